@@ -1,0 +1,291 @@
+#include "models/spring_network.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace knitsim {
+
+Vec3 PinPath::at(double t) const {
+  if (move_time <= 0.0 || t >= move_time) return end;
+  const double s = std::max(0.0, t / move_time);
+  return start + s * (end - start);
+}
+
+namespace {
+bool finite(Vec3 p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
+}  // namespace
+
+SpringNetwork::SpringNetwork(SpringNetworkSpec spec) : spec_(std::move(spec)) {
+  const int np = particle_count();
+  if (static_cast<int>(spec_.masses.size()) != np)
+    throw std::invalid_argument("spring network: one mass per particle is required");
+  if (spec_.pinned.size() != spec_.pin_paths.size())
+    throw std::invalid_argument("spring network: one pin path per pinned particle is required");
+  if (!(spec_.damping >= 0.0) || !std::isfinite(spec_.damping))
+    throw std::invalid_argument("spring network: damping must be >= 0 N s/m");
+  if (!(spec_.limit_stiffness_factor >= 0.0))
+    throw std::invalid_argument("spring network: limit_stiffness_factor must be >= 0");
+  for (const Vec3& p : spec_.positions)
+    if (!finite(p)) throw std::invalid_argument("spring network: non-finite particle position");
+
+  free_index_.assign(np, 0);
+  pin_slot_.assign(np, -1);
+  for (size_t k = 0; k < spec_.pinned.size(); ++k) {
+    const int p = spec_.pinned[k];
+    if (p < 0 || p >= np) throw std::invalid_argument("spring network: pin index out of range");
+    if (pin_slot_[p] >= 0) throw std::invalid_argument("spring network: particle pinned twice");
+    pin_slot_[p] = static_cast<int>(k);
+    free_index_[p] = -1;
+    pin_move_time_ = std::max(pin_move_time_, spec_.pin_paths[k].move_time);
+  }
+  free_count_ = 0;
+  for (int p = 0; p < np; ++p)
+    if (free_index_[p] >= 0) free_index_[p] = free_count_++;
+
+  const int n = dof();
+  dof_mass_.resize(n);
+  inv_mass_.resize(n);
+  gamma_.resize(n);
+  double mass_sum = 0.0;
+  for (int p = 0; p < np; ++p) {
+    const int f = free_index_[p];
+    if (f < 0) continue;
+    const double m = spec_.masses[p];
+    if (!(m > 0.0) || !std::isfinite(m))
+      throw std::invalid_argument("spring network: particle masses must be > 0 kg");
+    mass_sum += m;
+    for (int c = 0; c < 3; ++c) {
+      dof_mass_[3 * f + c] = m;
+      inv_mass_[3 * f + c] = 1.0 / m;
+      gamma_[3 * f + c] = spec_.damping / m;
+    }
+  }
+  const double g = norm(spec_.gravity);
+  if (spec_.residual_force_scale > 0.0) {
+    residual_scale_ = spec_.residual_force_scale;
+  } else if (free_count_ > 0 && g > 0.0) {
+    residual_scale_ = mass_sum / free_count_ * g;
+  } else {
+    throw std::invalid_argument(
+        "spring network: residual_force_scale must be > 0 N when there is no gravity");
+  }
+
+  // Springs: validate, then the stiffness pattern (3x3 blocks per free end pair).
+  std::vector<std::pair<int, int>> entries;
+  for (const Spring& s : spec_.springs) {
+    if (s.a < 0 || s.a >= np || s.b < 0 || s.b >= np || s.a == s.b)
+      throw std::invalid_argument("spring network: spring end out of range or self-loop");
+    if (!(s.rest > 0.0) || !std::isfinite(s.rest))
+      throw std::invalid_argument("spring network: spring rest length must be > 0 m");
+    if (!(s.stiffness > 0.0) || !std::isfinite(s.stiffness))
+      throw std::invalid_argument("spring network: spring stiffness must be > 0 N/m");
+    const int ends[2] = {free_index_[s.a], free_index_[s.b]};
+    for (int r : ends)
+      for (int c : ends)
+        if (r >= 0 && c >= 0)
+          for (int p = 0; p < 3; ++p)
+            for (int q = 0; q < 3; ++q) entries.emplace_back(3 * r + p, 3 * c + q);
+  }
+  pattern_ = make_csc_pattern(n, n, std::move(entries), /*with_diagonal=*/true);
+
+  slots_.assign(spec_.springs.size() * 36, -1);
+  for (size_t si = 0; si < spec_.springs.size(); ++si) {
+    const Spring& s = spec_.springs[si];
+    const int ends[2] = {free_index_[s.a], free_index_[s.b]};
+    for (int br = 0; br < 2; ++br)
+      for (int bc = 0; bc < 2; ++bc) {
+        if (ends[br] < 0 || ends[bc] < 0) continue;
+        for (int p = 0; p < 3; ++p)
+          for (int q = 0; q < 3; ++q)
+            slots_[si * 36 + (2 * br + bc) * 9 + 3 * p + q] =
+                pattern_.find(3 * ends[br] + p, 3 * ends[bc] + q);
+      }
+  }
+  pin_pos_.resize(spec_.pinned.size());
+  scratch_.resize(n);
+}
+
+void SpringNetwork::initial_state(double* x, double* v) const {
+  for (int p = 0; p < particle_count(); ++p) {
+    const int f = free_index_[p];
+    if (f < 0) continue;
+    const Vec3& q = spec_.positions[p];
+    x[3 * f] = q.x;
+    x[3 * f + 1] = q.y;
+    x[3 * f + 2] = q.z;
+  }
+  std::fill(v, v + dof(), 0.0);
+}
+
+void SpringNetwork::update_pins(double t) const {
+  for (size_t k = 0; k < pin_pos_.size(); ++k) pin_pos_[k] = spec_.pin_paths[k].at(t);
+}
+
+inline Vec3 SpringNetwork::end_position(int particle, const double* x) const {
+  const int f = free_index_[particle];
+  if (f >= 0) return {x[3 * f], x[3 * f + 1], x[3 * f + 2]};
+  return pin_pos_[pin_slot_[particle]];
+}
+
+inline void SpringNetwork::spring_force_law(const Spring& s, double L, double& f,
+                                            double& df) const {
+  f = s.stiffness * (L - s.rest);
+  df = s.stiffness;
+  if (spec_.elongation_limit > 0.0) {
+    const double over = L - s.rest * (1.0 + spec_.elongation_limit);
+    if (over > 0.0) {
+      const double klim = spec_.limit_stiffness_factor * s.stiffness;
+      f += klim * over;
+      df += klim;
+    }
+  }
+}
+
+void SpringNetwork::net_force(double t, const double* x, double* force) const {
+  update_pins(t);
+  const int n = dof();
+  for (int i = 0; i < n; i += 3) {
+    force[i] = dof_mass_[i] * spec_.gravity.x;
+    force[i + 1] = dof_mass_[i] * spec_.gravity.y;
+    force[i + 2] = dof_mass_[i] * spec_.gravity.z;
+  }
+  for (const Spring& s : spec_.springs) {
+    const int fa = free_index_[s.a], fb = free_index_[s.b];
+    if (fa < 0 && fb < 0) continue;
+    const Vec3 d = end_position(s.b, x) - end_position(s.a, x);
+    const double L = norm(d);
+    double f, df;
+    spring_force_law(s, L, f, df);
+    const Vec3 F = (f / L) * d;  // force on a
+    if (fa >= 0) {
+      force[3 * fa] += F.x;
+      force[3 * fa + 1] += F.y;
+      force[3 * fa + 2] += F.z;
+    }
+    if (fb >= 0) {
+      force[3 * fb] -= F.x;
+      force[3 * fb + 1] -= F.y;
+      force[3 * fb + 2] -= F.z;
+    }
+  }
+}
+
+void SpringNetwork::conservative_acceleration(double t, const double* x, double* a) const {
+  net_force(t, x, a);
+  for (int i = 0; i < dof(); ++i) a[i] *= inv_mass_[i];
+}
+
+void SpringNetwork::stiffness_values(double t, const double* x, double* values) const {
+  update_pins(t);
+  std::fill(values, values + pattern_.nnz(), 0.0);
+  for (size_t si = 0; si < spec_.springs.size(); ++si) {
+    const Spring& s = spec_.springs[si];
+    const int fa = free_index_[s.a], fb = free_index_[s.b];
+    if (fa < 0 && fb < 0) continue;
+    const Vec3 d = end_position(s.b, x) - end_position(s.a, x);
+    const double L = norm(d);
+    double f, df;
+    spring_force_law(s, L, f, df);
+    const double u[3] = {d.x / L, d.y / L, d.z / L};
+    const double fl = f / L;
+    double B[9];
+    for (int p = 0; p < 3; ++p)
+      for (int q = 0; q < 3; ++q)
+        B[3 * p + q] = (df - fl) * u[p] * u[q] + (p == q ? fl : 0.0);
+    // Blocks aa = -B, ab = +B, ba = +B, bb = -B; row r scaled by 1/m_r.
+    const int* slot = &slots_[si * 36];
+    const int ends[2] = {fa, fb};
+    for (int blk = 0; blk < 4; ++blk) {
+      const int row_end = ends[blk / 2];
+      if (row_end < 0 || ends[blk % 2] < 0) continue;
+      const double sign = (blk == 0 || blk == 3) ? -1.0 : 1.0;
+      const double scale = sign * inv_mass_[3 * row_end];
+      for (int e = 0; e < 9; ++e) values[slot[blk * 9 + e]] += scale * B[e];
+    }
+  }
+}
+
+double SpringNetwork::static_residual(double t, const double* x) const {
+  net_force(t, x, scratch_.data());
+  double worst = 0.0;
+  for (int i = 0; i < dof(); i += 3) {
+    const double f2 = scratch_[i] * scratch_[i] + scratch_[i + 1] * scratch_[i + 1] +
+                      scratch_[i + 2] * scratch_[i + 2];
+    if (!(f2 <= worst)) worst = f2;  // NaN propagates
+  }
+  return std::sqrt(worst) / residual_scale_;
+}
+
+bool SpringNetwork::project(double t, double* x, double* /*v*/) const {
+  if (spec_.elongation_limit <= 0.0) return false;
+  update_pins(t);
+  bool moved = false;
+  for (const Spring& s : spec_.springs) {
+    const int fa = free_index_[s.a], fb = free_index_[s.b];
+    if (fa < 0 && fb < 0) continue;
+    const Vec3 d = end_position(s.b, x) - end_position(s.a, x);
+    const double L = norm(d);
+    const double Lmax = s.rest * (1.0 + spec_.elongation_limit);
+    if (!(L > Lmax)) continue;
+    const Vec3 excess = ((L - Lmax) / L) * d;  // shortening vector, a -> b direction
+    const double wa = (fa >= 0 && fb >= 0) ? 0.5 : (fa >= 0 ? 1.0 : 0.0);
+    const double wb = 1.0 - wa;
+    if (fa >= 0) {
+      x[3 * fa] += wa * excess.x;
+      x[3 * fa + 1] += wa * excess.y;
+      x[3 * fa + 2] += wa * excess.z;
+    }
+    if (fb >= 0) {
+      x[3 * fb] -= wb * excess.x;
+      x[3 * fb + 1] -= wb * excess.y;
+      x[3 * fb + 2] -= wb * excess.z;
+    }
+    moved = true;
+  }
+  return moved;
+}
+
+double SpringNetwork::potential_energy(double t, const double* x) const {
+  update_pins(t);
+  double e = 0.0;
+  for (const Spring& s : spec_.springs) {
+    if (free_index_[s.a] < 0 && free_index_[s.b] < 0) continue;
+    const double L = norm(end_position(s.b, x) - end_position(s.a, x));
+    e += 0.5 * s.stiffness * (L - s.rest) * (L - s.rest);
+    if (spec_.elongation_limit > 0.0) {
+      const double over = L - s.rest * (1.0 + spec_.elongation_limit);
+      if (over > 0.0) e += 0.5 * spec_.limit_stiffness_factor * s.stiffness * over * over;
+    }
+  }
+  for (int i = 0; i < dof(); i += 3)
+    e -= dof_mass_[i] * (spec_.gravity.x * x[i] + spec_.gravity.y * x[i + 1] +
+                         spec_.gravity.z * x[i + 2]);
+  return e;
+}
+
+void SpringNetwork::all_positions(double t, const double* x, std::vector<Vec3>& out) const {
+  update_pins(t);
+  out.resize(particle_count());
+  for (int p = 0; p < particle_count(); ++p) out[p] = end_position(p, x);
+}
+
+double SpringNetwork::max_strain(double t, const double* x) const {
+  update_pins(t);
+  double worst = -1.0;
+  for (const Spring& s : spec_.springs) {
+    const double L = norm(end_position(s.b, x) - end_position(s.a, x));
+    worst = std::max(worst, (L - s.rest) / s.rest);
+  }
+  return worst;
+}
+
+std::string SpringNetwork::describe() const {
+  std::ostringstream os;
+  os << particle_count() << " particles (" << free_count_ << " free), " << spec_.springs.size()
+     << " springs, " << dof() << " dof, Jacobian nnz " << pattern_.nnz();
+  return os.str();
+}
+
+}  // namespace knitsim

@@ -1,0 +1,112 @@
+// SpringNetwork: particles joined by linear springs, with pins, gravity, absolute damping and
+// an elongation limit -- the one ODE system behind both papers' models.
+//
+// Equations (paper 1 Eqs. 2-4; SPEC 2.1), SI units throughout:
+//   m_i x_i'' = sum_springs F_s + m_i g - c v_i
+//   spring (a, b), length L = |x_b - x_a|, axis u = (x_b - x_a)/L, rest L0, stiffness k:
+//     F_a = f(L) u,  F_b = -F_a,  f(L) = k (L - L0) + k_lim max(0, L - L_max)
+//   L_max = L0 (1 + eps_max). The k_lim term is the implicit paths' elongation limit (a stiff
+//   limiting spring, k_lim = limit_stiffness_factor x k); the explicit reference paths
+//   instead call project() after each step, which shortens every spring beyond L_max to
+//   exactly L_max (Provot 1995, one pass in spring order, half each end, or the free end only
+//   if the other is pinned; velocities unchanged). After a projection no spring exceeds L_max,
+//   so on the reference paths the k_lim term stays inactive.
+//   Spring Jacobian (3x3 block, B = dF_a/dx_b):
+//     B = f'(L) u u^T + (f(L)/L) (I - u u^T);  dF_a/dx_a = -B, dF_b/dx_a = B, dF_b/dx_b = -B
+//   For k_lim = 0 this is k [ (1 - L0/L)(I - u u^T) + u u^T ] (SPEC 2.1).
+//
+// State: only free particles are degrees of freedom, 3 per particle in particle order
+// (x, y, z). Pinned particles follow a PinPath (fixed, or moved linearly in time).
+// Damping: absolute, per particle, gamma_i = c / m_i (paper 1 Eq. 4).
+// Static residual (SPEC 2.3): max_i |F_spring,i + m_i g| / F_ref over free particles, with
+// F_ref = mean free mass x |g| (or residual_force_scale if set, e.g. without gravity).
+//
+// Failure modes: bad specs (index out of range, non-positive mass or rest length, a spring
+// joining a particle to itself, NaN) throw std::invalid_argument at construction. Evaluation
+// never throws; a non-finite state produces non-finite output for the caller to detect.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "src/mechanical_system.hpp"
+#include "src/vec3.hpp"
+
+namespace knitsim {
+
+// Position of a pinned particle: `start` until t = 0, then linear to `end` at t = move_time,
+// then held. move_time = 0 means a fixed pin at `end` (= start).
+struct PinPath {
+  Vec3 start;
+  Vec3 end;
+  double move_time = 0.0;  // s
+  Vec3 at(double t) const;
+};
+
+struct Spring {
+  int a = 0, b = 0;        // particle indices
+  double rest = 0.0;       // L0, m
+  double stiffness = 0.0;  // k, N/m
+};
+
+struct SpringNetworkSpec {
+  std::vector<Vec3> positions;  // initial positions of all particles, m
+  std::vector<double> masses;   // kg, all particles (pinned ones are ignored)
+  std::vector<Spring> springs;
+  std::vector<int> pinned;       // particle indices
+  std::vector<PinPath> pin_paths;  // one per pinned particle
+  double damping = 0.0;           // c, N s/m per particle (absolute damping)
+  double elongation_limit = 0.0;  // eps_max as a fraction (0.05 = 5 %); <= 0: no limit
+  double limit_stiffness_factor = 100.0;  // k_lim / k above the limit (implicit paths)
+  Vec3 gravity{0.0, 0.0, -9.81};          // m/s^2
+  double residual_force_scale = 0.0;      // N; 0: mean free mass x |g|
+};
+
+class SpringNetwork final : public MechanicalSystem {
+ public:
+  explicit SpringNetwork(SpringNetworkSpec spec);
+
+  // MechanicalSystem
+  int dof() const override { return 3 * free_count_; }
+  void initial_state(double* x, double* v) const override;
+  void conservative_acceleration(double t, const double* x, double* a) const override;
+  const std::vector<double>& damping_rate() const override { return gamma_; }
+  const std::vector<double>& mass() const override { return dof_mass_; }
+  const CscPattern& stiffness_pattern() const override { return pattern_; }
+  void stiffness_values(double t, const double* x, double* values) const override;
+  double static_residual(double t, const double* x) const override;
+  double equilibrium_start_time() const override { return pin_move_time_; }
+  bool project(double t, double* x, double* v) const override;
+  double potential_energy(double t, const double* x) const override;
+  std::string describe() const override;
+
+  // Topology and bookkeeping.
+  const SpringNetworkSpec& spec() const { return spec_; }
+  int particle_count() const { return static_cast<int>(spec_.positions.size()); }
+  int free_index(int particle) const { return free_index_[particle]; }  // -1 if pinned
+  // Positions of all particles (free from x, pinned from their paths at t).
+  void all_positions(double t, const double* x, std::vector<Vec3>& out) const;
+  // Largest strain (L - L0)/L0 over all springs at (t, x).
+  double max_strain(double t, const double* x) const;
+  // Net spring + gravity force on each free particle, N (length dof()).
+  void net_force(double t, const double* x, double* f) const;
+
+ private:
+  Vec3 end_position(int particle, const double* x) const;
+  void update_pins(double t) const;
+  void spring_force_law(const Spring& s, double L, double& f, double& df) const;
+
+  SpringNetworkSpec spec_;
+  int free_count_ = 0;
+  std::vector<int> free_index_;  // particle -> free index or -1
+  std::vector<int> pin_slot_;    // particle -> pin index or -1
+  std::vector<double> gamma_, dof_mass_, inv_mass_;
+  double residual_scale_ = 1.0;
+  double pin_move_time_ = 0.0;
+  CscPattern pattern_;
+  std::vector<int> slots_;  // per spring: 4 blocks (aa, ab, ba, bb) x 9 value positions, -1 if absent
+  mutable std::vector<Vec3> pin_pos_;
+  mutable std::vector<double> scratch_;
+};
+
+}  // namespace knitsim

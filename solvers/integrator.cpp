@@ -1,0 +1,235 @@
+#include "solvers/integrator.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include "solvers/factories.hpp"
+
+namespace knitsim {
+
+namespace {
+
+[[noreturn]] void bad_option(const std::string& field, double value, const std::string& range) {
+  std::ostringstream os;
+  os << field << " = " << value << ": " << range;
+  throw std::invalid_argument(os.str());
+}
+
+struct Entry {
+  IntegratorInfo info;
+  std::function<std::unique_ptr<Integrator>()> make;
+};
+
+const std::vector<Entry>& registry() {
+  static const std::vector<Entry> entries = [] {
+    std::vector<Entry> e;
+    auto add = [&e](std::function<std::unique_ptr<Integrator>()> make) {
+      auto probe = make();
+      e.push_back({probe->info(), std::move(make)});
+    };
+    add(detail::make_euler);
+    add(detail::make_verlet);
+    add(detail::make_implicit_euler);
+    return e;
+  }();
+  return entries;
+}
+
+}  // namespace
+
+void IntegratorOptions::validate() const {
+  if (!(rtol > 0.0 && rtol < 1.0)) bad_option("rtol", rtol, "must be in (0, 1)");
+  if (!(atol > 0.0) || !std::isfinite(atol)) bad_option("atol", atol, "must be > 0");
+  if (!(dt >= 0.0) || !std::isfinite(dt)) bad_option("dt", dt, "must be >= 0 s (0 = automatic)");
+  if (!(dt_safety > 0.0 && dt_safety <= 1.0))
+    bad_option("dt_safety", dt_safety, "must be in (0, 1]");
+  if (max_order < 0 || max_order > 12)
+    bad_option("max_order", max_order, "must be in 0..12 (0 = method default)");
+  if (max_steps <= 0) bad_option("max_steps", static_cast<double>(max_steps), "must be > 0");
+  if (!(t_max > 0.0) || !std::isfinite(t_max)) bad_option("t_max", t_max, "must be > 0 s");
+  if (!(equilibrium_tol > 0.0) || !std::isfinite(equilibrium_tol))
+    bad_option("equilibrium_tol", equilibrium_tol, "must be > 0");
+  if (!(max_wall_seconds >= 0.0))
+    bad_option("max_wall_seconds", max_wall_seconds, "must be >= 0 s (0 = no cap)");
+  if (check_every < 0)
+    bad_option("check_every", static_cast<double>(check_every), "must be >= 0 (0 = 1000)");
+  if (!(runaway_position > 0.0))
+    bad_option("runaway_position", runaway_position, "must be > 0 m");
+  if (krylov_dim < 0 || krylov_dim > 500)
+    bad_option("krylov_dim", krylov_dim, "must be in 0..500 (0 = default)");
+}
+
+const char* to_string(RunStatus s) {
+  switch (s) {
+    case RunStatus::Equilibrium: return "equilibrium";
+    case RunStatus::TimeLimit: return "time_limit";
+    case RunStatus::StepLimit: return "step_limit";
+    case RunStatus::WallLimit: return "wall_limit";
+    case RunStatus::SolverFailure: return "solver_failure";
+    case RunStatus::Diverged: return "diverged";
+  }
+  return "unknown";
+}
+
+const std::vector<IntegratorInfo>& integrator_catalog() {
+  static const std::vector<IntegratorInfo> infos = [] {
+    std::vector<IntegratorInfo> v;
+    for (const auto& e : registry()) v.push_back(e.info);
+    return v;
+  }();
+  return infos;
+}
+
+std::unique_ptr<Integrator> make_integrator(const std::string& name) {
+  for (const auto& e : registry())
+    if (e.info.name == name) return e.make();
+  std::string names;
+  for (const auto& e : registry()) names += (names.empty() ? "" : ", ") + e.info.name;
+  throw std::invalid_argument("integrator = " + name + ": must be one of " + names);
+}
+
+RunStats run_to_equilibrium(const MechanicalSystem& sys, const std::string& integrator,
+                            const IntegratorOptions& opt, std::vector<double>& x,
+                            std::vector<double>& v, RunObserver* observer) {
+  auto integ = make_integrator(integrator);
+  return run_to_equilibrium(sys, *integ, opt, x, v, observer);
+}
+
+RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
+                            const IntegratorOptions& opt, std::vector<double>& x,
+                            std::vector<double>& v, RunObserver* observer) {
+  opt.validate();
+  const int n = sys.dof();
+  if (x.empty() || v.empty()) {
+    x.assign(n, 0.0);
+    v.assign(n, 0.0);
+    sys.initial_state(x.data(), v.data());
+  }
+  if (static_cast<int>(x.size()) != n || static_cast<int>(v.size()) != n)
+    throw std::invalid_argument("run_to_equilibrium: state size does not match the model");
+
+  using clock = std::chrono::steady_clock;
+  const auto wall_start = clock::now();
+  auto wall = [&] { return std::chrono::duration<double>(clock::now() - wall_start).count(); };
+
+  RunStats stats;
+  stats.integrator = integ.info().name;
+  integ.start(sys, 0.0, x.data(), v.data(), opt);
+
+  const long check_every = integ.info().adaptive ? 1 : (opt.check_every > 0 ? opt.check_every : 1000);
+  const double t_start_eq = sys.equilibrium_start_time();
+  auto finish = [&](RunStatus status, std::string message) {
+    const double t = integ.time();
+    std::copy_n(integ.positions(), n, x.begin());
+    std::copy_n(integ.velocities(), n, v.begin());
+    integ.fill_stats(stats);
+    stats.status = status;
+    stats.message = std::move(message);
+    stats.t_final = t;
+    stats.residual = sys.static_residual(t, x.data());
+    stats.wall_seconds = wall();
+    return stats;
+  };
+  auto state_ok = [&]() -> bool {
+    const double* xs = integ.positions();
+    const double* vs = integ.velocities();
+    for (int i = 0; i < n; ++i)
+      if (!(std::abs(xs[i]) <= opt.runaway_position) || !std::isfinite(vs[i])) return false;
+    return true;
+  };
+
+  // The initial state may already be at rest (e.g. a plain knit chart).
+  {
+    const double r0 = sys.static_residual(0.0, x.data());
+    if (t_start_eq <= 0.0 && r0 <= opt.equilibrium_tol)
+      return finish(RunStatus::Equilibrium, "initial state is already at equilibrium");
+  }
+
+  long steps = 0;
+  while (true) {
+    const Integrator::Step st = integ.step(opt.t_max);
+    ++steps;
+    if (!st.ok) {
+      const bool diverged = !state_ok();
+      return finish(diverged ? RunStatus::Diverged : RunStatus::SolverFailure, st.message);
+    }
+    const double t = integ.time();
+    if (steps % check_every == 0 || t >= opt.t_max) {
+      if (!state_ok()) {
+        std::ostringstream os;
+        os << "non-finite or runaway state at t = " << t << " s";
+        integ.fill_stats(stats);
+        if (stats.dt > 0.0)
+          os << " (dt = " << stats.dt << " s, predicted stability limit "
+             << stats.dt_predicted << " s)";
+        return finish(RunStatus::Diverged, os.str());
+      }
+      const double r = sys.static_residual(t, integ.positions());
+      if (observer) observer->on_check(t, integ.positions(), integ.velocities(), r);
+      if (t >= t_start_eq && r <= opt.equilibrium_tol)
+        return finish(RunStatus::Equilibrium, "static residual below equilibrium_tol");
+      if (opt.max_wall_seconds > 0.0 && wall() > opt.max_wall_seconds)
+        return finish(RunStatus::WallLimit, "wall-clock cap reached");
+    }
+    if (t >= opt.t_max) return finish(RunStatus::TimeLimit, "t_max reached before equilibrium");
+    if (steps >= opt.max_steps)
+      return finish(RunStatus::StepLimit, "step cap reached before equilibrium");
+  }
+}
+
+// ---- stability prediction -----------------------------------------------------------------
+
+namespace {
+
+double euler_limit(double w2, double g) {
+  if (w2 <= 0.0) return g > 0.0 ? 2.0 / g : std::numeric_limits<double>::infinity();
+  const double disc = 0.25 * g * g - w2;
+  if (disc >= 0.0) return 2.0 / (0.5 * g + std::sqrt(disc));  // overdamped: real eigenvalues
+  return g / w2;                                               // underdamped
+}
+
+double verlet_limit(double w2, double g) {
+  if (w2 <= 0.0) return std::numeric_limits<double>::infinity();
+  // f(h) = h phi w2 - 2 (1 + e^2)/(1 + e) is increasing in h; bisect for its root.
+  auto f = [&](double h) {
+    const double e = std::exp(-0.5 * g * h);
+    const double phi = g > 0.0 ? -std::expm1(-0.5 * g * h) / g : 0.5 * h;
+    return h * phi * w2 - 2.0 * (1.0 + e * e) / (1.0 + e);
+  };
+  double lo = 0.0, hi = 2.0 / std::sqrt(w2);
+  while (f(hi) < 0.0) hi *= 2.0;
+  for (int it = 0; it < 200; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (f(mid) < 0.0 ? lo : hi) = mid;
+  }
+  return lo;
+}
+
+}  // namespace
+
+double predict_stable_dt(const std::string& method, const MechanicalSystem& sys, double t,
+                         const double* x) {
+  if (method != "euler" && method != "verlet")
+    throw std::invalid_argument("predict_stable_dt: method = " + method +
+                                ": must be euler or verlet");
+  const CscPattern& p = sys.stiffness_pattern();
+  std::vector<double> values(p.nnz());
+  sys.stiffness_values(t, x, values.data());
+  std::vector<double> row_sum(sys.dof(), 0.0);
+  for (int k = 0; k < p.nnz(); ++k) row_sum[p.rowind[k]] += std::abs(values[k]);
+  const auto& gamma = sys.damping_rate();
+  double best = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < sys.dof(); ++i) {
+    const double h = method == "euler" ? euler_limit(row_sum[i], gamma[i])
+                                       : verlet_limit(row_sum[i], gamma[i]);
+    best = std::min(best, h);
+  }
+  return best;
+}
+
+}  // namespace knitsim

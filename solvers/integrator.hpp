@@ -1,0 +1,141 @@
+// One interface for every integrator, one driver that runs any of them to equilibrium.
+//
+//   auto integ = make_integrator("cvode-bdf");         // by name, see integrator_catalog()
+//   IntegratorOptions opt;  opt.rtol = 1e-6;  opt.validate();
+//   std::vector<double> x, v;                          // in: initial state (empty: the model's)
+//   RunStats s = run_to_equilibrium(model, *integ, opt, x, v);   // out: final state
+//
+// Integrators see only a MechanicalSystem (src/mechanical_system.hpp); they never know which
+// model they run. Every run stops by the same criterion (SPEC 2.3): static residual below
+// equilibrium_tol (checked after every step of adaptive methods, every `check_every` steps of
+// fixed-step methods, and only from the model's equilibrium_start_time() on), or at t_max, the
+// step cap or the wall-clock cap -- and RunStats.status says which. Numerical failure (a
+// SUNDIALS error, a non-finite or runaway state) is a status, never an exception.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "src/mechanical_system.hpp"
+
+namespace knitsim {
+
+struct IntegratorOptions {
+  double rtol = 1e-6;  // relative tolerance of adaptive methods
+  double atol = 1e-9;  // absolute tolerance (m for positions, m/s for velocities)
+  // Fixed step (s) of euler, verlet and implicit-euler. 0 = automatic: explicit methods take
+  // dt_safety x the predicted linear stability limit (predict_stable_dt); implicit-euler 1 s.
+  double dt = 0.0;
+  double dt_safety = 0.5;  // fraction of the predicted stability limit used when dt = 0
+  int max_order = 0;       // cap on the method order (CVODE BDF <= 5, Adams <= 12); 0 = default
+  long max_steps = 500'000'000;  // step cap per run
+  double t_max = 1e7;            // s, physical end time if no equilibrium is reached
+  double equilibrium_tol = 1e-8;  // static residual at which the run stops (dimensionless)
+  double max_wall_seconds = 0.0;  // wall-clock cap per run, s; 0 = none
+  long check_every = 0;  // fixed-step methods: residual check interval in steps; 0 = 1000
+  double runaway_position = 1e3;  // |x_i| above this (m) counts as a blow-up
+  int krylov_dim = 0;             // GMRES Krylov dimension; 0 = SUNDIALS default (5)
+  bool gmres_preconditioner = true;  // cvode-bdf-gmres: block-Jacobi preconditioner
+
+  // Throws std::invalid_argument naming the bad field and its accepted range.
+  void validate() const;
+};
+
+enum class RunStatus {
+  Equilibrium,    // static residual <= equilibrium_tol
+  TimeLimit,      // reached t_max first
+  StepLimit,      // reached max_steps first
+  WallLimit,      // reached max_wall_seconds first
+  SolverFailure,  // the integrator reported an error (e.g. a SUNDIALS flag)
+  Diverged,       // non-finite or runaway state
+};
+const char* to_string(RunStatus s);
+
+struct RunStats {
+  std::string integrator;
+  RunStatus status = RunStatus::SolverFailure;
+  std::string message;        // why it stopped, with the SUNDIALS flag name where relevant
+  double t_final = 0.0;       // s
+  double residual = 0.0;      // static residual at the end
+  double dt = 0.0;            // fixed step used (fixed-step methods), s
+  double dt_predicted = 0.0;  // predicted stability limit (explicit methods), s
+  long steps = 0;
+  long rhs_evals = 0;
+  long jac_evals = 0;
+  long lin_setups = 0;
+  long lin_iters = 0;
+  long nonlin_iters = 0;
+  long nonlin_fails = 0;
+  long err_test_fails = 0;
+  int max_order_used = 0;
+  double wall_seconds = 0.0;
+};
+
+struct IntegratorInfo {
+  std::string name;
+  std::string description;
+  int order = 0;  // classical order (0 = variable / not applicable)
+  bool adaptive = false;
+  bool explicit_method = false;
+};
+
+class Integrator {
+ public:
+  virtual ~Integrator() = default;
+  virtual const IntegratorInfo& info() const = 0;
+
+  // Prepare a run of `sys` from (t0, x0, v0). Throws std::invalid_argument on bad options.
+  // The system must outlive the run.
+  virtual void start(const MechanicalSystem& sys, double t0, const double* x0, const double* v0,
+                     const IntegratorOptions& opt) = 0;
+
+  struct Step {
+    bool ok = true;
+    std::string message;  // on failure: what went wrong
+  };
+  // Advance by one (internal) step, never beyond t_stop.
+  virtual Step step(double t_stop) = 0;
+
+  virtual double time() const = 0;
+  virtual const double* positions() const = 0;
+  virtual const double* velocities() const = 0;
+  // Counters so far (steps, evaluations, ...) and dt / dt_predicted where meaningful.
+  virtual void fill_stats(RunStats& stats) const = 0;
+};
+
+// Registry: every integrator by name (SPEC 2.4).
+const std::vector<IntegratorInfo>& integrator_catalog();
+std::unique_ptr<Integrator> make_integrator(const std::string& name);  // throws invalid_argument
+
+// Observer of a run, called at every residual check (for progress lines and time series).
+class RunObserver {
+ public:
+  virtual ~RunObserver() = default;
+  virtual void on_check(double t, const double* x, const double* v, double residual) = 0;
+};
+
+// The one run-to-equilibrium driver. x, v: in the initial state (empty = the model's
+// initial_state), out the final state.
+RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
+                            const IntegratorOptions& opt, std::vector<double>& x,
+                            std::vector<double>& v, RunObserver* observer = nullptr);
+
+// Convenience: make_integrator(name) + run_to_equilibrium.
+RunStats run_to_equilibrium(const MechanicalSystem& sys, const std::string& integrator,
+                            const IntegratorOptions& opt, std::vector<double>& x,
+                            std::vector<double>& v, RunObserver* observer = nullptr);
+
+// Linear stability prediction for the explicit fixed-step methods (SPEC 2.4), per dof i from
+// a Gershgorin bound on da_c/dx at (t, x): omega_i^2 <= sum_j |Ax_ij|, gamma_i = c_i/m_i.
+//   euler:  |1 + h lambda| < 1 for lambda = -gamma/2 +- sqrt(gamma^2/4 - omega^2)
+//           (overdamped: h < 2 / |lambda_fast|; underdamped: h < gamma / omega^2)
+//   verlet: velocity Verlet with the damping integrated exactly over each half step
+//           (e = exp(-gamma h/2), phi = (1 - e)/gamma): h phi omega^2 < 2 (1 + e^2)/(1 + e);
+//           gamma -> 0 gives the classical h omega < 2.
+// Returns the smallest limit over all dof (s); +inf if no dof constrains it, 0 if none is
+// stable (undamped Euler).
+double predict_stable_dt(const std::string& method, const MechanicalSystem& sys, double t,
+                         const double* x);
+
+}  // namespace knitsim

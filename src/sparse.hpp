@@ -1,0 +1,36 @@
+// Compressed sparse column (CSC) patterns, built once and refilled many times.
+//
+// Storage order (the same as SUNDIALS' CSC_MAT and Eigen's default ColMajor): column j owns
+// the entries colptr[j] .. colptr[j+1]-1; their row indices are in rowind, sorted ascending
+// within each column. Values live outside the pattern (a plain array of nnz doubles) so a
+// pattern can be shared between many value arrays.
+#pragma once
+
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+namespace knitsim {
+
+struct CscPattern {
+  int rows = 0;
+  int cols = 0;
+  std::vector<int> colptr;  // cols + 1 entries
+  std::vector<int> rowind;  // nnz entries
+
+  int nnz() const { return colptr.empty() ? 0 : colptr.back(); }
+  // Position of (row, col) in the value array, or -1 if the entry is not in the pattern.
+  // O(log(entries in column)); for set-up only, never in a hot loop.
+  int find(int row, int col) const;
+};
+
+// Builds a pattern from (row, col) pairs (duplicates merged). With `with_diagonal`, every
+// diagonal entry of a square pattern is present even if no pair names it: SUNDIALS 6.4
+// pays O(n^2) in I - gamma*J when a diagonal entry is missing.
+CscPattern make_csc_pattern(int rows, int cols, std::vector<std::pair<int, int>> entries,
+                            bool with_diagonal);
+
+// y = A x for a CSC matrix (pattern + values).
+void csc_multiply(const CscPattern& A, const double* values, const double* x, double* y);
+
+}  // namespace knitsim
