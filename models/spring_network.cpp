@@ -177,6 +177,14 @@ void SpringNetwork::conservative_acceleration(double t, const double* x, double*
   for (int i = 0; i < dof(); ++i) a[i] *= inv_mass_[i];
 }
 
+void SpringNetwork::constant_acceleration(double /*t*/, double* a) const {
+  for (int i = 0; i < dof(); i += 3) {
+    a[i] = spec_.gravity.x;
+    a[i + 1] = spec_.gravity.y;
+    a[i + 2] = spec_.gravity.z;
+  }
+}
+
 void SpringNetwork::stiffness_values(double t, const double* x, double* values) const {
   update_pins(t);
   std::fill(values, values + pattern_.nnz(), 0.0);

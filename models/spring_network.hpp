@@ -70,6 +70,7 @@ class SpringNetwork final : public MechanicalSystem {
   int dof() const override { return 3 * free_count_; }
   void initial_state(double* x, double* v) const override;
   void conservative_acceleration(double t, const double* x, double* a) const override;
+  void constant_acceleration(double t, double* a) const override;  // gravity
   const std::vector<double>& damping_rate() const override { return gamma_; }
   const std::vector<double>& mass() const override { return dof_mass_; }
   const CscPattern& stiffness_pattern() const override { return pattern_; }

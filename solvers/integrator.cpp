@@ -57,7 +57,7 @@ void IntegratorOptions::validate() const {
   if (!(max_wall_seconds >= 0.0))
     bad_option("max_wall_seconds", max_wall_seconds, "must be >= 0 s (0 = no cap)");
   if (check_every < 0)
-    bad_option("check_every", static_cast<double>(check_every), "must be >= 0 (0 = 1000)");
+    bad_option("check_every", static_cast<double>(check_every), "must be >= 0 (0 = automatic)");
   if (!(runaway_position > 0.0))
     bad_option("runaway_position", runaway_position, "must be > 0 m");
   if (krylov_dim < 0 || krylov_dim > 500)
@@ -121,7 +121,8 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
   stats.integrator = integ.info().name;
   integ.start(sys, 0.0, x.data(), v.data(), opt);
 
-  const long check_every = integ.info().adaptive ? 1 : (opt.check_every > 0 ? opt.check_every : 1000);
+  const bool cheap_steps = integ.info().explicit_method && !integ.info().adaptive;
+  const long check_every = opt.check_every > 0 ? opt.check_every : (cheap_steps ? 1000 : 1);
   const double t_start_eq = sys.equilibrium_start_time();
   auto finish = [&](RunStatus status, std::string message) {
     const double t = integ.time();

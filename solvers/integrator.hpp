@@ -7,8 +7,8 @@
 //
 // Integrators see only a MechanicalSystem (src/mechanical_system.hpp); they never know which
 // model they run. Every run stops by the same criterion (SPEC 2.3): static residual below
-// equilibrium_tol (checked after every step of adaptive methods, every `check_every` steps of
-// fixed-step methods, and only from the model's equilibrium_start_time() on), or at t_max, the
+// equilibrium_tol (checked every `check_every` steps, and only from the model's
+// equilibrium_start_time() on), or at t_max, the
 // step cap or the wall-clock cap -- and RunStats.status says which. Numerical failure (a
 // SUNDIALS error, a non-finite or runaway state) is a status, never an exception.
 #pragma once
@@ -33,7 +33,9 @@ struct IntegratorOptions {
   double t_max = 1e7;            // s, physical end time if no equilibrium is reached
   double equilibrium_tol = 1e-8;  // static residual at which the run stops (dimensionless)
   double max_wall_seconds = 0.0;  // wall-clock cap per run, s; 0 = none
-  long check_every = 0;  // fixed-step methods: residual check interval in steps; 0 = 1000
+  // Residual check interval in steps; 0 = automatic: 1000 for the fixed-step explicit
+  // methods (a check costs about one RHS), 1 (every step) for all others.
+  long check_every = 0;
   double runaway_position = 1e3;  // |x_i| above this (m) counts as a blow-up
   int krylov_dim = 0;             // GMRES Krylov dimension; 0 = SUNDIALS default (5)
   bool gmres_preconditioner = true;  // cvode-bdf-gmres: block-Jacobi preconditioner

@@ -11,6 +11,10 @@ double MechanicalSystem::kinetic_energy(const double* v) const {
   return e;
 }
 
+void MechanicalSystem::constant_acceleration(double /*t*/, double* a) const {
+  std::fill(a, a + dof(), 0.0);
+}
+
 FirstOrderSystem::FirstOrderSystem(const MechanicalSystem& sys) : sys_(sys), n_(sys.dof()) {
   const CscPattern& ax = sys_.stiffness_pattern();
   const int n = n_;

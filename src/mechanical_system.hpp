@@ -37,6 +37,10 @@ class MechanicalSystem {
   // a_c(t, x) into a (length n).
   virtual void conservative_acceleration(double t, const double* x, double* a) const = 0;
 
+  // The state-independent part of a_c (e.g. gravity) into a (length n): what an IMEX split
+  // treats explicitly. Default: zero.
+  virtual void constant_acceleration(double t, double* a) const;
+
   // gamma_i (1/s), length n; a = a_c - gamma .* v.
   virtual const std::vector<double>& damping_rate() const = 0;
 

@@ -1,0 +1,19 @@
+// The knitsim subcommands (SPEC 2.10). Each lives in its own src/cmd_<name>.cpp and registers
+// itself on the CLI11 application; main.cpp only calls these.
+//
+// Contract for every command: exit status 0 on success; on bad input one line on stderr
+// naming the field and its accepted range, exit status 2; on a numerical failure of the run
+// itself the outputs are still written with the status, exit status 3.
+#pragma once
+
+namespace CLI {
+class App;
+}
+
+namespace knitsim {
+
+void register_drape_command(CLI::App& app);
+void register_list_command(CLI::App& app);
+void register_demo_command(CLI::App& app);
+
+}  // namespace knitsim
