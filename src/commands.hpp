@@ -15,5 +15,7 @@ namespace knitsim {
 void register_drape_command(CLI::App& app);
 void register_list_command(CLI::App& app);
 void register_demo_command(CLI::App& app);
+void register_optimize_command(CLI::App& app);
+void register_taguchi_command(CLI::App& app);
 
 }  // namespace knitsim

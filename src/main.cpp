@@ -1,6 +1,54 @@
-// knitsim command line (SPEC 2.10). Placeholder until the CLI lands.
+// knitsim command line (SPEC 2.10). Each subcommand registers itself (src/commands.hpp); this
+// file only parses and maps what a command throws to the exit status of the contract:
+//   0  success (and --help)
+//   2  bad input: a CLI11 parse error or std::invalid_argument, printed as ONE line
+//      "knitsim: error: <message>" on stderr (commands validate all input before writing)
+//   3  a run that ended in another status than equilibrium: the command throws
+//      CLI::RuntimeError(3) after writing its outputs (CLI11 prints nothing for it)
+//   1  anything else (e.g. a file that cannot be written), one line on stderr
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <exception>
 #include <iostream>
-int main() {
-  std::cout << "knitsim\n";
+#include <stdexcept>
+#include <string>
+
+#include "src/commands.hpp"
+#include "src/output.hpp"
+
+namespace {
+
+int fail(int status, std::string message) {
+  std::replace(message.begin(), message.end(), '\n', ' ');
+  std::cerr << "knitsim: error: " << message << std::endl;
+  return status;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  knitsim::set_command_line(argc, argv);
+  CLI::App app{"knitsim: stiff mass-spring models of knitted fabric"};
+  app.require_subcommand(1);
+  knitsim::register_drape_command(app);
+  knitsim::register_list_command(app);
+  knitsim::register_demo_command(app);
+  knitsim::register_optimize_command(app);
+  knitsim::register_taguchi_command(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::RuntimeError& e) {
+    return e.get_exit_code();
+  } catch (const CLI::ParseError& e) {
+    return fail(2, std::string(e.what()) + " (see knitsim --help)");
+  } catch (const std::invalid_argument& e) {
+    return fail(2, e.what());
+  } catch (const std::exception& e) {
+    return fail(1, e.what());
+  }
   return 0;
 }

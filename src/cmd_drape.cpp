@@ -1,0 +1,122 @@
+// knitsim drape (SPEC 2.10): one scene run to equilibrium, with its outputs.
+//
+// Order of work: parse, load the scene and apply --set, check the run options and the
+// integrator name, create and probe --out; only then run and write. Bad input therefore writes
+// nothing (exit 2); a run that ends in any status but equilibrium still writes its outputs and
+// exits 3.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <stdexcept>
+
+#include "src/commands.hpp"
+#include "src/output.hpp"
+#include "src/scene.hpp"
+
+namespace knitsim {
+
+namespace {
+
+struct DrapeArgs {
+  std::string scene = "four_corner";
+  std::vector<std::string> sets;
+  std::string integrator;     // empty: default_integrator()
+  IntegratorOptions options;  // only the fields bound to flags below are taken from here
+  std::string out;
+  bool quiet = false;
+};
+
+std::string human_summary(const Scene& scene, const DrapeResult& r, const std::string& dir) {
+  const RunStats& s = r.stats;
+  const int side = r.grid.n + 1;
+  Table t;
+  t.columns = {"drape", scene.name + " (" + scene.source + ")"};
+  t.rows = {{"grid", std::to_string(side) + " x " + std::to_string(side) + " particles, " +
+                         std::to_string(r.grid.network.spec().springs.size()) + " springs, " +
+                         std::to_string(r.grid.network.dof()) + " dof"},
+            {"integrator", s.integrator},
+            {"status", std::string(to_string(s.status)) + " (" + s.message + ")"},
+            {"t_final", format_number(s.t_final, 6) + " s"},
+            {"steps", std::to_string(s.steps) + " (RHS " + std::to_string(s.rhs_evals) + ", Jac " +
+                          std::to_string(s.jac_evals) + ", LS setups " +
+                          std::to_string(s.lin_setups) + ")"},
+            {"residual", format_number(s.residual, 3) + " (tol " +
+                             format_number(scene.options.equilibrium_tol, 3) + ")"},
+            {"centre sag", format_number(100 * r.centre_sag, 4) + " cm"},
+            {"max strain", format_number(100 * r.max_strain, 3) + " %"},
+            {"wall", format_number(1e3 * s.wall_seconds, 4) + " ms"},
+            {"outputs", dir + "/"}};
+  return t.text();
+}
+
+void run(const DrapeArgs& args) {
+  Scene scene = load_scene(args.scene, args.sets);
+  const IntegratorOptions& o = args.options;
+  scene.options.rtol = o.rtol;
+  scene.options.atol = o.atol;
+  scene.options.dt = o.dt;
+  scene.options.max_order = o.max_order;
+  scene.options.max_steps = o.max_steps;
+  scene.options.max_wall_seconds = o.max_wall_seconds;
+  scene.validate();
+
+  const std::string integrator = args.integrator.empty() ? default_integrator() : args.integrator;
+  try {
+    make_integrator(integrator);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("--") + e.what());  // "--integrator = X: ..."
+  }
+
+  // --target (edge measurement and objective, SPEC 2.5) is read and checked here, before the
+  // output folder is made.
+
+  const std::filesystem::path dir = make_output_dir(args.out, "drape-" + scene.name);
+  DrapeResult result = [&] {
+    ProgressLine progress(scene.name + " " + integrator, scene.options.equilibrium_tol,
+                          !args.quiet);
+    return run_drape(scene, integrator, &progress);
+  }();
+  write_drape_outputs(dir, scene, result);
+  if (!args.quiet) std::cout << human_summary(scene, result, dir.string()) << std::flush;
+  if (result.stats.status != RunStatus::Equilibrium) throw CLI::RuntimeError(3);
+}
+
+}  // namespace
+
+void register_drape_command(CLI::App& app) {
+  auto args = std::make_shared<DrapeArgs>();
+  CLI::App* cmd =
+      app.add_subcommand("drape",
+                         "Hang a fabric (paper 1) and run it to equilibrium; writes summary.json, "
+                         "nodes.csv, drape.vtk, drape.png and manifest.json into --out");
+  cmd->add_option("--scene", args->scene,
+                  "Built-in scene (four_corner, two_corner, two_corner_slack) or a TOML file")
+      ->capture_default_str();
+  cmd->add_option("--set", args->sets,
+                  "Override a scene key, e.g. model.stiffness=900 (repeatable: one key=value "
+                  "per --set)")
+      ->allow_extra_args(false)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  cmd->add_option("--integrator", args->integrator,
+                  "Integrator (knitsim list integrators); default cvode-bdf if built, else "
+                  "implicit-euler");
+  cmd->add_option("--rtol", args->options.rtol, "Relative tolerance (adaptive methods)")
+      ->capture_default_str();
+  cmd->add_option("--atol", args->options.atol, "Absolute tolerance, m and m/s")
+      ->capture_default_str();
+  cmd->add_option("--dt", args->options.dt, "Fixed step, s (fixed-step methods; 0 = automatic)")
+      ->capture_default_str();
+  cmd->add_option("--max-order", args->options.max_order, "Cap on the method order (0 = default)")
+      ->capture_default_str();
+  cmd->add_option("--max-steps", args->options.max_steps, "Step cap")->capture_default_str();
+  cmd->add_option("--max-wall", args->options.max_wall_seconds,
+                  "Wall-clock cap, s (0 = none); the run then ends with status wall_limit")
+      ->capture_default_str();
+  cmd->add_option("--out", args->out,
+                  "Output folder (default: a fresh out/drape-<scene>-<YYYYmmdd-HHMMSS>)");
+  cmd->add_flag("--quiet", args->quiet, "No progress line and no summary on stdout");
+  cmd->callback([args] { run(*args); });
+}
+
+}  // namespace knitsim

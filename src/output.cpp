@@ -1,0 +1,444 @@
+#include "src/output.hpp"
+
+#include <cairo.h>
+#include <unistd.h>
+
+#include <CLI/Version.hpp>
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include "src/render.hpp"
+
+// Set by CMakeLists.txt on this file only (configure-time facts).
+#ifndef KNITSIM_GIT_COMMIT
+#define KNITSIM_GIT_COMMIT "unknown"
+#endif
+#ifndef KNITSIM_VERSION
+#define KNITSIM_VERSION "unknown"
+#endif
+#ifndef KNITSIM_BUILD_TYPE
+#define KNITSIM_BUILD_TYPE "unknown"
+#endif
+#ifndef KNITSIM_SUNDIALS_VERSION
+#define KNITSIM_SUNDIALS_VERSION "unknown"
+#endif
+#ifndef KNITSIM_EIGEN_VERSION
+#define KNITSIM_EIGEN_VERSION "unknown"
+#endif
+#ifndef KNITSIM_TOMLPP_VERSION
+#define KNITSIM_TOMLPP_VERSION "unknown"
+#endif
+
+namespace knitsim {
+
+namespace fs = std::filesystem;
+
+// ---- files and folders -----------------------------------------------------------------------
+
+namespace {
+
+std::string tmp_name(const fs::path& path) { return path.string() + ".tmp"; }
+
+void commit_tmp(const fs::path& path) {
+  std::error_code ec;
+  fs::rename(tmp_name(path), path, ec);
+  if (ec) {
+    fs::remove(tmp_name(path), ec);
+    throw std::runtime_error("cannot write " + path.string() + ": " + ec.message());
+  }
+}
+
+std::string local_stamp() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  localtime_r(&now, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y%m%d-%H%M%S", &tm);
+  return buf;
+}
+
+std::string utc_stamp() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+}  // namespace
+
+void write_file_atomic(const fs::path& path, const std::string& content) {
+  write_file_atomic_with(path, [&content](const std::string& tmp) {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    out << content;
+    out.close();
+    if (!out) throw std::runtime_error(std::strerror(errno));
+  });
+}
+
+void write_file_atomic_with(const fs::path& path,
+                            const std::function<void(const std::string& tmp)>& write) {
+  try {
+    write(tmp_name(path));
+  } catch (const std::exception& e) {
+    std::error_code ec;
+    fs::remove(tmp_name(path), ec);
+    throw std::runtime_error("cannot write " + path.string() + ": " + e.what());
+  }
+  commit_tmp(path);
+}
+
+void write_json_atomic(const fs::path& path, const nlohmann::json& value) {
+  write_file_atomic(path, value.dump(2) + "\n");
+}
+
+fs::path make_output_dir(const std::string& requested, const std::string& stem) {
+  std::error_code ec;
+  fs::path dir;
+  bool created = false;
+  if (requested.empty()) {
+    const fs::path parent = "out";
+    fs::create_directories(parent, ec);
+    if (ec) throw std::invalid_argument("--out (default out/): cannot create out: " + ec.message());
+    const std::string base = stem + "-" + local_stamp();
+    for (int k = 1; !created; ++k) {
+      dir = parent / (k == 1 ? base : base + "-" + std::to_string(k));
+      created = fs::create_directory(dir, ec);
+      if (ec)
+        throw std::invalid_argument("--out " + dir.string() + ": cannot create: " + ec.message());
+    }
+  } else {
+    dir = requested;
+    if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
+      throw std::invalid_argument("--out " + requested + ": exists and is not a folder");
+    created = !fs::exists(dir, ec);
+    fs::create_directories(dir, ec);
+    if (ec) throw std::invalid_argument("--out " + requested + ": cannot create: " + ec.message());
+  }
+  const fs::path probe = dir / (".knitsim-probe-" + std::to_string(::getpid()));
+  std::ofstream out(probe);
+  const int err = errno;
+  const bool writable = static_cast<bool>(out);
+  out.close();
+  fs::remove(probe, ec);
+  if (!writable) {
+    if (created) fs::remove(dir, ec);
+    throw std::invalid_argument("--out " + dir.string() + ": cannot write: " + std::strerror(err));
+  }
+  return dir;
+}
+
+// ---- formatting --------------------------------------------------------------------------------
+
+std::string format_number(double value, int digits) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*g", digits, value);
+  return buf;
+}
+
+std::string Table::text() const {
+  std::vector<size_t> width(columns.size());
+  for (size_t c = 0; c < columns.size(); ++c) width[c] = columns[c].size();
+  for (const auto& row : rows)
+    for (size_t c = 0; c < row.size() && c < width.size(); ++c)
+      width[c] = std::max(width[c], row[c].size());
+  std::ostringstream os;
+  auto line = [&](const std::vector<std::string>& cells) {
+    std::string s;
+    for (size_t c = 0; c < cells.size(); ++c) {
+      s += cells[c];
+      if (c + 1 < cells.size()) s += std::string(width[c] - cells[c].size() + 2, ' ');
+    }
+    os << s << "\n";
+  };
+  line(columns);
+  for (const auto& row : rows) line(row);
+  return os.str();
+}
+
+std::string Table::csv() const {
+  auto cell = [](const std::string& s) {
+    if (s.find_first_of(",\"\n") == std::string::npos) return s;
+    std::string q = "\"";
+    for (char ch : s) q += ch == '"' ? std::string("\"\"") : std::string(1, ch);
+    return q + "\"";
+  };
+  std::ostringstream os;
+  auto line = [&](const std::vector<std::string>& cells) {
+    for (size_t c = 0; c < cells.size(); ++c) os << (c ? "," : "") << cell(cells[c]);
+    os << "\n";
+  };
+  line(columns);
+  for (const auto& row : rows) line(row);
+  return os.str();
+}
+
+std::string Table::markdown() const {
+  std::ostringstream os;
+  auto line = [&](const std::vector<std::string>& cells) {
+    os << "|";
+    for (const std::string& c : cells) os << " " << c << " |";
+    os << "\n";
+  };
+  line(columns);
+  os << "|";
+  for (size_t c = 0; c < columns.size(); ++c) os << "---|";
+  os << "\n";
+  for (const auto& row : rows) line(row);
+  return os.str();
+}
+
+std::string to_vtk(const VtkPolyData& d) {
+  std::ostringstream os;
+  os.precision(10);
+  os << "# vtk DataFile Version 3.0\n" << d.title << "\nASCII\nDATASET POLYDATA\n";
+  os << "POINTS " << d.points.size() << " double\n";
+  for (const Vec3& p : d.points) os << p.x << " " << p.y << " " << p.z << "\n";
+  size_t size = 0;
+  for (const auto& poly : d.polygons) size += poly.size() + 1;
+  os << "POLYGONS " << d.polygons.size() << " " << size << "\n";
+  for (const auto& poly : d.polygons) {
+    os << poly.size();
+    for (int i : poly) os << " " << i;
+    os << "\n";
+  }
+  if (!d.point_ints.empty() || !d.point_vectors.empty())
+    os << "POINT_DATA " << d.points.size() << "\n";
+  for (const auto& [name, values] : d.point_ints) {
+    os << "SCALARS " << name << " int 1\nLOOKUP_TABLE default\n";
+    for (int v : values) os << v << "\n";
+  }
+  for (const auto& [name, values] : d.point_vectors) {
+    os << "VECTORS " << name << " double\n";
+    for (const Vec3& v : values) os << v.x << " " << v.y << " " << v.z << "\n";
+  }
+  return os.str();
+}
+
+// ---- JSON ------------------------------------------------------------------------------------
+
+nlohmann::json to_json(const DrapeParams& p) {
+  return {{"width", p.width},
+          {"areal_density", p.areal_density},
+          {"stiffness", p.stiffness},
+          {"damping", p.damping},
+          {"elongation_limit", p.elongation_limit},
+          {"natural_length", p.natural_length},
+          {"topology", std::string(1, p.topology)},
+          {"layout", to_string(p.layout)},
+          {"pin_span", p.pin_span},
+          {"pin_move_time", p.pin_move_time},
+          {"perturbation", p.perturbation},
+          {"seed", p.seed}};
+}
+
+nlohmann::json to_json(const IntegratorOptions& o) {
+  return {{"rtol", o.rtol},
+          {"atol", o.atol},
+          {"dt", o.dt},
+          {"dt_safety", o.dt_safety},
+          {"max_order", o.max_order},
+          {"max_steps", o.max_steps},
+          {"t_max", o.t_max},
+          {"equilibrium_tol", o.equilibrium_tol},
+          {"max_wall_seconds", o.max_wall_seconds},
+          {"check_every", o.check_every},
+          {"runaway_position", o.runaway_position},
+          {"krylov_dim", o.krylov_dim},
+          {"gmres_preconditioner", o.gmres_preconditioner}};
+}
+
+nlohmann::json to_json(const RunStats& s) {
+  return {{"integrator", s.integrator},
+          {"status", to_string(s.status)},
+          {"message", s.message},
+          {"t_final", s.t_final},
+          {"residual", s.residual},
+          {"dt", s.dt},
+          {"dt_predicted", s.dt_predicted},
+          {"steps", s.steps},
+          {"rhs_evals", s.rhs_evals},
+          {"jac_evals", s.jac_evals},
+          {"lin_setups", s.lin_setups},
+          {"lin_iters", s.lin_iters},
+          {"nonlin_iters", s.nonlin_iters},
+          {"nonlin_fails", s.nonlin_fails},
+          {"err_test_fails", s.err_test_fails},
+          {"max_order_used", s.max_order_used},
+          {"wall_seconds", s.wall_seconds}};
+}
+
+// ---- provenance --------------------------------------------------------------------------------
+
+namespace {
+std::string& command_line_store() {
+  static std::string line;
+  return line;
+}
+}  // namespace
+
+void set_command_line(int argc, const char* const* argv) {
+  std::string line;
+  for (int i = 0; i < argc; ++i) {
+    std::string arg = argv[i];
+    const bool plain =
+        !arg.empty() && arg.find_first_of(" \t\n'\"\\$`*?;&|<>()") == std::string::npos;
+    if (!plain) {  // shell-quoted, so the line can be pasted back
+      std::string q = "'";
+      for (char ch : arg) q += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
+      arg = q + "'";
+    }
+    line += (i ? " " : "") + arg;
+  }
+  command_line_store() = line;
+}
+
+nlohmann::json manifest(const nlohmann::json& options) {
+#if defined(__clang__)
+  const std::string compiler = "clang " __clang_version__;
+#elif defined(__GNUC__)
+  const std::string compiler = "gcc " __VERSION__;
+#else
+  const std::string compiler = "unknown";
+#endif
+  const std::string json_version = std::to_string(NLOHMANN_JSON_VERSION_MAJOR) + "." +
+                                   std::to_string(NLOHMANN_JSON_VERSION_MINOR) + "." +
+                                   std::to_string(NLOHMANN_JSON_VERSION_PATCH);
+  return {{"program", "knitsim"},
+          {"version", KNITSIM_VERSION},
+          {"git_commit", KNITSIM_GIT_COMMIT},
+          {"build_type", KNITSIM_BUILD_TYPE},
+          {"command_line", command_line_store()},
+          {"created_utc", utc_stamp()},
+          {"options", options},
+          {"libraries",
+           {{"sundials", KNITSIM_SUNDIALS_VERSION},
+            {"eigen", KNITSIM_EIGEN_VERSION},
+            {"cairo", cairo_version_string()},
+            {"tomlplusplus", KNITSIM_TOMLPP_VERSION},
+            {"cli11", CLI11_VERSION},
+            {"nlohmann_json", json_version}}},
+          {"compiler", compiler}};
+}
+
+// ---- drape outputs -----------------------------------------------------------------------------
+
+nlohmann::json drape_summary(const Scene& scene, const DrapeResult& r) {
+  const SpringNetwork& net = r.grid.network;
+  nlohmann::json j = to_json(r.stats);
+  j["scene"] = scene.name;
+  j["source"] = scene.source;
+  j["grid"] = {{"n", r.grid.n},
+               {"particles", net.particle_count()},
+               {"pinned", net.spec().pinned.size()},
+               {"springs", net.spec().springs.size()},
+               {"dof", net.dof()}};
+  j["max_strain"] = r.max_strain;
+  j["centre_sag_m"] = r.centre_sag;
+  j["params"] = to_json(scene.params);
+  j["options"] = to_json(scene.options);
+  return j;
+}
+
+void write_drape_outputs(const fs::path& dir, const Scene& scene, const DrapeResult& r) {
+  const DrapeGrid& g = r.grid;
+  const int side = g.n + 1;
+  std::vector<int> pinned(r.positions.size(), 0);
+  for (int p : g.network.spec().pinned) pinned[p] = 1;
+
+  write_json_atomic(dir / "summary.json", drape_summary(scene, r));
+
+  std::ostringstream nodes;
+  nodes.precision(17);
+  nodes << "id,i,j,x,y,z,pinned\n";
+  for (int i = 0; i < side; ++i)
+    for (int j = 0; j < side; ++j) {
+      const int id = g.index(i, j);
+      const Vec3& p = r.positions[id];
+      nodes << id << "," << i << "," << j << "," << p.x << "," << p.y << "," << p.z << ","
+            << pinned[id] << "\n";
+    }
+  write_file_atomic(dir / "nodes.csv", nodes.str());
+
+  std::vector<std::array<int, 4>> quads;
+  for (int i = 0; i < g.n; ++i)
+    for (int j = 0; j < g.n; ++j)
+      quads.push_back({g.index(i, j), g.index(i, j + 1), g.index(i + 1, j + 1), g.index(i + 1, j)});
+
+  VtkPolyData vtk;
+  vtk.title = "knitsim drape " + scene.name + " (" + r.stats.integrator + ", " +
+              to_string(r.stats.status) + ", t = " + format_number(r.stats.t_final, 6) + " s)";
+  vtk.points = r.positions;
+  for (const auto& q : quads) vtk.polygons.emplace_back(q.begin(), q.end());
+  vtk.point_ints.push_back({"pinned", pinned});
+  std::vector<Vec3> displacement(r.positions.size());
+  for (size_t k = 0; k < displacement.size(); ++k) displacement[k] = r.positions[k] - r.rest[k];
+  vtk.point_vectors.push_back({"displacement", displacement});
+  write_file_atomic(dir / "drape.vtk", to_vtk(vtk));
+
+  MeshScene mesh;
+  mesh.points = r.positions;
+  mesh.quads = quads;
+  mesh.markers = g.network.spec().pinned;
+  RenderView view;
+  view.title = scene.name + ": " + r.stats.integrator + ", " + to_string(r.stats.status) +
+               " at t = " + format_number(r.stats.t_final, 4) + " s";
+  const DrapeParams& p = scene.params;
+  view.caption = {"k = " + format_number(p.stiffness) + " N/m, c = " + format_number(p.damping) +
+                      " N s/m, L0 = " + format_number(100 * p.natural_length) + " cm, topology " +
+                      std::string(1, p.topology) + ", " + format_number(p.areal_density) + " g/m^2",
+                  std::to_string(side) + " x " + std::to_string(side) + " particles, centre sag " +
+                      format_number(100 * r.centre_sag, 3) + " cm, max strain " +
+                      format_number(100 * r.max_strain, 3) + " %, residual " +
+                      format_number(r.stats.residual, 2)};
+  write_file_atomic_with(dir / "drape.png",
+                         [&](const std::string& tmp) { render_mesh_png(tmp, mesh, view); });
+
+  write_json_atomic(dir / "manifest.json", manifest({{"scene", scene.name},
+                                                     {"source", scene.source},
+                                                     {"integrator", r.stats.integrator},
+                                                     {"params", to_json(scene.params)},
+                                                     {"options", to_json(scene.options)}}));
+}
+
+// ---- progress ----------------------------------------------------------------------------------
+
+ProgressLine::ProgressLine(std::string label, double equilibrium_tol, bool enabled)
+    : label_(std::move(label)),
+      tol_(equilibrium_tol),
+      active_(enabled && ::isatty(STDERR_FILENO) == 1),
+      start_(Clock::now()),
+      last_(start_) {}
+
+ProgressLine::~ProgressLine() {
+  if (shown_) std::fprintf(stderr, "\r\033[K");
+}
+
+void ProgressLine::on_check(double t, const double*, const double*, double residual) {
+  if (!active_) return;
+  if (first_residual_ < 0.0) first_residual_ = residual;
+  const Clock::time_point now = Clock::now();
+  if (now - last_ < std::chrono::milliseconds(100)) return;
+  last_ = now;
+  const double elapsed = std::chrono::duration<double>(now - start_).count();
+  std::string eta;
+  // Fraction of the way from the first residual to the tolerance, on a log scale.
+  if (residual > tol_ && first_residual_ > residual && tol_ > 0.0) {
+    const double f = std::log(first_residual_ / residual) / std::log(first_residual_ / tol_);
+    if (f > 0.02) eta = "  eta ~" + format_number(elapsed * (1.0 - f) / f, 2) + " s";
+  }
+  std::fprintf(stderr, "\r\033[K%s  t = %.3g s  residual %.2e (tol %.0e)  elapsed %.1f s%s",
+               label_.c_str(), t, residual, tol_, elapsed, eta.c_str());
+  std::fflush(stderr);
+  shown_ = true;
+}
+
+}  // namespace knitsim

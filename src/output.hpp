@@ -1,0 +1,120 @@
+// What a run writes and prints (SPEC 2.10, 2.11): output folders, atomic file writes, tables
+// (text, CSV, Markdown), legacy VTK, JSON summaries, the manifest, the drape outputs, and the
+// progress line on a terminal.
+//
+// Every file is written atomically: to `<name>.tmp` in the same folder, then renamed over
+// `<name>` (POSIX rename: a reader sees the old file or the new one, never half of one).
+// Failure modes: bad --out folders are bad input (std::invalid_argument naming --out); a write
+// that fails later (disk full, ...) throws std::runtime_error("cannot write PATH: reason").
+#pragma once
+
+#include <chrono>
+#include <filesystem>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "models/drape_grid.hpp"
+#include "solvers/integrator.hpp"
+#include "src/scene.hpp"
+#include "src/vec3.hpp"
+
+namespace knitsim {
+
+// ---- files and folders -----------------------------------------------------------------------
+
+void write_file_atomic(const std::filesystem::path& path, const std::string& content);
+// For writers that take a file name (the PNG renderer): write(tmp) must create the file tmp.
+void write_file_atomic_with(const std::filesystem::path& path,
+                            const std::function<void(const std::string& tmp)>& write);
+// JSON pretty-printed with 2 spaces and a final newline.
+void write_json_atomic(const std::filesystem::path& path, const nlohmann::json& value);
+
+// The output folder of a command, created and checked writable (a probe file is created and
+// removed) before any work starts.
+//   requested empty: a fresh folder out/<stem>-YYYYmmdd-HHMMSS (local time) under the working
+//     directory, with -2, -3, ... appended if that name is taken;
+//   otherwise `requested`, created with its parents if missing; an existing folder is reused
+//     and files of the same names in it are replaced.
+// Throws std::invalid_argument("--out DIR: cannot create|write ...: reason").
+std::filesystem::path make_output_dir(const std::string& requested, const std::string& stem);
+
+// ---- formatting --------------------------------------------------------------------------------
+
+// printf %.<digits>g (lossless for doubles at digits = 17).
+std::string format_number(double value, int digits = 4);
+
+// A table of text cells, printable three ways. Every row has columns.size() cells.
+struct Table {
+  std::vector<std::string> columns;
+  std::vector<std::vector<std::string>> rows;
+
+  std::string text() const;      // columns aligned with two spaces, for terminals
+  std::string csv() const;       // RFC 4180: cells holding , " or a newline are quoted
+  std::string markdown() const;  // GitHub pipe table
+};
+
+// Legacy VTK (ASCII, DATASET POLYDATA), opened by ParaView and VisIt.
+struct VtkPolyData {
+  std::string title;  // one line
+  std::vector<Vec3> points;
+  std::vector<std::vector<int>> polygons;  // point indices, any number >= 3 per polygon
+  std::vector<std::pair<std::string, std::vector<int>>> point_ints;      // SCALARS int
+  std::vector<std::pair<std::string, std::vector<Vec3>>> point_vectors;  // VECTORS double
+};
+std::string to_vtk(const VtkPolyData& data);
+
+// ---- JSON ------------------------------------------------------------------------------------
+
+nlohmann::json to_json(const DrapeParams& p);        // field names as in DrapeParams
+nlohmann::json to_json(const IntegratorOptions& o);  // field names as in IntegratorOptions
+nlohmann::json to_json(const RunStats& s);           // status as to_string(RunStatus)
+
+// ---- provenance --------------------------------------------------------------------------------
+
+// The process command line, recorded once by main() for the manifests.
+void set_command_line(int argc, const char* const* argv);
+// manifest.json: program and version, git commit (at configure time), build type, command
+// line, `options` as given, library versions (SUNDIALS, Eigen, cairo, toml++, CLI11,
+// nlohmann-json), compiler, UTC creation time. No host or user names.
+nlohmann::json manifest(const nlohmann::json& options);
+
+// ---- drape outputs -----------------------------------------------------------------------------
+
+// summary.json: scene, source, status, message, integrator, t_final, residual, wall time, all
+// RunStats counters, grid size and counts, max strain, centre sag, params, options.
+nlohmann::json drape_summary(const Scene& scene, const DrapeResult& result);
+
+// Writes into `dir` (which must exist): summary.json, nodes.csv (id,i,j,x,y,z,pinned; all
+// particles at t_final, m), drape.vtk (the grid's quads, point data `pinned` and
+// `displacement` = position - rest position, m), drape.png (render_mesh_png, oblique view) and
+// manifest.json (options: scene, integrator, params, run options).
+void write_drape_outputs(const std::filesystem::path& dir, const Scene& scene,
+                         const DrapeResult& result);
+
+// ---- progress ----------------------------------------------------------------------------------
+
+// One self-overwriting status line on stderr -- only when stderr is a terminal, and at most 10
+// times a second: label, t, static residual against the tolerance, elapsed wall time and a
+// rough ETA (extrapolating log(residual) linearly in wall time). Cleared on destruction.
+class ProgressLine final : public RunObserver {
+ public:
+  ProgressLine(std::string label, double equilibrium_tol, bool enabled = true);
+  ~ProgressLine() override;
+  ProgressLine(const ProgressLine&) = delete;
+  ProgressLine& operator=(const ProgressLine&) = delete;
+
+  void on_check(double t, const double* x, const double* v, double residual) override;
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  std::string label_;
+  double tol_;
+  bool active_;
+  bool shown_ = false;
+  double first_residual_ = -1.0;
+  Clock::time_point start_, last_;
+};
+
+}  // namespace knitsim

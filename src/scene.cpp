@@ -1,0 +1,356 @@
+#include "src/scene.hpp"
+
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <climits>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+namespace knitsim {
+
+namespace {
+
+enum class Kind { Number, Integer, Text };
+
+// One scene key: where its value goes. Number keys expose the field (its accepted range is
+// stated once, by the validators); Integer and Text keys parse and check their own value and
+// throw `accepted` (e.g. "one of a, b, c") when it does not fit.
+struct Key {
+  std::string name;
+  Kind kind;
+  std::function<double&(Scene&)> number;                // Kind::Number
+  std::function<bool(Scene&, const std::string&)> set;  // Integer, Text: false = bad
+  std::string accepted;                                 // Integer, Text
+};
+
+bool is_name(const std::string& s) {
+  return !s.empty() && std::all_of(s.begin(), s.end(), [](unsigned char c) {
+    return std::isalnum(c) || c == '_' || c == '-';
+  });
+}
+
+const std::vector<Key>& keys() {
+  static const std::vector<Key> table = [] {
+    std::vector<Key> k;
+    auto number = [&k](const char* name, std::function<double&(Scene&)> field) {
+      k.push_back({name, Kind::Number, std::move(field), nullptr, ""});
+    };
+    auto other = [&k](const char* name, Kind kind,
+                      std::function<bool(Scene&, const std::string&)> set, const char* accepted) {
+      k.push_back({name, kind, nullptr, std::move(set), accepted});
+    };
+    other(
+        "scene.name", Kind::Text,
+        [](Scene& s, const std::string& v) { return is_name(v) ? (s.name = v, true) : false; },
+        "a non-empty name of letters, digits, _ and -");
+    number("fabric.width", [](Scene& s) -> double& { return s.params.width; });
+    number("fabric.areal_density", [](Scene& s) -> double& { return s.params.areal_density; });
+    number("model.stiffness", [](Scene& s) -> double& { return s.params.stiffness; });
+    number("model.damping", [](Scene& s) -> double& { return s.params.damping; });
+    number("model.elongation_limit", [](Scene& s) -> double& { return s.params.elongation_limit; });
+    number("model.natural_length", [](Scene& s) -> double& { return s.params.natural_length; });
+    other(
+        "model.topology", Kind::Text,
+        [](Scene& s, const std::string& v) {
+          if (v != "a" && v != "b" && v != "c") return false;
+          s.params.topology = v[0];
+          return true;
+        },
+        "one of a, b, c");
+    number("model.perturbation", [](Scene& s) -> double& { return s.params.perturbation; });
+    other(
+        "model.seed", Kind::Integer,
+        [](Scene& s, const std::string& v) {
+          auto digit = [](unsigned char c) { return std::isdigit(c) != 0; };
+          if (v.empty() || !std::all_of(v.begin(), v.end(), digit)) return false;
+          errno = 0;
+          const unsigned long long u = std::strtoull(v.c_str(), nullptr, 10);
+          if (errno == ERANGE || u > UINT_MAX) return false;
+          s.params.seed = static_cast<unsigned>(u);
+          return true;
+        },
+        "an integer in 0..4294967295");
+    other(
+        "pins.layout", Kind::Text,
+        [](Scene& s, const std::string& v) {
+          if (v == "four_corner")
+            s.params.layout = PinLayout::FourCorner;
+          else if (v == "two_corner")
+            s.params.layout = PinLayout::TwoCorner;
+          else
+            return false;
+          return true;
+        },
+        "one of four_corner, two_corner");
+    number("pins.span", [](Scene& s) -> double& { return s.params.pin_span; });
+    number("pins.move_time", [](Scene& s) -> double& { return s.params.pin_move_time; });
+    number("run.t_max", [](Scene& s) -> double& { return s.options.t_max; });
+    number("run.equilibrium_tol", [](Scene& s) -> double& { return s.options.equilibrium_tol; });
+    return k;
+  }();
+  return table;
+}
+
+// Levenshtein distance, for "did you mean".
+size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diagonal = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] != b[j - 1] ? 1 : 0)});
+      diagonal = up;
+    }
+  }
+  return row[b.size()];
+}
+
+[[noreturn]] void unknown_key(const std::string& key, const std::string& where) {
+  std::string best;
+  size_t best_distance = std::numeric_limits<size_t>::max();
+  for (const Key& k : keys()) {
+    const size_t d = edit_distance(key, k.name);
+    if (d < best_distance) best_distance = d, best = k.name;
+  }
+  std::string msg = key + ": unknown key; ";
+  if (best_distance <= std::max<size_t>(3, key.size() / 3)) {
+    msg += "did you mean " + best + "?";
+  } else {
+    msg += "valid keys:";
+    for (const std::string& k : scene_keys()) msg += " " + k;
+  }
+  throw std::invalid_argument(msg + where);
+}
+
+const Key& find_key(const std::string& name, const std::string& where) {
+  for (const Key& k : keys())
+    if (k.name == name) return k;
+  unknown_key(name, where);
+}
+
+// The accepted values of a key, for type errors. For numbers the range is asked from the
+// validators (with the field set to NaN), so it is stated in one place.
+std::string accepted(const Key& key) {
+  if (key.kind != Kind::Number) return key.accepted;
+  Scene probe;
+  key.number(probe) = std::numeric_limits<double>::quiet_NaN();
+  try {
+    probe.validate();
+  } catch (const std::invalid_argument& e) {
+    const std::string msg = e.what();
+    const std::string marker = ": must be ";
+    const size_t at = msg.find(marker);
+    if (at != std::string::npos) return "a number " + msg.substr(at + marker.size());
+  }
+  return "a finite number";
+}
+
+[[noreturn]] void bad_value(const Key& key, const std::string& shown, const std::string& where) {
+  throw std::invalid_argument(key.name + " = " + shown + ": must be " + accepted(key) + where);
+}
+
+// Sets a Number key; NaN and inf are type errors.
+void set_number(Scene& scene, const Key& key, double value, const std::string& shown,
+                const std::string& where) {
+  if (!std::isfinite(value)) bad_value(key, shown, where);
+  key.number(scene) = value;
+}
+
+// Sets `key` from text (a --set value, or a TOML string or integer).
+void set_from_text(Scene& scene, const Key& key, const std::string& text, const std::string& shown,
+                   const std::string& where) {
+  if (key.kind == Kind::Number) {
+    char* end = nullptr;
+    const double value = std::strtod(text.c_str(), &end);
+    if (text.empty() || end != text.c_str() + text.size()) bad_value(key, shown, where);
+    set_number(scene, key, value, shown, where);
+  } else if (!key.set(scene, text)) {
+    bad_value(key, shown, where);
+  }
+}
+
+std::string trim(const std::string& s) {
+  const size_t b = s.find_first_not_of(" \t");
+  if (b == std::string::npos) return "";
+  return s.substr(b, s.find_last_not_of(" \t") - b + 1);
+}
+
+void apply_override(Scene& scene, const std::string& assignment) {
+  const size_t eq = assignment.find('=');
+  if (eq == std::string::npos)
+    throw std::invalid_argument("--set " + assignment + ": expected key=value, e.g. " +
+                                "model.stiffness=900");
+  const std::string name = trim(assignment.substr(0, eq));
+  std::string value = trim(assignment.substr(eq + 1));
+  const Key& key = find_key(name, "");
+  if (key.kind == Kind::Text && value.size() >= 2 && value.front() == '"' && value.back() == '"')
+    value = value.substr(1, value.size() - 2);
+  set_from_text(scene, key, value, value, "");
+}
+
+// A TOML value as it appears in the file, for messages.
+std::string shown(const toml::node& node) {
+  std::ostringstream os;
+  node.visit([&os](const auto& v) { os << v; });
+  return os.str();
+}
+
+void apply_toml(Scene& scene, const std::string& text, const std::string& source) {
+  toml::table root;
+  try {
+    root = toml::parse(text, source);
+  } catch (const toml::parse_error& e) {
+    std::ostringstream os;
+    os << "scene " << source << ": TOML syntax error at line " << e.source().begin.line
+       << ", column " << e.source().begin.column << ": " << e.description();
+    throw std::invalid_argument(os.str());
+  }
+  auto where = [&source](const toml::node& node) {
+    return " (" + source + " line " + std::to_string(node.source().begin.line) + ")";
+  };
+  for (const auto& [section, section_node] : root) {
+    const std::string section_name(section.str());
+    const toml::table* table = section_node.as_table();
+    if (!table) unknown_key(section_name, where(section_node));
+    for (const auto& [name, node] : *table) {
+      const std::string full = section_name + "." + std::string(name.str());
+      const Key& key = find_key(full, where(node));
+      if (key.kind == Kind::Number && node.is_number()) {
+        set_number(scene, key, node.value<double>().value(), shown(node), where(node));
+      } else if (key.kind == Kind::Integer && node.is_integer()) {
+        set_from_text(scene, key, shown(node), shown(node), where(node));
+      } else if (key.kind == Kind::Text && node.is_string()) {
+        set_from_text(scene, key, node.value<std::string>().value(), shown(node), where(node));
+      } else {
+        bad_value(key, shown(node), where(node));
+      }
+    }
+  }
+}
+
+[[noreturn]] void unreadable(const std::string& path, const std::string& reason) {
+  std::string msg = "scene: cannot read " + path + ": " + reason;
+  if (path.find('/') == std::string::npos && path.find('.') == std::string::npos) {
+    msg += " (built-in scenes:";
+    for (const auto& s : builtin_scenes()) msg += " " + s.first;
+    msg += ")";
+  }
+  throw std::invalid_argument(msg);
+}
+
+std::string read_file(const std::string& path) {
+  std::error_code ec;
+  const std::filesystem::file_status st = std::filesystem::status(path, ec);
+  if (ec) unreadable(path, ec.message());
+  if (std::filesystem::is_directory(st)) unreadable(path, "is a directory");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) unreadable(path, std::strerror(errno));
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) unreadable(path, "read error");
+  return text.str();
+}
+
+}  // namespace
+
+void Scene::validate() const {
+  params.validate();
+  try {
+    options.validate();
+  } catch (const std::invalid_argument& e) {
+    // IntegratorOptions names its fields; the user wrote a scene key or a command-line flag.
+    static const std::vector<std::pair<std::string, std::string>> user_names = {
+        {"t_max", "run.t_max"},
+        {"equilibrium_tol", "run.equilibrium_tol"},
+        {"rtol", "--rtol"},
+        {"atol", "--atol"},
+        {"dt", "--dt"},
+        {"max_order", "--max-order"},
+        {"max_steps", "--max-steps"},
+        {"max_wall_seconds", "--max-wall"}};
+    const std::string msg = e.what();
+    for (const auto& [field, user] : user_names)
+      if (msg.rfind(field + " = ", 0) == 0)
+        throw std::invalid_argument(user + msg.substr(field.size()));
+    throw;
+  }
+}
+
+Scene load_scene(const std::string& name_or_path, const std::vector<std::string>& overrides) {
+  Scene scene;
+  const auto& builtins = builtin_scenes();
+  const auto builtin = std::find_if(builtins.begin(), builtins.end(),
+                                    [&](const auto& s) { return s.first == name_or_path; });
+  if (builtin != builtins.end()) {
+    scene.name = builtin->first;
+    scene.source = "built-in";
+    apply_toml(scene, builtin->second, "built-in " + builtin->first);
+  } else {
+    const std::string text = read_file(name_or_path);
+    const std::string stem = std::filesystem::path(name_or_path).stem().string();
+    scene.name = is_name(stem) ? stem : "scene";
+    scene.source = name_or_path;
+    apply_toml(scene, text, name_or_path);
+  }
+  for (const std::string& o : overrides) apply_override(scene, o);
+  scene.validate();
+  return scene;
+}
+
+std::vector<std::string> scene_keys() {
+  std::vector<std::string> names;
+  for (const Key& k : keys()) names.push_back(k.name);
+  return names;
+}
+
+std::string scene_description(const std::string& toml_text) {
+  std::istringstream in(toml_text);
+  std::string line;
+  std::getline(in, line);
+  if (!std::getline(in, line)) return "";
+  const size_t hash = line.find('#');
+  return hash == std::string::npos ? "" : trim(line.substr(hash + 1));
+}
+
+std::string default_integrator() {
+  for (const IntegratorInfo& info : integrator_catalog())
+    if (info.name == "cvode-bdf") return info.name;
+  return "implicit-euler";
+}
+
+DrapeResult run_drape(const Scene& scene, const std::string& integrator, RunObserver* observer) {
+  scene.validate();
+  auto integ = make_integrator(integrator);
+  DrapeResult r{build_drape_grid(scene.params), RunStats{}, {}, {}};
+  const SpringNetwork& net = r.grid.network;
+  std::vector<double> x, v;
+  r.stats = run_to_equilibrium(net, *integ, scene.options, x, v, observer);
+  const double t = r.stats.t_final;
+  net.all_positions(t, x.data(), r.positions);
+  r.rest = net.spec().positions;
+  r.max_strain = net.max_strain(t, x.data());
+
+  const int n = r.grid.n;
+  double centre_z = 0.0;
+  int count = 0;
+  for (int i : {n / 2, (n + 1) / 2})
+    for (int j : {n / 2, (n + 1) / 2}) centre_z += r.positions[r.grid.index(i, j)].z, ++count;
+  double pin_z = 0.0;
+  for (int p : net.spec().pinned) pin_z += r.positions[p].z;
+  r.centre_sag = pin_z / net.spec().pinned.size() - centre_z / count;
+  return r;
+}
+
+}  // namespace knitsim

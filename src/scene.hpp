@@ -1,0 +1,80 @@
+// Drape scenes (SPEC 2.2, 2.10): a DrapeParams set plus the run options of SPEC 2.3, loaded
+// from a built-in name or a TOML file, with `--set key=value` overrides, and run to equilibrium.
+//
+// Scene file (TOML), keys and units exactly as in models/scenes/four_corner.toml; every key is
+// optional (defaults: DrapeParams / IntegratorOptions, i.e. sample 1 hung from four corners):
+//   [scene]  name (text; default: the built-in name or the file's stem)
+//   [fabric] width (m), areal_density (g/m^2)
+//   [model]  stiffness (N/m), damping (N s/m), elongation_limit (percent),
+//            natural_length (m), topology (a|b|c), perturbation (m), seed (integer >= 0)
+//   [pins]   layout (four_corner|two_corner), span (fraction of the width), move_time (s)
+//   [run]    t_max (s), equilibrium_tol (static residual, dimensionless)
+// Line 2 of a scene file is a comment that describes it in one line (`knitsim list scenes`).
+//
+// Failure modes: every bad input throws std::invalid_argument with one line naming the key as
+// the user wrote it (scene key, or the command-line flag for the run options):
+//   "model.stifness: unknown key; did you mean model.stiffness?"
+//   "model.stiffness = abc: must be a number > 0 N/m"      (wrong type, NaN, inf)
+//   "model.stiffness = -5: must be > 0 N/m"                 (range, from DrapeParams::validate)
+//   "scene: cannot read FILE: <reason>",  "scene FILE: TOML syntax error at line L, column C: ..."
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "models/drape_grid.hpp"
+#include "solvers/integrator.hpp"
+#include "src/vec3.hpp"
+
+namespace knitsim {
+
+// The built-in scene files as (name, TOML text), compiled into the binary from
+// models/scenes/*.toml by src/embed_scenes.cmake (defined in the generated builtin_scenes.cpp).
+const std::vector<std::pair<std::string, std::string>>& builtin_scenes();
+
+struct Scene {
+  std::string name = "four_corner";  // scene.name
+  std::string source = "built-in";   // "built-in" or the file path it was read from
+  DrapeParams params;
+  // Run options: the scene sets t_max and equilibrium_tol ([run]); the command line may set
+  // the integrator's tolerances, step and caps. Everything else keeps its default.
+  IntegratorOptions options;
+
+  // DrapeParams::validate and IntegratorOptions::validate, with the offending field renamed to
+  // what the user writes (run.t_max, --rtol, --max-wall, ...).
+  void validate() const;
+};
+
+// Loads a built-in scene (by name) or a scene file (any other argument is a path), applies the
+// "key=value" overrides in order, and validates the result.
+Scene load_scene(const std::string& name_or_path, const std::vector<std::string>& overrides = {});
+
+// All scene keys, dotted ("model.stiffness"), in file order.
+std::vector<std::string> scene_keys();
+
+// The one-line description of a scene file: its line 2 without the leading "#".
+std::string scene_description(const std::string& toml_text);
+
+// cvode-bdf if the registry has it, otherwise implicit-euler (SPEC 2.4: cvode-bdf is the
+// default).
+std::string default_integrator();
+
+// One drape run and the quantities every report of it shows.
+struct DrapeResult {
+  DrapeGrid grid;               // the model that ran; particle (i, j) = grid.index(i, j)
+  RunStats stats;               // status, counters, residual, wall time
+  std::vector<Vec3> positions;  // all particles (pins included) at stats.t_final, m
+  std::vector<Vec3> rest;       // all particles at t = 0, m
+  double max_strain = 0.0;      // largest spring strain (L - L0)/L0 at t_final
+  double centre_sag = 0.0;      // m: mean pin height minus the height of the grid centre (the
+                                // mean of the 1 or 4 particles nearest to it), at t_final
+};
+
+// Builds the grid of `scene`, runs it from the flat state with run_to_equilibrium and the named
+// integrator (throws std::invalid_argument for an unknown name), and measures the result.
+// A run that does not reach equilibrium is a status in result.stats, not an exception.
+DrapeResult run_drape(const Scene& scene, const std::string& integrator,
+                      RunObserver* observer = nullptr);
+
+}  // namespace knitsim

@@ -1,0 +1,256 @@
+// The knitsim binary against its command-line contract (SPEC 2.10), and the output writers.
+//   bad input: exit 2, one stderr line naming the field, nothing written;
+//   a settled run: exit 0 and outputs that agree with each other;
+//   an unsettled run: exit 3 with the outputs still written.
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "src/output.hpp"
+
+#ifndef KNITSIM_EXE
+#error "KNITSIM_EXE (the path of the knitsim binary) must be defined by the build"
+#endif
+
+using namespace knitsim;
+namespace fs = std::filesystem;
+
+namespace {
+
+// A fresh temporary folder, removed at the end of the test.
+struct TempDir {
+  fs::path path;
+  explicit TempDir(const std::string& tag) {
+    path =
+        fs::temp_directory_path() / ("knitsim-test-cli-" + tag + "-" + std::to_string(::getpid()));
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~TempDir() { fs::remove_all(path); }
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::vector<std::string> lines(const std::string& text) {
+  std::vector<std::string> out;
+  std::istringstream in(text);
+  for (std::string l; std::getline(in, l);) out.push_back(l);
+  return out;
+}
+
+struct Run {
+  int status = -1;
+  std::string out, err;
+};
+
+// Runs `knitsim <args>` (args already shell-quoted) with stdout/stderr captured.
+Run run_knitsim(const std::string& args, const TempDir& tmp) {
+  const fs::path out = tmp.path / "stdout.txt", err = tmp.path / "stderr.txt";
+  const std::string cmd = std::string("'") + KNITSIM_EXE + "' " + args + " >'" + out.string() +
+                          "' 2>'" + err.string() + "' </dev/null";
+  const int raw = std::system(cmd.c_str());
+  Run r;
+  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
+}
+
+}  // namespace
+
+TEST_CASE("bad input: exit 2, one stderr line naming the field, --out not created") {
+  TempDir tmp("bad");
+  const fs::path out = tmp.path / "should-not-exist";
+  fs::create_directories(tmp.path / "a-file-parent");
+  std::ofstream(tmp.path / "a-file") << "x";
+  struct Case {
+    std::string args, names;
+  };
+  const std::vector<Case> cases = {
+      {"--set model.stifness=900", "did you mean model.stiffness?"},
+      {"--set model.topology=d", "model.topology = d: must be one of a, b, c"},
+      {"--set model.stiffness=nan", "model.stiffness = nan: must be a number > 0 N/m"},
+      {"--set model.stiffness=-3", "model.stiffness = -3: must be > 0 N/m"},
+      {"--set model.natural_length=0", "model.natural_length = 0: must be > 0 m"},
+      {"--scene /nonexistent/scene.toml", "scene: cannot read /nonexistent/scene.toml"},
+      {"--scene four_cornr", "built-in scenes: four_corner"},
+      {"--rtol 2", "--rtol = 2: must be in (0, 1)"},
+      {"--rtol abc", "--rtol"},
+      {"--max-steps 0", "--max-steps = 0"},
+      {"--integrator nope", "--integrator = nope: must be one of"},
+      {"--bogus", "--bogus"},
+  };
+  for (const Case& c : cases) {
+    CAPTURE(c.args);
+    const Run r = run_knitsim("drape " + c.args + " --out '" + out.string() + "'", tmp);
+    CHECK(r.status == 2);
+    const auto err = lines(r.err);
+    REQUIRE(err.size() == 1);
+    CHECK(err[0].rfind("knitsim: error: ", 0) == 0);
+    CHECK(err[0].find(c.names) != std::string::npos);
+    CHECK(r.out.empty());
+    CHECK(!fs::exists(out));
+  }
+  // --out that is a file, or below a file.
+  for (const fs::path& bad : {tmp.path / "a-file", tmp.path / "a-file" / "sub"}) {
+    CAPTURE(bad);
+    const Run r =
+        run_knitsim("drape --set model.natural_length=0.1 --out '" + bad.string() + "'", tmp);
+    CHECK(r.status == 2);
+    REQUIRE(lines(r.err).size() == 1);
+    CHECK(r.err.find("--out " + bad.string()) != std::string::npos);
+  }
+  const Run none = run_knitsim("", tmp);
+  CHECK(none.status == 2);
+  CHECK(lines(none.err).size() == 1);
+  const Run list = run_knitsim("list scenery", tmp);
+  CHECK(list.status == 2);
+  CHECK(lines(list.err).size() == 1);
+}
+
+TEST_CASE("a settled drape: exit 0, summary, nodes, VTK, PNG and manifest agree") {
+  TempDir tmp("good");
+  const fs::path out = tmp.path / "nested" / "run";
+  // implicit-euler: a fixed-step method whose result does not hang on adaptive-solver tuning.
+  const Run r =
+      run_knitsim("drape --set model.natural_length=0.1 --integrator implicit-euler --out '" +
+                      out.string() + "'",
+                  tmp);
+  INFO(r.err);
+  REQUIRE(r.status == 0);
+  CHECK(r.out.find("equilibrium") != std::string::npos);
+  CHECK(r.err.empty());  // no progress line: stderr is not a terminal
+
+  const auto summary = nlohmann::json::parse(slurp(out / "summary.json"));
+  CHECK(summary["status"] == "equilibrium");
+  CHECK(summary["scene"] == "four_corner");
+  CHECK(summary["params"]["natural_length"] == 0.1);
+  const int n = summary["grid"]["n"];
+  REQUIRE(n == 5);  // floor(0.5 / 0.1 + 0.5)
+  CHECK(summary["grid"]["particles"] == 36);
+  CHECK(summary["grid"]["dof"] == 3 * 32);
+  CHECK(summary["residual"].get<double>() <= summary["options"]["equilibrium_tol"].get<double>());
+  CHECK(summary["steps"].get<long>() > 0);
+
+  // nodes.csv: (n+1)^2 rows; the 4 corners pinned at z = 0; the centre sag is theirs.
+  const auto rows = lines(slurp(out / "nodes.csv"));
+  REQUIRE(rows.size() == 1u + (n + 1) * (n + 1));
+  CHECK(rows[0] == "id,i,j,x,y,z,pinned");
+  int pinned = 0;
+  double centre_z = 0.0;
+  for (size_t k = 1; k < rows.size(); ++k) {
+    std::istringstream in(rows[k]);
+    std::string cell;
+    std::vector<double> v;
+    while (std::getline(in, cell, ',')) v.push_back(std::stod(cell));
+    REQUIRE(v.size() == 7u);
+    const int i = static_cast<int>(v[1]), j = static_cast<int>(v[2]);
+    CHECK(v[0] == i * (n + 1) + j);
+    if (v[6] == 1.0) {
+      ++pinned;
+      CHECK(v[5] == 0.0);
+      CHECK(((i == 0 || i == n) && (j == 0 || j == n)));
+    }
+    if ((i == 2 || i == 3) && (j == 2 || j == 3)) centre_z += v[5] / 4.0;
+  }
+  CHECK(pinned == 4);
+  CHECK(summary["centre_sag_m"].get<double>() == Approx(-centre_z).epsilon(1e-12));
+
+  const std::string vtk = slurp(out / "drape.vtk");
+  CHECK(vtk.rfind("# vtk DataFile Version 3.0\n", 0) == 0);
+  CHECK(vtk.find("POINTS 36 double") != std::string::npos);
+  CHECK(vtk.find("POLYGONS 25 125") != std::string::npos);
+  CHECK(vtk.find("SCALARS pinned int 1") != std::string::npos);
+  CHECK(vtk.find("VECTORS displacement double") != std::string::npos);
+
+  CHECK(slurp(out / "drape.png").rfind("\x89PNG\r\n\x1a\n", 0) == 0);
+  const auto manifest = nlohmann::json::parse(slurp(out / "manifest.json"));
+  CHECK(manifest["command_line"].get<std::string>().find("model.natural_length=0.1") !=
+        std::string::npos);
+  CHECK(!manifest["git_commit"].get<std::string>().empty());
+  CHECK(manifest["libraries"]["sundials"].get<std::string>().rfind("6.", 0) == 0);
+  CHECK(summary["integrator"] == "implicit-euler");
+  CHECK(manifest["options"]["integrator"] == "implicit-euler");
+  for (const auto& e : fs::directory_iterator(out)) CHECK(e.path().extension() != ".tmp");
+}
+
+TEST_CASE("an unsettled drape exits 3 and still writes its outputs") {
+  TempDir tmp("unsettled");
+  const fs::path out = tmp.path / "run";
+  const Run r =
+      run_knitsim("drape --set model.natural_length=0.1 --set run.t_max=0.5 --quiet --out '" +
+                      out.string() + "'",
+                  tmp);
+  CHECK(r.status == 3);
+  CHECK(r.out.empty());  // --quiet
+  const auto summary = nlohmann::json::parse(slurp(out / "summary.json"));
+  CHECK(summary["status"] == "time_limit");
+  CHECK(summary["t_final"].get<double>() == Approx(0.5));
+  CHECK(fs::exists(out / "nodes.csv"));
+  CHECK(fs::exists(out / "drape.png"));
+}
+
+TEST_CASE("knitsim list shows the registry and the built-in scenes") {
+  TempDir tmp("list");
+  const Run integ = run_knitsim("list integrators", tmp);
+  CHECK(integ.status == 0);
+  CHECK(lines(integ.out).size() == 1 + integrator_catalog().size());
+  for (const IntegratorInfo& info : integrator_catalog())
+    CHECK(integ.out.find(info.name) != std::string::npos);
+  const Run scenes = run_knitsim("list scenes", tmp);
+  CHECK(scenes.status == 0);
+  CHECK(scenes.out.find("two_corner_slack") != std::string::npos);
+  CHECK(scenes.out.find("hung from its four corners") != std::string::npos);
+}
+
+TEST_CASE("output writers: tables, VTK, atomic files and output folders") {
+  Table t;
+  t.columns = {"a", "b"};
+  t.rows = {{"1", "x,y"}, {"say \"hi\"", ""}};
+  CHECK(t.csv() == "a,b\n1,\"x,y\"\n\"say \"\"hi\"\"\",\n");
+  CHECK(t.markdown() == "| a | b |\n|---|---|\n| 1 | x,y |\n| say \"hi\" |  |\n");
+  CHECK(t.text() == "a         b\n1         x,y\nsay \"hi\"  \n");
+
+  VtkPolyData d;
+  d.title = "t";
+  d.points = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {2, 0, 0}};
+  d.polygons = {{0, 1, 2, 3}, {1, 4, 2}};
+  d.point_ints = {{"pinned", {1, 0, 0, 0, 1}}};
+  const std::string vtk = to_vtk(d);
+  CHECK(vtk.find("POLYGONS 2 9\n4 0 1 2 3\n3 1 4 2\n") != std::string::npos);
+  CHECK(vtk.find("POINT_DATA 5\nSCALARS pinned int 1\nLOOKUP_TABLE default\n1\n0\n0\n0\n1\n") !=
+        std::string::npos);
+
+  TempDir tmp("writers");
+  write_file_atomic(tmp.path / "f.txt", "one");
+  write_file_atomic(tmp.path / "f.txt", "two");
+  CHECK(slurp(tmp.path / "f.txt") == "two");
+  CHECK(!fs::exists(tmp.path / "f.txt.tmp"));
+  CHECK_THROWS_AS(write_file_atomic(tmp.path / "no-such-dir" / "f.txt", "x"), std::runtime_error);
+
+  // Default folders are fresh: a second one in the same second gets -2.
+  const fs::path cwd = fs::current_path();
+  fs::current_path(tmp.path);
+  const fs::path a = make_output_dir("", "stem");
+  const fs::path b = make_output_dir("", "stem");
+  fs::current_path(cwd);
+  CHECK(a.parent_path() == "out");
+  CHECK(a.filename().string().rfind("stem-", 0) == 0);
+  CHECK(a != b);
+  CHECK(fs::is_directory(tmp.path / a));
+  CHECK(fs::is_directory(tmp.path / b));
+  CHECK(fs::is_empty(tmp.path / a));  // the writability probe is removed
+}

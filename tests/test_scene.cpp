@@ -1,0 +1,239 @@
+// Scenes: built-in and file loading, --set overrides, one-line errors naming the key, and the
+// drape run's measured quantities against the positions it returns.
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+#include <string>
+
+#include "src/scene.hpp"
+
+using namespace knitsim;
+namespace fs = std::filesystem;
+
+namespace {
+
+// The message of the std::invalid_argument that f throws ("" if none).
+template <typename F>
+std::string error_of(F&& f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+std::string load_error(const std::string& scene, const std::vector<std::string>& sets = {}) {
+  return error_of([&] { load_scene(scene, sets); });
+}
+
+// A scene file in a fresh temporary folder.
+struct TempScene {
+  fs::path path;
+  TempScene(const std::string& name, const std::string& text) {
+    const fs::path dir =
+        fs::temp_directory_path() / ("knitsim-test-scene-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    path = dir / name;
+    std::ofstream(path) << text;
+  }
+  ~TempScene() { fs::remove_all(path.parent_path()); }
+};
+
+}  // namespace
+
+TEST_CASE("built-in scenes load with the paper's sample-1 parameters") {
+  REQUIRE(builtin_scenes().size() == 3);
+  for (const auto& [name, text] : builtin_scenes()) {
+    const Scene s = load_scene(name);
+    CAPTURE(name);
+    CHECK(s.name == name);
+    CHECK(s.source == "built-in");
+    CHECK(s.params.stiffness == 852.0);
+    CHECK(s.params.damping == 12.0);
+    CHECK(s.params.elongation_limit == 5.0);
+    CHECK(s.params.natural_length == 0.049);
+    CHECK(s.params.topology == 'a');
+    CHECK(s.params.areal_density == 41.65);
+    CHECK(s.params.width == 0.5);
+    CHECK(s.options.t_max == 1e7);
+    CHECK(s.options.equilibrium_tol == 1e-8);
+    CHECK(!scene_description(text).empty());
+  }
+  CHECK(load_scene("four_corner").params.layout == PinLayout::FourCorner);
+  const Scene two = load_scene("two_corner");
+  CHECK(two.params.layout == PinLayout::TwoCorner);
+  CHECK(two.params.pin_span == 1.0);
+  const Scene slack = load_scene("two_corner_slack");
+  CHECK(slack.params.layout == PinLayout::TwoCorner);
+  CHECK(slack.params.pin_span == 0.6);
+  CHECK(slack.params.pin_move_time == 100.0);
+  CHECK(slack.params.perturbation == 1e-6);
+  CHECK(scene_description(builtin_scenes()[0].second) ==
+        "Sample 1 (Tables 2 and 4) hung from its four corners (paper 1, Fig. 12).");
+}
+
+TEST_CASE("--set overrides change the parameters, in order, parsed by the key's type") {
+  const Scene s =
+      load_scene("four_corner",
+                 {"model.stiffness=900", "model.topology=b", "fabric.areal_density = 58.26",
+                  "model.seed=7", "pins.layout=\"two_corner\"", "pins.span=0.5", "run.t_max=5e3",
+                  "run.equilibrium_tol=1e-6", "scene.name=mine", "model.stiffness=1000"});
+  CHECK(s.params.stiffness == 1000.0);  // the later --set wins
+  CHECK(s.params.topology == 'b');
+  CHECK(s.params.areal_density == 58.26);
+  CHECK(s.params.seed == 7u);
+  CHECK(s.params.layout == PinLayout::TwoCorner);
+  CHECK(s.params.pin_span == 0.5);
+  CHECK(s.options.t_max == 5e3);
+  CHECK(s.options.equilibrium_tol == 1e-6);
+  CHECK(s.name == "mine");
+  // Untouched keys keep the scene's values.
+  CHECK(s.params.damping == 12.0);
+  CHECK(s.params.natural_length == 0.049);
+  CHECK(scene_keys().size() == 15);
+}
+
+TEST_CASE("unknown keys name the key and suggest the nearest valid one") {
+  CHECK(load_error("four_corner", {"model.stifness=900"}) ==
+        "model.stifness: unknown key; did you mean model.stiffness?");
+  CHECK(load_error("four_corner", {"fabric.areal_densty=40"}) ==
+        "fabric.areal_densty: unknown key; did you mean fabric.areal_density?");
+  CHECK(load_error("four_corner", {"run.tmax=1"}) ==
+        "run.tmax: unknown key; did you mean run.t_max?");
+  // Nothing near: the valid keys are listed instead of a misleading guess.
+  const std::string far = load_error("four_corner", {"colour=red"});
+  CHECK(far.rfind("colour: unknown key; valid keys: scene.name fabric.width", 0) == 0);
+  CHECK(far.find('\n') == std::string::npos);
+
+  TempScene file("typo.toml", "[model]\nstiffness = 900\nnatural_lenght = 0.05\n");
+  CHECK(load_error(file.path.string()) ==
+        "model.natural_lenght: unknown key; did you mean model.natural_length? (" +
+            file.path.string() + " line 3)");
+  TempScene section("section.toml", "[modle]\nstiffness = 900\n");
+  CHECK(load_error(section.path.string())
+            .rfind("modle.stiffness: unknown key; did you mean model.stiffness?", 0) == 0);
+}
+
+TEST_CASE("bad values give one line naming the field and the accepted range") {
+  struct Case {
+    std::string set, expected;
+  };
+  const std::vector<Case> cases = {
+      {"model.topology=d", "model.topology = d: must be one of a, b, c"},
+      {"model.topology=ab", "model.topology = ab: must be one of a, b, c"},
+      {"model.stiffness=-5", "model.stiffness = -5: must be > 0 N/m"},
+      {"model.stiffness=nan", "model.stiffness = nan: must be a number > 0 N/m"},
+      {"model.stiffness=inf", "model.stiffness = inf: must be a number > 0 N/m"},
+      {"model.stiffness=abc", "model.stiffness = abc: must be a number > 0 N/m"},
+      {"model.stiffness=", "model.stiffness = : must be a number > 0 N/m"},
+      {"model.stiffness=9e9x", "model.stiffness = 9e9x: must be a number > 0 N/m"},
+      {"model.natural_length=0", "model.natural_length = 0: must be > 0 m"},
+      {"model.damping=-1", "model.damping = -1: must be >= 0 N s/m"},
+      {"pins.span=1.5", "pins.span = 1.5: must be in (0, 1]"},
+      {"pins.span=x", "pins.span = x: must be a number in (0, 1]"},
+      {"pins.layout=three_corner",
+       "pins.layout = three_corner: must be one of four_corner, two_corner"},
+      {"model.seed=-1", "model.seed = -1: must be an integer in 0..4294967295"},
+      {"model.seed=1.5", "model.seed = 1.5: must be an integer in 0..4294967295"},
+      {"run.t_max=0", "run.t_max = 0: must be > 0 s"},
+      {"run.equilibrium_tol=abc", "run.equilibrium_tol = abc: must be a number > 0"},
+      {"scene.name=a b", "scene.name = a b: must be a non-empty name of letters, digits, _ and -"},
+  };
+  for (const Case& c : cases) {
+    CAPTURE(c.set);
+    CHECK(load_error("four_corner", {c.set}) == c.expected);
+  }
+  CHECK(load_error("four_corner", {"model.stiffness"}) ==
+        "--set model.stiffness: expected key=value, e.g. model.stiffness=900");
+}
+
+TEST_CASE("scene files: partial files, types, missing files and TOML syntax errors") {
+  TempScene partial("my_fabric.toml",
+                    "# x\n# A test fabric.\n[model]\nstiffness = 700   # an integer is a number\n"
+                    "[pins]\nlayout = \"two_corner\"\n");
+  const Scene s = load_scene(partial.path.string(), {"model.damping=15"});
+  CHECK(s.name == "my_fabric");  // the file's stem when [scene] name is absent
+  CHECK(s.source == partial.path.string());
+  CHECK(s.params.stiffness == 700.0);
+  CHECK(s.params.damping == 15.0);
+  CHECK(s.params.layout == PinLayout::TwoCorner);
+  CHECK(s.params.natural_length == DrapeParams{}.natural_length);
+
+  TempScene typed("typed.toml", "[model]\nstiffness = \"abc\"\n");
+  CHECK(load_error(typed.path.string()) ==
+        "model.stiffness = 'abc': must be a number > 0 N/m (" + typed.path.string() + " line 2)");
+  TempScene nan("nan.toml", "[model]\ndamping = nan\n");
+  CHECK(
+      load_error(nan.path.string()).rfind("model.damping = nan: must be a number >= 0 N s/m", 0) ==
+      0);
+  TempScene topo("topo.toml", "[model]\ntopology = 1\n");
+  CHECK(load_error(topo.path.string()).rfind("model.topology = 1: must be one of a, b, c", 0) == 0);
+
+  TempScene syntax("syntax.toml", "[model]\nstiffness = 900\ndamping = = 3\n");
+  const std::string err = load_error(syntax.path.string());
+  CHECK(err.rfind("scene " + syntax.path.string() + ": TOML syntax error at line 3, column ", 0) ==
+        0);
+  CHECK(err.find('\n') == std::string::npos);
+
+  const std::string missing = load_error("/nonexistent/scene.toml");
+  CHECK(missing == "scene: cannot read /nonexistent/scene.toml: No such file or directory");
+  CHECK(load_error("four_cornr") ==
+        "scene: cannot read four_cornr: No such file or directory (built-in scenes: four_corner "
+        "two_corner two_corner_slack)");
+  CHECK(load_error(fs::temp_directory_path().string()) ==
+        "scene: cannot read " + fs::temp_directory_path().string() + ": is a directory");
+}
+
+TEST_CASE("run options are validated under the names the user writes") {
+  Scene s = load_scene("four_corner");
+  s.options.rtol = 2.0;
+  CHECK(error_of([&] { s.validate(); }) == "--rtol = 2: must be in (0, 1)");
+  s.options.rtol = 1e-6;
+  s.options.max_wall_seconds = -1.0;
+  CHECK(error_of([&] { s.validate(); }).rfind("--max-wall = -1: ", 0) == 0);
+}
+
+TEST_CASE("run_drape: a small four_corner drape is mirror-symmetric and its sag is the centre's") {
+  // n = 5 cells: the centre is the mean of particles (2,2), (2,3), (3,2), (3,3).
+  const Scene s = load_scene("four_corner", {"model.natural_length=0.1"});
+  const DrapeResult r = run_drape(s, "implicit-euler");
+  REQUIRE(r.stats.status == RunStatus::Equilibrium);
+  REQUIRE(r.grid.n == 5);
+  REQUIRE(r.positions.size() == 36u);
+  CHECK(r.stats.residual <= s.options.equilibrium_tol);
+
+  double centre = 0.0;
+  for (int i : {2, 3})
+    for (int j : {2, 3}) centre += r.positions[r.grid.index(i, j)].z / 4.0;
+  CHECK(r.centre_sag == Approx(-centre).epsilon(1e-12));
+  CHECK(r.centre_sag > 0.0);
+
+  // Pins stay where they started; the square's symmetries (i <-> j, i <-> n - i) hold at rest.
+  for (int p : r.grid.network.spec().pinned) {
+    CHECK(r.positions[p].z == 0.0);
+    CHECK(r.positions[p].x == r.rest[p].x);
+  }
+  const int n = r.grid.n;
+  double asymmetry = 0.0;
+  for (int i = 0; i <= n; ++i)
+    for (int j = 0; j <= n; ++j) {
+      const double z = r.positions[r.grid.index(i, j)].z;
+      asymmetry = std::max(asymmetry, std::abs(z - r.positions[r.grid.index(j, i)].z));
+      asymmetry = std::max(asymmetry, std::abs(z - r.positions[r.grid.index(n - i, j)].z));
+    }
+  CHECK(asymmetry < 1e-6 * r.centre_sag);
+
+  // The reported max strain is that of the returned positions (structural springs included).
+  double strain = 0.0;
+  for (const Spring& sp : r.grid.network.spec().springs)
+    strain = std::max(strain, norm(r.positions[sp.b] - r.positions[sp.a]) / sp.rest - 1.0);
+  CHECK(r.max_strain == Approx(strain).epsilon(1e-9));
+
+  CHECK(error_of([&] { run_drape(s, "no-such-method"); }).rfind("integrator = no-such-method", 0) ==
+        0);
+}
