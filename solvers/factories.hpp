@@ -10,5 +10,13 @@ namespace knitsim::detail {
 std::unique_ptr<Integrator> make_euler();
 std::unique_ptr<Integrator> make_verlet();
 std::unique_ptr<Integrator> make_implicit_euler();
+std::unique_ptr<Integrator> make_cvode_bdf();
+std::unique_ptr<Integrator> make_cvode_bdf_dense();
+std::unique_ptr<Integrator> make_cvode_bdf_gmres();
+std::unique_ptr<Integrator> make_cvode_adams();
+std::unique_ptr<Integrator> make_arkode_erk();
+std::unique_ptr<Integrator> make_arkode_dirk();
+std::unique_ptr<Integrator> make_arkode_imex();
+std::unique_ptr<Integrator> make_static();
 
 }  // namespace knitsim::detail

@@ -35,6 +35,14 @@ const std::vector<Entry>& registry() {
     add(detail::make_euler);
     add(detail::make_verlet);
     add(detail::make_implicit_euler);
+    add(detail::make_cvode_bdf);
+    add(detail::make_cvode_bdf_dense);
+    add(detail::make_cvode_bdf_gmres);
+    add(detail::make_cvode_adams);
+    add(detail::make_arkode_erk);
+    add(detail::make_arkode_dirk);
+    add(detail::make_arkode_imex);
+    add(detail::make_static);
     return e;
   }();
   return entries;
@@ -165,7 +173,7 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
         std::ostringstream os;
         os << "non-finite or runaway state at t = " << t << " s";
         integ.fill_stats(stats);
-        if (stats.dt > 0.0)
+        if (stats.dt_predicted > 0.0)
           os << " (dt = " << stats.dt << " s, predicted stability limit "
              << stats.dt_predicted << " s)";
         return finish(RunStatus::Diverged, os.str());

@@ -1,0 +1,165 @@
+#include "solvers/sundials_common.hpp"
+
+#include <sunlinsol/sunlinsol_klu.h>
+#include <sunmatrix/sunmatrix_dense.h>
+#include <sunmatrix/sunmatrix_sparse.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <sstream>
+
+namespace knitsim::sun {
+
+namespace {
+
+std::string with_detail(const std::string& head, const std::string& detail) {
+  return detail.empty() ? head : head + ": " + detail;
+}
+
+}  // namespace
+
+SundialsError::SundialsError(const std::string& call, int flag, const std::string& name,
+                             const std::string& detail)
+    : std::runtime_error(
+          with_detail(call + ": " + name + " (" + std::to_string(flag) + ")", detail)),
+      flag_(flag),
+      flag_name_(name) {}
+
+std::string flag_name(int flag, FlagNameFn name) {
+  if (name == nullptr) return "flag " + std::to_string(flag);
+  char* s = name(flag);
+  if (s == nullptr) return "flag " + std::to_string(flag);
+  std::string out(s);
+  std::free(s);
+  return out;
+}
+
+void record_error(int /*error_code*/, const char* module, const char* function, char* msg,
+                  void* log) {
+  auto* l = static_cast<ErrorLog*>(log);
+  std::snprintf(l->last.data(), l->last.size(), "[%s] %s: %s", module ? module : "?",
+                function ? function : "?", msg ? msg : "");
+}
+
+void check(int flag, const char* call, FlagNameFn name, const ErrorLog* log) {
+  if (flag >= 0) return;
+  throw SundialsError(call, flag, flag_name(flag, name), log ? log->last.data() : "");
+}
+
+std::string step_failure(const char* call, int flag, FlagNameFn name, double t,
+                         const ErrorLog& log) {
+  std::ostringstream os;
+  os << call << ": " << flag_name(flag, name) << " at t = " << t << " s";
+  return with_detail(os.str(), log.last.data());
+}
+
+int finite_or_recoverable(const double* values, long n) {
+  for (long i = 0; i < n; ++i)
+    if (!std::isfinite(values[i])) return 1;
+  return 0;
+}
+
+ContextPtr make_context() {
+  SUNContext ctx = nullptr;
+  check(SUNContext_Create(nullptr, &ctx), "SUNContext_Create", nullptr);
+  return ContextPtr(ctx);
+}
+
+VectorPtr make_vector(long n, SUNContext ctx) {
+  VectorPtr v(check_created(N_VNew_Serial(n, ctx), "N_VNew_Serial"));
+  N_VConst(0.0, v.get());
+  return v;
+}
+
+VectorPtr wrap_vector(double* values, long n, SUNContext ctx) {
+  return VectorPtr(check_created(N_VMake_Serial(n, values, ctx), "N_VMake_Serial"));
+}
+
+VectorPtr make_state(const double* x0, const double* v0, int n, SUNContext ctx) {
+  VectorPtr y = make_vector(2L * n, ctx);
+  std::copy_n(x0, n, vec_data(y.get()));
+  std::copy_n(v0, n, vec_data(y.get()) + n);
+  return y;
+}
+
+void write_csc_pattern(const CscPattern& pattern, SUNMatrix A) {
+  sunindextype* colptr = SUNSparseMatrix_IndexPointers(A);
+  sunindextype* rowind = SUNSparseMatrix_IndexValues(A);
+  std::copy(pattern.colptr.begin(), pattern.colptr.end(), colptr);
+  std::copy(pattern.rowind.begin(), pattern.rowind.end(), rowind);
+}
+
+MatrixPtr make_csc_matrix(const CscPattern& pattern, SUNContext ctx) {
+  MatrixPtr A(check_created(
+      SUNSparseMatrix(pattern.rows, pattern.cols, std::max(pattern.nnz(), 1), CSC_MAT, ctx),
+      "SUNSparseMatrix"));
+  write_csc_pattern(pattern, A.get());
+  std::fill_n(SUNSparseMatrix_Data(A.get()), SUNSparseMatrix_NNZ(A.get()), 0.0);
+  return A;
+}
+
+LinearSolverPtr make_klu(N_Vector y, SUNMatrix A, SUNContext ctx) {
+  LinearSolverPtr ls(check_created(SUNLinSol_KLU(y, A, ctx), "SUNLinSol_KLU"));
+  check(SUNLinSol_KLUSetOrdering(ls.get(), 0 /* AMD */), "SUNLinSol_KLUSetOrdering", nullptr);
+  return ls;
+}
+
+NewtonMatrix::NewtonMatrix(const FirstOrderSystem& fo, MatrixKind kind, SUNContext ctx)
+    : fo_(fo), kind_(kind) {
+  const CscPattern& p = fo.jacobian_pattern();
+  jac_.assign(p.nnz(), 0.0);
+  if (kind == MatrixKind::SparseCsc) {
+    A_ = make_csc_matrix(p, ctx);
+    diagonal_.resize(p.cols);
+    for (int j = 0; j < p.cols; ++j) {
+      diagonal_[j] = p.find(j, j);
+      if (diagonal_[j] < 0)  // FirstOrderSystem guarantees every diagonal entry
+        throw std::logic_error("NewtonMatrix: Jacobian pattern lacks a diagonal entry");
+    }
+  } else {
+    A_ = MatrixPtr(check_created(SUNDenseMatrix(p.rows, p.cols, ctx), "SUNDenseMatrix"));
+  }
+}
+
+int NewtonMatrix::assemble(double t, const double* y, bool reuse_jacobian, double gamma,
+                           bool* jacobian_current) {
+  const CscPattern& p = fo_.jacobian_pattern();
+  const bool evaluate = !(reuse_jacobian && have_jacobian_);
+  if (evaluate) {
+    fo_.jacobian_values(t, y, jac_.data());
+    have_jacobian_ = true;
+    if (finite_or_recoverable(jac_.data(), static_cast<long>(jac_.size())) != 0) {
+      have_jacobian_ = false;
+      *jacobian_current = false;
+      return 1;
+    }
+  }
+  *jacobian_current = evaluate;
+  if (kind_ == MatrixKind::SparseCsc) {
+    double* a = SUNSparseMatrix_Data(A_.get());
+    for (int k = 0; k < p.nnz(); ++k) a[k] = -gamma * jac_[k];
+    for (long d : diagonal_) a[d] += 1.0;
+  } else {
+    double* a = SUNDenseMatrix_Data(A_.get());
+    const long rows = p.rows;
+    std::fill_n(a, rows * p.cols, 0.0);
+    for (int j = 0; j < p.cols; ++j) {
+      double* col = a + j * rows;
+      for (int k = p.colptr[j]; k < p.colptr[j + 1]; ++k) col[p.rowind[k]] = -gamma * jac_[k];
+      col[j] += 1.0;
+    }
+  }
+  return 0;
+}
+
+int ode_rhs(double t, N_Vector y, N_Vector ydot, void* user_data) {
+  return guarded([&] {
+    const auto* problem = static_cast<const OdeProblem*>(user_data);
+    problem->fo.rhs(t, vec_data(y), vec_data(ydot));
+    return finite_or_recoverable(vec_data(ydot), problem->fo.size());
+  });
+}
+
+}  // namespace knitsim::sun

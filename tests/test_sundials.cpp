@@ -1,0 +1,248 @@
+// The SUNDIALS integrators (cvode.cpp, arkode.cpp, static_newton.cpp): cross-integrator
+// agreement on the drape equilibria against a tight cvode-bdf reference, the static
+// accelerator landing on the dynamics' state, the stiffness penalty of the non-stiff
+// methods, and SUNDIALS failures reported as statuses.
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "models/drape_grid.hpp"
+#include "solvers/integrator.hpp"
+#include "tests/test_systems.hpp"
+
+using namespace knitsim;
+using knitsim::test::max_abs_difference;
+
+namespace {
+
+constexpr double kAgreement = 1e-6;  // m, final positions vs the reference
+
+struct Drape {
+  RunStats stats;
+  std::vector<double> x, v;
+};
+
+Drape drape(const MechanicalSystem& sys, const std::string& integrator,
+            const IntegratorOptions& opt) {
+  Drape d;
+  d.stats = run_to_equilibrium(sys, integrator, opt, d.x, d.v);
+  return d;
+}
+
+IntegratorOptions reference_options() {
+  IntegratorOptions opt;
+  opt.rtol = 1e-8;
+  opt.atol = 1e-10;
+  return opt;
+}
+
+// The paper-default four_corner drape and its cvode-bdf reference (rtol 1e-8, atol 1e-10).
+const DrapeGrid& four_corner() {
+  static const DrapeGrid grid = build_drape_grid(DrapeParams{});
+  return grid;
+}
+const Drape& four_corner_reference() {
+  static const Drape ref = drape(four_corner().network, "cvode-bdf", reference_options());
+  return ref;
+}
+
+// 6 x 6 grid (natural length 0.1 m) with damping c (N s/m).
+DrapeGrid coarse_grid(double damping) {
+  DrapeParams p;
+  p.natural_length = 0.1;
+  p.damping = damping;
+  return build_drape_grid(p);
+}
+
+void require_agreement(const Drape& d, const Drape& ref, double tol) {
+  INFO(d.stats.integrator << ": " << to_string(d.stats.status) << " (" << d.stats.message
+                          << "), residual " << d.stats.residual << ", steps " << d.stats.steps);
+  REQUIRE(d.stats.status == RunStatus::Equilibrium);
+  CHECK(d.stats.residual <= IntegratorOptions{}.equilibrium_tol);
+  CHECK(max_abs_difference(d.x, ref.x) <= tol);
+}
+
+const std::vector<std::string> kSundials = {"cvode-bdf",   "cvode-bdf-dense", "cvode-bdf-gmres",
+                                            "cvode-adams", "arkode-erk",      "arkode-dirk",
+                                            "arkode-imex", "static"};
+
+}  // namespace
+
+TEST_CASE("every SUNDIALS integrator is registered in order after implicit-euler") {
+  std::vector<std::string> names;
+  for (const auto& info : integrator_catalog()) names.push_back(info.name);
+  auto it = std::find(names.begin(), names.end(), "implicit-euler");
+  REQUIRE(it != names.end());
+  REQUIRE(std::distance(it, names.end()) >= static_cast<long>(kSundials.size()) + 1);
+  CHECK(std::vector<std::string>(it + 1, it + 1 + kSundials.size()) == kSundials);
+}
+
+TEST_CASE("matrix-based SUNDIALS integrators reach the four_corner equilibrium of cvode-bdf") {
+  const Drape& ref = four_corner_reference();
+  REQUIRE(ref.stats.status == RunStatus::Equilibrium);
+  // The sheet sags under gravity; the reference BDF used orders above 1.
+  double z_min = 0.0;
+  for (std::size_t i = 2; i < ref.x.size(); i += 3) z_min = std::min(z_min, ref.x[i]);
+  CHECK(z_min < -0.01);
+  CHECK(ref.stats.max_order_used >= 3);
+  for (const char* name : {"cvode-bdf", "arkode-dirk", "arkode-imex", "static"}) {
+    SECTION(name) {
+      const Drape d = drape(four_corner().network, name, IntegratorOptions{});
+      require_agreement(d, ref, kAgreement);
+      CHECK(d.stats.jac_evals > 0);
+      CHECK(d.stats.lin_setups >= d.stats.jac_evals);
+      CHECK(d.stats.nonlin_iters >= d.stats.steps);
+    }
+  }
+}
+
+TEST_CASE("static polishes with Newton: exact rest state, same four_corner equilibrium") {
+  const Drape d = drape(four_corner().network, "static", IntegratorOptions{});
+  REQUIRE(d.stats.status == RunStatus::Equilibrium);
+  // An accepted polish leaves v = 0 exactly; the damped dynamics alone never do.
+  CHECK(max_abs_difference(d.v, std::vector<double>(d.v.size(), 0.0)) == 0.0);
+  const Drape relaxed = drape(four_corner().network, "cvode-bdf", IntegratorOptions{});
+  CHECK(max_abs_difference(relaxed.v, std::vector<double>(relaxed.v.size(), 0.0)) > 0.0);
+  CHECK(d.stats.steps < relaxed.stats.steps);  // the polish ends the run early
+}
+
+TEST_CASE("static lands on the two_corner equilibrium of the dynamics") {
+  DrapeParams p;
+  p.layout = PinLayout::TwoCorner;
+  const DrapeGrid grid = build_drape_grid(p);
+  const Drape ref = drape(grid.network, "cvode-bdf", reference_options());
+  REQUIRE(ref.stats.status == RunStatus::Equilibrium);
+  double z_min = 0.0;
+  for (std::size_t i = 2; i < ref.x.size(); i += 3) z_min = std::min(z_min, ref.x[i]);
+  CHECK(z_min < -0.45);  // the sheet has swung down and hangs from its two corners
+  const Drape d = drape(grid.network, "static", IntegratorOptions{});
+  require_agreement(d, ref, kAgreement);
+}
+
+TEST_CASE("cvode-bdf-dense agrees with cvode-bdf on a small mesh") {
+  const DrapeGrid grid = coarse_grid(DrapeParams{}.damping);
+  const Drape ref = drape(grid.network, "cvode-bdf", reference_options());
+  REQUIRE(ref.stats.status == RunStatus::Equilibrium);
+  const Drape d = drape(grid.network, "cvode-bdf-dense", reference_options());
+  require_agreement(d, ref, kAgreement);
+  CHECK(d.stats.jac_evals > 0);
+}
+
+TEST_CASE("cvode-bdf-dense refuses a large system, naming its size") {
+  DrapeParams p;
+  p.natural_length = 0.0165;  // 31 x 31 cells: 2n = 6 x 1020 free particles
+  const DrapeGrid grid = build_drape_grid(p);
+  const int two_n = 2 * grid.network.dof();
+  REQUIRE(two_n > 3000);
+  std::vector<double> x, v;
+  REQUIRE_THROWS_WITH(
+      run_to_equilibrium(grid.network, "cvode-bdf-dense", IntegratorOptions{}, x, v),
+      Catch::Contains(std::to_string(two_n)));
+}
+
+TEST_CASE("cvode-bdf-gmres reaches the four_corner equilibrium to Krylov accuracy") {
+  // Krylov solves are accurate relative to the error weights (~1e-10 m in positions), while
+  // a residual of 1e-8 needs positions to ~1e-14 m: the residual stagnates near 1e-4, so
+  // GMRES is checked at equilibrium_tol = 1e-3 (positions within 2e-5 m of the reference).
+  IntegratorOptions opt;
+  opt.krylov_dim = 20;
+  opt.equilibrium_tol = 1e-3;
+  const Drape d = drape(four_corner().network, "cvode-bdf-gmres", opt);
+  INFO(d.stats.message);
+  REQUIRE(d.stats.status == RunStatus::Equilibrium);
+  CHECK(d.stats.lin_iters > 0);
+  CHECK(max_abs_difference(d.x, four_corner_reference().x) <= 2e-5);
+}
+
+TEST_CASE("the block-Jacobi preconditioner cuts GMRES iterations") {
+  const DrapeGrid grid = coarse_grid(DrapeParams{}.damping);
+  IntegratorOptions opt;
+  opt.krylov_dim = 20;
+  opt.t_max = 10.0;
+  long iters[2] = {0, 0};
+  for (bool pre : {false, true}) {
+    opt.gmres_preconditioner = pre;
+    const Drape d = drape(grid.network, "cvode-bdf-gmres", opt);
+    INFO(d.stats.message);
+    REQUIRE(d.stats.status == RunStatus::TimeLimit);
+    iters[pre] = d.stats.lin_iters;
+  }
+  CHECK(iters[1] * 3 < iters[0]);
+}
+
+TEST_CASE("non-stiff methods agree with cvode-bdf on a lightly damped coarse drape") {
+  // c = 0.05 N s/m makes the drape non-stiff (gamma = c/m ~ 1e2 /s instead of ~3e4 /s).
+  const DrapeGrid grid = coarse_grid(0.05);
+  const Drape ref = drape(grid.network, "cvode-bdf", reference_options());
+  REQUIRE(ref.stats.status == RunStatus::Equilibrium);
+  for (const char* name : {"cvode-adams", "arkode-erk"}) {
+    SECTION(name) {
+      const Drape d = drape(grid.network, name, reference_options());
+      require_agreement(d, ref, kAgreement);
+      CHECK(d.stats.jac_evals == 0);
+      CHECK(d.stats.lin_setups == 0);
+    }
+  }
+}
+
+TEST_CASE("non-stiff methods pay the stiffness penalty on the paper's damping") {
+  const DrapeGrid grid = coarse_grid(DrapeParams{}.damping);
+  const Drape bdf = drape(grid.network, "cvode-bdf", reference_options());
+  REQUIRE(bdf.stats.status == RunStatus::Equilibrium);
+  IntegratorOptions opt = reference_options();
+  opt.max_steps = 20 * bdf.stats.steps;
+  for (const char* name : {"cvode-adams", "arkode-erk"}) {
+    const Drape d = drape(grid.network, name, opt);
+    INFO(name << ": " << d.stats.message);
+    CHECK(d.stats.status == RunStatus::StepLimit);
+    CHECK(d.stats.residual > 1e-3);  // nowhere near rest after 20x cvode-bdf's steps
+  }
+}
+
+TEST_CASE("SUNDIALS limits and failures are statuses, not exceptions") {
+  const DrapeGrid grid = coarse_grid(DrapeParams{}.damping);
+  test::NanAccelerationSystem nan_system(grid.network);
+  for (const std::string& name : kSundials) {
+    SECTION(name) {
+      std::vector<double> x, v;
+      IntegratorOptions opt;
+      opt.max_steps = 1;
+      RunStats s = run_to_equilibrium(grid.network, name, opt, x, v);
+      CHECK(s.status == RunStatus::StepLimit);
+      CHECK(s.steps >= 1);
+
+      opt = IntegratorOptions{};
+      opt.t_max = 1e-6;
+      x.clear();
+      s = run_to_equilibrium(grid.network, name, opt, x, v);
+      CHECK(s.status == RunStatus::TimeLimit);
+      CHECK(s.t_final == Approx(1e-6).epsilon(1e-12));  // the stop time is never passed
+
+      x.clear();
+      s = run_to_equilibrium(nan_system, name, IntegratorOptions{}, x, v);
+      INFO(s.message);
+      CHECK((s.status == RunStatus::SolverFailure || s.status == RunStatus::Diverged));
+      // The message names the SUNDIALS call and its flag.
+      CHECK_THAT(s.message, Catch::Matches(".*(CVode|ARKStepEvolve|ERKStepEvolve): "
+                                           "[A-Z_]*_(ERR|FAIL)[A-Z_]* at t = .*"));
+    }
+  }
+}
+
+TEST_CASE("SUNDIALS integrators reject orders their methods do not have") {
+  const DrapeGrid grid = coarse_grid(DrapeParams{}.damping);
+  std::vector<double> x, v;
+  IntegratorOptions opt;
+  opt.max_order = 6;
+  REQUIRE_THROWS_WITH(run_to_equilibrium(grid.network, "cvode-bdf", opt, x, v),
+                      Catch::Contains("max_order = 6"));
+  REQUIRE_THROWS_WITH(run_to_equilibrium(grid.network, "arkode-dirk", opt, x, v),
+                      Catch::Contains("max_order = 6"));
+  opt.max_order = 2;
+  opt.max_steps = 50;
+  const RunStats s = run_to_equilibrium(grid.network, "cvode-bdf", opt, x, v);
+  CHECK(s.max_order_used == 2);
+}
