@@ -4,8 +4,9 @@
 //
 //   cvode-bdf        BDF orders 1..5, Newton iteration; A = I - gamma J assembled into J's
 //                    fixed CSC pattern (NewtonMatrix, via CVodeSetLinSysFn: values only, the
-//                    pattern is written once), factored by KLU (symbolic analysis kept across
-//                    set-ups, numeric refactorisation per set-up).
+//                    pattern is written once), solved by the symmetric Schur-complement LDL^T
+//                    (default) or KLU (IntegratorOptions::newton_solver); both keep their
+//                    symbolic analysis across set-ups and refactor numerically per set-up.
 //   cvode-bdf-dense  the same with a dense matrix and dense LU: O((2n)^3) per set-up, for
 //                    comparison on small meshes only (refused above 2n = 3000).
 //   cvode-bdf-gmres  the same BDF/Newton, matrix-free SPGMR: analytic products
@@ -274,7 +275,7 @@ class Cvode final : public Integrator {
         s->problem->newton = s->newton.get();
         SUNMatrix A = s->newton->get();
         s->ls = sparse
-                    ? make_klu(y, A, ctx)
+                    ? make_newton_solver(opt.newton_solver, *s->fo, y, A, ctx)
                     : LinearSolverPtr(check_created(SUNLinSol_Dense(y, A, ctx), "SUNLinSol_Dense"));
         check(CVodeSetLinearSolver(mem, s->ls.get(), A), "CVodeSetLinearSolver", kLsName, log);
         check(CVodeSetLinSysFn(mem, cvode_linsys), "CVodeSetLinSysFn", kLsName, log);
@@ -394,7 +395,9 @@ class Cvode final : public Integrator {
 std::unique_ptr<Integrator> make_cvode_bdf() {
   return std::make_unique<Cvode>(
       CvodeMethod::BdfSparse,
-      IntegratorInfo{"cvode-bdf", "CVODE BDF (orders 1-5), Newton, sparse KLU, analytic Jacobian",
+      IntegratorInfo{"cvode-bdf",
+                     "CVODE BDF (orders 1-5), Newton, sparse direct (Schur LDL^T or KLU), "
+                     "analytic Jacobian",
                      0, true, false});
 }
 

@@ -38,6 +38,13 @@ struct IntegratorOptions {
   long check_every = 0;
   double runaway_position = 1e3;  // |x_i| above this (m) counts as a blow-up
   int krylov_dim = 0;             // GMRES Krylov dimension; 0 = SUNDIALS default (5)
+  // Linear solver for the Newton systems of cvode-bdf, arkode-dirk and arkode-imex:
+  //   Klu        sparse LU of the 2n x 2n matrix I - gamma J (SUNDIALS' KLU);
+  //   SchurLdl   velocity block eliminated, symmetric 3n x 3n LDL^T (schur_ldl_solver.hpp).
+  // Both solve the same Newton systems exactly, so the steps taken are the same; SchurLdl
+  // measured 1.3x faster on both drape scenes (README, "Performance"), hence the default.
+  enum class NewtonSolver { Klu, SchurLdl };
+  NewtonSolver newton_solver = NewtonSolver::SchurLdl;
   bool gmres_preconditioner = true;  // cvode-bdf-gmres: block-Jacobi preconditioner
 
   // Throws std::invalid_argument naming the bad field and its accepted range.

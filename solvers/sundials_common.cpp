@@ -1,5 +1,7 @@
 #include "solvers/sundials_common.hpp"
 
+#include "solvers/schur_ldl_solver.hpp"
+
 #include <sunlinsol/sunlinsol_klu.h>
 #include <sunmatrix/sunmatrix_dense.h>
 #include <sunmatrix/sunmatrix_sparse.h>
@@ -104,6 +106,14 @@ LinearSolverPtr make_klu(N_Vector y, SUNMatrix A, SUNContext ctx) {
   LinearSolverPtr ls(check_created(SUNLinSol_KLU(y, A, ctx), "SUNLinSol_KLU"));
   check(SUNLinSol_KLUSetOrdering(ls.get(), 0 /* AMD */), "SUNLinSol_KLUSetOrdering", nullptr);
   return ls;
+}
+
+LinearSolverPtr make_newton_solver(IntegratorOptions::NewtonSolver which,
+                                   const FirstOrderSystem& fo, N_Vector y, SUNMatrix A,
+                                   SUNContext ctx) {
+  if (which == IntegratorOptions::NewtonSolver::Klu) return make_klu(y, A, ctx);
+  return LinearSolverPtr(
+      check_created(knitsim::detail::make_schur_ldl_solver(ctx, fo), "make_schur_ldl_solver"));
 }
 
 NewtonMatrix::NewtonMatrix(const FirstOrderSystem& fo, MatrixKind kind, SUNContext ctx)

@@ -47,6 +47,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "solvers/integrator.hpp"
 #include "src/first_order.hpp"
 #include "src/sparse.hpp"
 
@@ -162,6 +163,11 @@ MatrixPtr make_csc_matrix(const CscPattern& pattern, SUNContext ctx);
 // instructions than SUNDIALS' default COLAMD on four_corner with cvode-bdf. The symbolic
 // analysis is done at the first set-up and kept; later set-ups refactor numerically.
 LinearSolverPtr make_klu(N_Vector y, SUNMatrix A, SUNContext ctx);
+// The Newton linear solver chosen by IntegratorOptions::newton_solver for A = I - gamma J in
+// `fo`'s pattern: KLU, or the symmetric Schur-complement LDL^T (schur_ldl_solver.hpp).
+LinearSolverPtr make_newton_solver(IntegratorOptions::NewtonSolver which,
+                                   const FirstOrderSystem& fo, N_Vector y, SUNMatrix A,
+                                   SUNContext ctx);
 
 // ---- Newton matrix of the first-order system ------------------------------------------
 

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <map>
 #include <stdexcept>
 
 #include "src/commands.hpp"
@@ -59,6 +60,7 @@ void run(const DrapeArgs& args) {
   scene.options.max_order = o.max_order;
   scene.options.max_steps = o.max_steps;
   scene.options.max_wall_seconds = o.max_wall_seconds;
+  scene.options.newton_solver = o.newton_solver;
   scene.validate();
 
   const std::string integrator = args.integrator.empty() ? default_integrator() : args.integrator;
@@ -112,6 +114,14 @@ void register_drape_command(CLI::App& app) {
   cmd->add_option("--max-steps", args->options.max_steps, "Step cap")->capture_default_str();
   cmd->add_option("--max-wall", args->options.max_wall_seconds,
                   "Wall-clock cap, s (0 = none); the run then ends with status wall_limit")
+      ->capture_default_str();
+  const std::map<std::string, IntegratorOptions::NewtonSolver> solvers = {
+      {"klu", IntegratorOptions::NewtonSolver::Klu},
+      {"ldl", IntegratorOptions::NewtonSolver::SchurLdl}};
+  cmd->add_option("--newton-solver", args->options.newton_solver,
+                  "Newton linear solver of cvode-bdf, arkode-dirk, arkode-imex: klu (2n LU) or "
+                  "ldl (velocity block eliminated, 3n symmetric LDL^T)")
+      ->transform(CLI::CheckedTransformer(solvers, CLI::ignore_case))
       ->capture_default_str();
   cmd->add_option("--out", args->out,
                   "Output folder (default: a fresh out/drape-<scene>-<YYYYmmdd-HHMMSS>)");

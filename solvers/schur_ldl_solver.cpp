@@ -1,0 +1,134 @@
+#include "solvers/schur_ldl_solver.hpp"
+
+#include <sunmatrix/sunmatrix_sparse.h>
+#include <nvector/nvector_serial.h>
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include <vector>
+
+namespace knitsim::detail {
+
+namespace {
+
+struct SchurLdl {
+  const FirstOrderSystem* sys = nullptr;
+  int n = 0;                    // dof (half the first-order size)
+  std::vector<int> ax_begin;    // column j < n: first Ax entry of A's column j
+  std::vector<int> diag;        // reduced matrix: position of (j, j)
+  std::vector<double> rhs, x2;  // length n
+  Eigen::SparseMatrix<double> S;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> ldlt;
+  double gamma = 0.0;
+  long setups = 0;
+  int last_flag = SUNLS_SUCCESS;
+};
+
+SchurLdl* content(SUNLinearSolver LS) { return static_cast<SchurLdl*>(LS->content); }
+
+SUNLinearSolver_Type get_type(SUNLinearSolver) { return SUNLINEARSOLVER_DIRECT; }
+SUNLinearSolver_ID get_id(SUNLinearSolver) { return SUNLINEARSOLVER_CUSTOM; }
+int initialize(SUNLinearSolver) { return SUNLS_SUCCESS; }
+
+int setup(SUNLinearSolver LS, SUNMatrix A) {
+  SchurLdl& c = *content(LS);
+  const sunindextype* colptr = SUNSparseMatrix_IndexPointers(A);
+  const double* a = SUNSparseMatrix_Data(A);
+  const int n = c.n;
+  const CscPattern& kp = c.sys->mechanical().stiffness_pattern();
+  const auto& m = c.sys->mechanical().mass();
+  c.gamma = -a[colptr[n]];  // A(0, n) = -gamma
+  double* s = c.S.valuePtr();
+  for (int j = 0; j < n; ++j) {
+    const int begin = c.ax_begin[j];
+    for (int k = kp.colptr[j]; k < kp.colptr[j + 1]; ++k)
+      s[k] = m[kp.rowind[k]] * c.gamma * a[begin + (k - kp.colptr[j])];
+  }
+  for (int j = 0; j < n; ++j) s[c.diag[j]] += m[j] * a[colptr[n + j] + 1];  // M A_vv
+  c.ldlt.factorize(c.S);
+  ++c.setups;
+  c.last_flag = c.ldlt.info() == Eigen::Success ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_REC;
+  return c.last_flag;
+}
+
+int solve(SUNLinearSolver LS, SUNMatrix A, N_Vector x, N_Vector b, realtype /*tol*/) {
+  SchurLdl& c = *content(LS);
+  const int n = c.n;
+  const double* a = SUNSparseMatrix_Data(A);
+  const sunindextype* colptr = SUNSparseMatrix_IndexPointers(A);
+  const sunindextype* rowind = SUNSparseMatrix_IndexValues(A);
+  const double* bb = N_VGetArrayPointer(b);
+  double* xx = N_VGetArrayPointer(x);
+  const auto& m = c.sys->mechanical().mass();
+  // rhs = M (b2 - A_vx b1)
+  for (int i = 0; i < n; ++i) c.rhs[i] = bb[n + i];
+  for (int j = 0; j < n; ++j) {
+    const double b1 = bb[j];
+    for (sunindextype k = c.ax_begin[j]; k < colptr[j + 1]; ++k) c.rhs[rowind[k] - n] -= a[k] * b1;
+  }
+  for (int i = 0; i < n; ++i) c.rhs[i] *= m[i];
+  Eigen::Map<Eigen::VectorXd> r(c.rhs.data(), n), x2(c.x2.data(), n);
+  x2 = c.ldlt.solve(r);
+  for (int i = 0; i < n; ++i) {
+    xx[n + i] = c.x2[i];
+    xx[i] = bb[i] + c.gamma * c.x2[i];
+  }
+  c.last_flag = SUNLS_SUCCESS;
+  return SUNLS_SUCCESS;
+}
+
+sunindextype last_flag(SUNLinearSolver LS) { return content(LS)->last_flag; }
+
+int free_solver(SUNLinearSolver LS) {
+  if (!LS) return SUNLS_SUCCESS;
+  delete content(LS);
+  LS->content = nullptr;
+  SUNLinSolFreeEmpty(LS);
+  return SUNLS_SUCCESS;
+}
+
+}  // namespace
+
+SUNLinearSolver make_schur_ldl_solver(SUNContext ctx, const FirstOrderSystem& sys) {
+  SUNLinearSolver LS = SUNLinSolNewEmpty(ctx);
+  if (!LS) return nullptr;
+  auto* c = new SchurLdl;
+  c->sys = &sys;
+  c->n = sys.size() / 2;
+  const int n = c->n;
+  const CscPattern& jp = sys.jacobian_pattern();
+  const CscPattern& kp = sys.mechanical().stiffness_pattern();
+  c->ax_begin.resize(n);
+  for (int j = 0; j < n; ++j) c->ax_begin[j] = jp.colptr[j] + 1;  // after the zero diagonal
+  c->rhs.resize(n);
+  c->x2.resize(n);
+  std::vector<Eigen::Triplet<double>> trip;
+  trip.reserve(kp.nnz());
+  for (int j = 0; j < n; ++j)
+    for (int k = kp.colptr[j]; k < kp.colptr[j + 1]; ++k) trip.emplace_back(kp.rowind[k], j, 1.0);
+  c->S.resize(n, n);
+  c->S.setFromTriplets(trip.begin(), trip.end());
+  c->S.makeCompressed();
+  // The value array of S is filled in kp's order: the two patterns must coincide.
+  for (int k = 0; k < kp.nnz(); ++k)
+    if (c->S.innerIndexPtr()[k] != kp.rowind[k]) {
+      delete c;
+      SUNLinSolFreeEmpty(LS);
+      return nullptr;
+    }
+  c->diag.resize(n);
+  for (int j = 0; j < n; ++j) c->diag[j] = kp.find(j, j);
+  c->ldlt.analyzePattern(c->S);
+
+  LS->content = c;
+  LS->ops->gettype = get_type;
+  LS->ops->getid = get_id;
+  LS->ops->initialize = initialize;
+  LS->ops->setup = setup;
+  LS->ops->solve = solve;
+  LS->ops->lastflag = last_flag;
+  LS->ops->free = free_solver;
+  return LS;
+}
+
+}  // namespace knitsim::detail
