@@ -234,9 +234,10 @@ bool SpringNetwork::project(double t, double* x, double* /*v*/) const {
     const int fa = free_index_[s.a], fb = free_index_[s.b];
     if (fa < 0 && fb < 0) continue;
     const Vec3 d = end_position(s.b, x) - end_position(s.a, x);
-    const double L = norm(d);
     const double Lmax = s.rest * (1.0 + spec_.elongation_limit);
-    if (!(L > Lmax)) continue;
+    const double L2 = dot(d, d);
+    if (!(L2 > Lmax * Lmax)) continue;  // the common case costs no square root
+    const double L = std::sqrt(L2);
     const Vec3 excess = ((L - Lmax) / L) * d;  // shortening vector, a -> b direction
     const double wa = (fa >= 0 && fb >= 0) ? 0.5 : (fa >= 0 ? 1.0 : 0.0);
     const double wb = 1.0 - wa;

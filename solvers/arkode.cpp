@@ -281,7 +281,9 @@ std::unique_ptr<Integrator> make_arkode_erk() {
 std::unique_ptr<Integrator> make_arkode_dirk() {
   return std::make_unique<Arkode>(
       ArkMethod::Dirk,
-      IntegratorInfo{"arkode-dirk", "ARKODE ARKStep ESDIRK (order 4 default), Newton, sparse KLU",
+      IntegratorInfo{"arkode-dirk",
+                     "ARKODE ARKStep ESDIRK (order 4 default), Newton, sparse direct (Schur "
+                     "LDL^T or KLU)",
                      4, true, false});
 }
 
@@ -289,7 +291,7 @@ std::unique_ptr<Integrator> make_arkode_imex() {
   return std::make_unique<Arkode>(
       ArkMethod::Imex,
       IntegratorInfo{"arkode-imex",
-                     "ARKODE ARKStep IMEX (ARK 4 default): springs + damping implicit (KLU), "
+                     "ARKODE ARKStep IMEX (ARK 4 default): springs + damping implicit (sparse direct), "
                      "gravity explicit",
                      4, true, false});
 }

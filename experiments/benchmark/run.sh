@@ -1,0 +1,110 @@
+#!/usr/bin/env bash
+# Drape benchmark (issue "Foundation", item 7): cvode-bdf on four_corner and two_corner as
+# medians of REPEATS runs, and the paper's explicit Euler reference on four_corner to the
+# same residual (SPEC 2.12 fabric: k 852 N/m, c 12 N s/m, L0 4.9 cm, 41.65 g/m^2, topology a,
+# i.e. the built-in scenes' defaults).
+#
+#   experiments/benchmark/run.sh [--quick] [--repeats N] [--out DIR]
+#
+# Euler runs at 0.9 x its predicted stability limit (the largest step it can take). In full
+# mode it runs to equilibrium (about 5-10 minutes); with --quick it runs EULER_QUICK_STEPS steps
+# and its cost to equilibrium is extrapolated from the measured time per step and the
+# physical settling time t_settle measured by verlet (second order, same ODE).
+# Writes DIR/runs.csv (every run), DIR/summary.csv (medians), DIR/manifest.json; prints a table.
+set -euo pipefail
+here=$(cd "$(dirname "$0")" && pwd)
+root=$(cd "$here/../.." && pwd)
+KNITSIM=${KNITSIM:-$root/build/knitsim}
+REPEATS=5
+QUICK=0
+OUT=$root/out/benchmark
+EULER_QUICK_STEPS=2000000
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --quick) QUICK=1 ;;
+    --repeats) REPEATS=$2; shift ;;
+    --out) OUT=$2; shift ;;
+    *) echo "usage: $0 [--quick] [--repeats N] [--out DIR]" >&2; exit 2 ;;
+  esac
+  shift
+done
+[ -x "$KNITSIM" ] || { echo "benchmark: $KNITSIM not built (run ./run.sh --build-only)" >&2; exit 2; }
+mkdir -p "$OUT/runs"
+runs_csv=$OUT/runs.csv
+echo "scene,integrator,repeat,status,t_final,steps,rhs_evals,jac_evals,lin_setups,residual,dt,wall_seconds" > "$runs_csv"
+
+# One drape; appends a row to runs.csv. Extra arguments go to knitsim drape.
+drape() {
+  local scene=$1 integ=$2 rep=$3; shift 3
+  local dir=$OUT/runs/$scene-$integ-$rep
+  rm -rf "$dir"
+  "$KNITSIM" drape --scene "$scene" --integrator "$integ" --quiet --out "$dir" "$@" >/dev/null || true
+  python3 - "$dir/summary.json" "$scene" "$integ" "$rep" >> "$runs_csv" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+print(",".join([sys.argv[2], sys.argv[3], sys.argv[4], s["status"], repr(s["t_final"]),
+                str(s["steps"]), str(s["rhs_evals"]), str(s["jac_evals"]), str(s["lin_setups"]),
+                repr(s["residual"]), repr(s["dt"]), repr(s["wall_seconds"])]))
+PY
+}
+
+for scene in four_corner two_corner; do
+  for rep in $(seq 1 "$REPEATS"); do drape "$scene" cvode-bdf "$rep"; done
+done
+
+# Euler: its predicted stability limit from a one-step run, then 0.9 x that step.
+drape four_corner euler probe --max-steps 1
+dt_pred=$(python3 -c "import json;print(json.load(open('$OUT/runs/four_corner-euler-probe/summary.json'))['dt_predicted'])")
+dt_euler=$(python3 -c "print(0.9*$dt_pred)")
+if [ "$QUICK" = 1 ]; then
+  drape four_corner euler 1 --dt "$dt_euler" --max-steps "$EULER_QUICK_STEPS"
+  drape four_corner verlet settle
+else
+  drape four_corner euler 1 --dt "$dt_euler"
+fi
+
+python3 - "$runs_csv" "$OUT/summary.csv" "$QUICK" <<'PY'
+import csv, statistics, sys
+rows = list(csv.DictReader(open(sys.argv[1])))
+quick = sys.argv[3] == "1"
+out = []
+def med(rs, k): return statistics.median(float(r[k]) for r in rs)
+for scene, integ in [("four_corner", "cvode-bdf"), ("two_corner", "cvode-bdf")]:
+    rs = [r for r in rows if r["scene"] == scene and r["integrator"] == integ]
+    out.append(dict(scene=scene, integrator=integ, runs=len(rs), status=rs[0]["status"],
+                    t_final=med(rs, "t_final"), steps=med(rs, "steps"),
+                    wall_seconds=med(rs, "wall_seconds"), measured="yes"))
+eu = [r for r in rows if r["integrator"] == "euler" and r["repeat"] == "1"][0]
+per_step = float(eu["wall_seconds"]) / float(eu["steps"])
+if quick:
+    settle = [r for r in rows if r["integrator"] == "verlet"][0]
+    t_settle = float(settle["t_final"])
+    steps = t_settle / float(eu["dt"])
+    out.append(dict(scene="four_corner", integrator="euler", runs=1, status="extrapolated",
+                    t_final=t_settle, steps=steps, wall_seconds=steps * per_step,
+                    measured="no: %s steps timed, t_settle from verlet" % eu["steps"]))
+else:
+    out.append(dict(scene="four_corner", integrator="euler", runs=1, status=eu["status"],
+                    t_final=float(eu["t_final"]), steps=float(eu["steps"]),
+                    wall_seconds=float(eu["wall_seconds"]), measured="yes"))
+w = csv.DictWriter(open(sys.argv[2], "w", newline=""), fieldnames=list(out[0].keys()))
+w.writeheader(); w.writerows(out)
+print("%-12s %-10s %4s %-13s %12s %12s %12s  %s" % ("scene", "integrator", "runs", "status",
+      "t_final s", "steps", "wall s", "measured"))
+for o in out:
+    print("%-12s %-10s %4d %-13s %12.4g %12.4g %12.4g  %s" % (o["scene"], o["integrator"],
+          o["runs"], o["status"], o["t_final"], o["steps"], o["wall_seconds"], o["measured"]))
+bdf4 = out[0]["wall_seconds"]
+print("euler / cvode-bdf on four_corner (wall, same residual): %.3g" % (out[2]["wall_seconds"] / bdf4))
+print("euler time per step: %.3g us (dt = %s s)" % (per_step * 1e6, eu["dt"]))
+PY
+commit=$(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)
+python3 - "$OUT/manifest.json" "$KNITSIM" "$QUICK" "$REPEATS" "$commit" <<'PY'
+import json, sys, datetime, os
+commit = sys.argv[5]
+json.dump({"experiment": "benchmark", "command": "experiments/benchmark/run.sh" + (" --quick" if sys.argv[3] == "1" else ""),
+           "repeats": int(sys.argv[4]), "knitsim": sys.argv[2], "git_commit": commit,
+           "created_utc": datetime.datetime.utcnow().isoformat() + "Z",
+           "nproc": os.cpu_count()}, open(sys.argv[1], "w"), indent=2)
+PY
+echo "benchmark: wrote $OUT/runs.csv, $OUT/summary.csv, $OUT/manifest.json"
