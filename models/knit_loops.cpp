@@ -1,0 +1,411 @@
+#include "models/knit_loops.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace knitsim {
+
+namespace {
+
+// A tuck's head lies this many loop radii behind the head of the held loop (header).
+constexpr double kTuckHeadDepth = 2.0;
+
+const char* const kAcceptedLetters = "accepted letters: K knit, T tuck, M miss";
+
+[[noreturn]] void bad(const std::string& field, double value, const std::string& range) {
+  std::ostringstream os;
+  os << field << " = " << value << ": " << range;
+  throw std::invalid_argument(os.str());
+}
+
+// "chart row R, column C: <what> (<accepted letters>)" with R counted from the top as drawn.
+[[noreturn]] void bad_stitch(const KnitChart& chart, int wale, int course,
+                             const std::string& what) {
+  std::ostringstream os;
+  os << "chart row " << chart.courses - course << ", column " << wale + 1 << ": " << what << " ("
+     << kAcceptedLetters << ")";
+  throw std::invalid_argument(os.str());
+}
+
+std::string describe_char(char c) {
+  const auto u = static_cast<unsigned char>(c);
+  std::ostringstream os;
+  if (c == ' ') {
+    os << "a space";
+  } else if (c == '\t') {
+    os << "a tab";
+  } else if (u >= 33 && u < 127) {
+    os << "'" << c << "'";
+  } else {
+    os << "byte 0x" << std::hex << static_cast<int>(u);
+  }
+  return os.str();
+}
+
+Vec3 unit(Vec3 v) {
+  const double l = norm(v);
+  return l > 0.0 ? (1.0 / l) * v : v;
+}
+Vec3 lerp(Vec3 a, Vec3 b, double t) { return a + t * (b - a); }
+
+// Local frame of wale i in one course (see the header).
+struct Frame {
+  Vec3 B, ex, ey, n;
+};
+
+// Frames of every wale of course j and its W + 1 sinker points (sinker k lies between wales
+// k - 1 and k; sinkers 0 and W are the course ends).
+struct CourseGeometry {
+  std::vector<Frame> frames;
+  std::vector<Vec3> sinkers;
+};
+
+CourseGeometry course_geometry(const KnitModel& m, const std::vector<Vec3>& x, int j) {
+  const int W = m.chart.wales;
+  const double r = m.params.loop_radius;
+  CourseGeometry g;
+  g.frames.resize(W);
+  auto is_knit = [&](int i) { return m.chart.at(i, j) == Stitch::Knit; };
+  // Nearest knits to the left and right (the edge wales are knits) and the weight of the right.
+  std::vector<int> left(W), right(W);
+  for (int i = 0, last = 0; i < W; ++i) left[i] = last = is_knit(i) ? i : last;
+  for (int i = W - 1, last = W - 1; i >= 0; --i) right[i] = last = is_knit(i) ? i : last;
+  auto weight = [&](int i) {
+    return right[i] == left[i] ? 0.0 : double(i - left[i]) / double(right[i] - left[i]);
+  };
+
+  for (int i = 0; i < W; ++i)
+    if (is_knit(i)) g.frames[i].B = x[m.loops[m.loop(i, j)].lower];
+  for (int i = 0; i < W; ++i)
+    if (!is_knit(i)) g.frames[i].B = lerp(g.frames[left[i]].B, g.frames[right[i]].B, weight(i));
+
+  for (int i = 0; i < W; ++i) {
+    const int l = m.loop(i, j);
+    if (l < 0) continue;  // misses: interpolated below
+    Frame& f = g.frames[i];
+    f.ey = unit(x[m.loops[l].upper] - f.B);
+    Vec3 d{1.0, 0.0, 0.0};
+    if (W > 1) d = g.frames[std::min(i + 1, W - 1)].B - g.frames[std::max(i - 1, 0)].B;
+    Vec3 ex = d - dot(d, f.ey) * f.ey;
+    if (!(norm(ex) > 1e-12 * norm(d))) ex = cross(f.ey, Vec3{0.0, 0.0, 1.0});  // degenerate
+    f.ex = unit(ex);
+    f.n = cross(f.ex, f.ey);
+  }
+  for (int i = 0; i < W; ++i) {
+    if (m.loop(i, j) >= 0) continue;
+    const Frame &a = g.frames[left[i]], &b = g.frames[right[i]];
+    Frame& f = g.frames[i];
+    f.ex = unit(lerp(a.ex, b.ex, weight(i)));
+    f.ey = unit(lerp(a.ey, b.ey, weight(i)));
+    f.n = unit(lerp(a.n, b.n, weight(i)));
+  }
+
+  g.sinkers.resize(W + 1);
+  const Frame &first = g.frames.front(), &last = g.frames.back();
+  g.sinkers[0] = first.B - 4.0 * r * first.ex - r * first.ey - r * first.n;
+  g.sinkers[W] = last.B + 4.0 * r * last.ex - r * last.ey - r * last.n;
+  for (int k = 1; k < W; ++k) {
+    const Frame &a = g.frames[k - 1], &b = g.frames[k];
+    g.sinkers[k] = 0.5 * (a.B + b.B) - (0.5 * r) * (a.ey + b.ey) - (0.5 * r) * (a.n + b.n);
+  }
+  return g;
+}
+
+// T0..T8 of loop l (T1, T7 only for knits), in ascending k.
+LoopTypeValues loop_type_values(const KnitModel& m, const CourseGeometry& g,
+                                const std::vector<Vec3>& x, int l) {
+  const KnitLoop& loop = m.loops[l];
+  const double r = m.params.loop_radius;
+  const Frame& f = g.frames[loop.wale];
+  const Vec3 P = x[loop.upper];
+  const double back = loop.kind == Stitch::Tuck ? kTuckHeadDepth * r : 0.0;
+  const Vec3 T0 = g.sinkers[loop.wale], T8 = g.sinkers[loop.wale + 1];
+  const Vec3 T3 = P - 3.0 * r * f.ex - back * f.n;
+  const Vec3 T4 = P + r * f.ey - (r + back) * f.n;
+  const Vec3 T5 = P + 3.0 * r * f.ex - back * f.n;
+  const Vec3 T2 = 0.5 * (T0 + T4) + 2.0 * r * f.n;
+  const Vec3 T6 = 0.5 * (T4 + T8) + 2.0 * r * f.n;
+  if (loop.kind == Stitch::Tuck) return {{0, 2, 3, 4, 5, 6, 8}, {T0, T2, T3, T4, T5, T6, T8}};
+  const Vec3 T1 = f.B - r * f.ex, T7 = f.B + r * f.ex;
+  return {{0, 1, 2, 3, 4, 5, 6, 7, 8}, {T0, T1, T2, T3, T4, T5, T6, T7, T8}};
+}
+
+void check_positions(const KnitModel& m, const std::vector<Vec3>& x) {
+  if (x.size() != m.points.size()) {
+    std::ostringstream os;
+    os << "knit geometry: " << x.size() << " positions given, the model has " << m.points.size()
+       << " points";
+    throw std::invalid_argument(os.str());
+  }
+}
+
+}  // namespace
+
+void KnitChart::validate() const {
+  if (wales < 1 || courses < 1)
+    throw std::invalid_argument(std::string("chart: no stitch rows (one line per course, top "
+                                            "course first; ") +
+                                kAcceptedLetters + ")");
+  if (stitches.size() != static_cast<size_t>(wales) * courses) {
+    std::ostringstream os;
+    os << "chart: " << stitches.size() << " stitches for " << wales << " wales x " << courses
+       << " courses";
+    throw std::invalid_argument(os.str());
+  }
+  for (int j = 0; j < courses; ++j)
+    for (int i = 0; i < wales; ++i) {
+      const Stitch s = at(i, j);
+      if (s != Stitch::Knit && s != Stitch::Tuck && s != Stitch::Miss)
+        bad_stitch(*this, i, j, "not a stitch");
+      if (s == Stitch::Knit) continue;
+      const std::string name = s == Stitch::Tuck ? "a tuck" : "a miss";
+      if (j == 0) bad_stitch(*this, i, j, name + " in the bottom course has no loop below to hold");
+      if (i == 0 || i == wales - 1)
+        bad_stitch(*this, i, j, name + " on an edge wale leaves the yarn no loop to turn at");
+      if (s == Stitch::Miss && j == courses - 1)
+        bad_stitch(*this, i, j,
+                   "a miss in the top course leaves the held loop without an upper point");
+    }
+}
+
+KnitChart parse_knit_chart(const std::string& text) {
+  struct Row {
+    std::string stitches;
+    int line;
+  };
+  std::vector<Row> rows;
+  std::istringstream in(text);
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    line = line.substr(0, line.find('#'));
+    const size_t begin = line.find_first_not_of(" \t\r");
+    if (begin == std::string::npos) continue;
+    const size_t end = line.find_last_not_of(" \t\r");
+    rows.push_back({line.substr(begin, end - begin + 1), number});
+  }
+  KnitChart chart;
+  chart.courses = static_cast<int>(rows.size());
+  chart.wales = rows.empty() ? 0 : static_cast<int>(rows[0].stitches.size());
+  if (rows.empty()) chart.validate();  // throws: no rows
+  chart.stitches.resize(static_cast<size_t>(chart.wales) * chart.courses);
+  for (int row = 0; row < chart.courses; ++row) {
+    const Row& r = rows[row];
+    const int course = chart.courses - 1 - row;
+    for (int col = 0; col < static_cast<int>(r.stitches.size()); ++col) {
+      const char c = r.stitches[col];
+      if (c != 'K' && c != 'T' && c != 'M') {
+        std::ostringstream os;
+        os << "chart row " << row + 1 << " (line " << r.line << "), column " << col + 1 << ": "
+           << describe_char(c) << " is not a stitch (" << kAcceptedLetters << ")";
+        throw std::invalid_argument(os.str());
+      }
+    }
+    if (static_cast<int>(r.stitches.size()) != chart.wales) {
+      std::ostringstream os;
+      os << "chart row " << row + 1 << " (line " << r.line << "): " << r.stitches.size()
+         << " stitches, row 1 has " << chart.wales << "; every row needs one letter per wale ("
+         << kAcceptedLetters << ")";
+      throw std::invalid_argument(os.str());
+    }
+    for (int col = 0; col < chart.wales; ++col)
+      chart.stitches[static_cast<size_t>(course) * chart.wales + col] =
+          static_cast<Stitch>(r.stitches[col]);
+  }
+  chart.validate();
+  return chart;
+}
+
+void KnitParams::validate() const {
+  if (!(loop_radius > 0.0) || !std::isfinite(loop_radius))
+    bad("model.loop_radius", loop_radius, "must be > 0 m");
+  if (!(wale_stiffness > 0.0) || !std::isfinite(wale_stiffness))
+    bad("model.wale_stiffness", wale_stiffness, "must be > 0 N/m");
+  if (!(course_stiffness > 0.0) || !std::isfinite(course_stiffness))
+    bad("model.course_stiffness", course_stiffness, "must be > 0 N/m");
+  if (!(damping >= 0.0) || !std::isfinite(damping))
+    bad("model.damping", damping, "must be >= 0 N s/m");
+  if (!(areal_density > 0.0) || !std::isfinite(areal_density))
+    bad("fabric.areal_density", areal_density, "must be > 0 g/m^2");
+  if (max_points < 1) bad("max_points", static_cast<double>(max_points), "must be >= 1");
+}
+
+const char* to_string(KnitSpringKind kind) {
+  switch (kind) {
+    case KnitSpringKind::Wale:
+      return "wale";
+    case KnitSpringKind::Course:
+      return "course";
+    case KnitSpringKind::Tuck:
+      return "tuck";
+    case KnitSpringKind::Float:
+      return "float";
+  }
+  return "unknown";
+}
+
+int KnitModel::count(KnitSpringKind kind) const {
+  return static_cast<int>(std::count(spring_kind.begin(), spring_kind.end(), kind));
+}
+
+std::vector<Vec3> KnitModel::rest_positions() const {
+  std::vector<Vec3> x(points.size());
+  for (size_t k = 0; k < points.size(); ++k) x[k] = points[k].rest;
+  return x;
+}
+
+KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
+  p.validate();
+  chart.validate();
+  const int W = chart.wales, C = chart.courses;
+  if (static_cast<double>(W) * (C + 1) > static_cast<double>(p.max_points)) {
+    std::ostringstream os;
+    os << "chart: " << W << " wales x " << C << " courses gives up to " << W * (C + 1.0)
+       << " points, over the cap of " << p.max_points;
+    throw std::invalid_argument(os.str());
+  }
+  const double r = p.loop_radius, w = p.wale_spacing(), h = p.course_spacing();
+
+  std::vector<KnitPoint> points;
+  std::vector<int> point_at(static_cast<size_t>(W) * (C + 1), -1);
+  for (int L = 0; L <= C; ++L)
+    for (int i = 0; i < W; ++i)
+      if (L == 0 || L == C || chart.at(i, L) == Stitch::Knit) {
+        point_at[static_cast<size_t>(L) * W + i] = static_cast<int>(points.size());
+        points.push_back({i, L, Vec3{i * w, L * h, 0.0}});
+      }
+  auto point = [&](int i, int L) { return point_at[static_cast<size_t>(L) * W + i]; };
+
+  std::vector<KnitLoop> loops;
+  std::vector<int> loop_at(static_cast<size_t>(W) * C, -1);
+  for (int j = 0; j < C; ++j)
+    for (int i = 0; i < W; ++i) {
+      const Stitch s = chart.at(i, j);
+      if (s == Stitch::Miss) continue;
+      int L = j + 1;
+      while (point(i, L) < 0) ++L;  // the top level always exists
+      loop_at[static_cast<size_t>(j) * W + i] = static_cast<int>(loops.size());
+      loops.push_back({i, j, s, s == Stitch::Knit ? point(i, j) : -1, point(i, L)});
+    }
+
+  SpringNetworkSpec spec;
+  std::vector<KnitSpringKind> kinds;
+  auto add = [&](int a, int b, double rest, double k, KnitSpringKind kind) {
+    spec.springs.push_back({a, b, rest, k});
+    kinds.push_back(kind);
+  };
+  const double k_tuck = 1.0 / (1.0 / p.wale_stiffness + 1.0 / p.course_stiffness);
+  for (int j = 0; j < C; ++j) {
+    const KnitLoop* prev = nullptr;
+    for (int i = 0; i < W; ++i) {
+      const int l = loop_at[static_cast<size_t>(j) * W + i];
+      if (l < 0) continue;
+      const KnitLoop& cur = loops[l];
+      if (cur.kind == Stitch::Knit)
+        add(cur.lower, cur.upper, h, p.wale_stiffness, KnitSpringKind::Wale);
+      if (prev != nullptr) {
+        auto anchor = [](const KnitLoop& a) { return a.kind == Stitch::Knit ? a.lower : a.upper; };
+        auto nominal_height = [&](const KnitLoop& a) {
+          return (a.kind == Stitch::Knit ? j : j + 1) * h;
+        };
+        const bool tuck = prev->kind == Stitch::Tuck || cur.kind == Stitch::Tuck;
+        const KnitSpringKind kind = cur.wale - prev->wale > 1 ? KnitSpringKind::Float
+                                    : tuck                    ? KnitSpringKind::Tuck
+                                                              : KnitSpringKind::Course;
+        add(anchor(*prev), anchor(cur), std::hypot(w, nominal_height(cur) - nominal_height(*prev)),
+            tuck ? k_tuck : p.course_stiffness, kind);
+      }
+      prev = &cur;
+    }
+  }
+
+  const int count = static_cast<int>(points.size());
+  const double total_mass = p.areal_density * 1e-3 * (W * w) * (C * h);  // kg
+  spec.positions.resize(count);
+  for (int k = 0; k < count; ++k) spec.positions[k] = points[k].rest;
+  spec.masses.assign(count, total_mass / count);
+  auto pin_level = [&](int L) {
+    for (int i = 0; i < W; ++i) {
+      const int id = point(i, L);
+      spec.pinned.push_back(id);
+      spec.pin_paths.push_back({points[id].rest, points[id].rest, 0.0});
+    }
+  };
+  if (p.pins == KnitPins::Bottom || p.pins == KnitPins::BottomAndTop) pin_level(0);
+  if (p.pins == KnitPins::Top || p.pins == KnitPins::BottomAndTop) pin_level(C);
+  spec.damping = p.damping;
+  spec.elongation_limit = 0.0;
+  const double g = 9.81;
+  spec.gravity = p.gravity ? Vec3{0.0, -g, 0.0} : Vec3{0.0, 0.0, 0.0};
+  spec.residual_force_scale = p.wale_stiffness * r;
+  if (p.gravity)
+    spec.residual_force_scale = std::min(spec.residual_force_scale, total_mass / count * g);
+
+  return KnitModel{chart,
+                   p,
+                   std::move(points),
+                   std::move(loops),
+                   std::move(kinds),
+                   std::move(point_at),
+                   std::move(loop_at),
+                   SpringNetwork(std::move(spec))};
+}
+
+std::vector<LoopTypeValues> type_value_points(const KnitModel& m,
+                                              const std::vector<Vec3>& positions) {
+  check_positions(m, positions);
+  std::vector<LoopTypeValues> out(m.loops.size());
+  for (int j = 0; j < m.chart.courses; ++j) {
+    const CourseGeometry g = course_geometry(m, positions, j);
+    for (int i = 0; i < m.chart.wales; ++i) {
+      const int l = m.loop(i, j);
+      if (l >= 0) out[l] = loop_type_values(m, g, positions, l);
+    }
+  }
+  return out;
+}
+
+std::vector<std::vector<Vec3>> course_yarn_points(const KnitModel& m,
+                                                  const std::vector<Vec3>& positions) {
+  check_positions(m, positions);
+  const double r = m.params.loop_radius;
+  std::vector<std::vector<Vec3>> yarns(m.chart.courses);
+  for (int j = 0; j < m.chart.courses; ++j) {
+    const CourseGeometry g = course_geometry(m, positions, j);
+    std::vector<Vec3>& yarn = yarns[j];
+    yarn.push_back(g.sinkers[0]);
+    for (int i = 0; i < m.chart.wales; ++i) {
+      const int l = m.loop(i, j);
+      if (l >= 0) {
+        const LoopTypeValues t = loop_type_values(m, g, positions, l);
+        yarn.insert(yarn.end(), t.t.begin() + 1, t.t.end() - 1);  // without the sinkers
+      } else {
+        const Frame& f = g.frames[i];
+        yarn.push_back(f.B - r * f.ey - r * f.n);  // the float behind the missed wale
+      }
+      yarn.push_back(g.sinkers[i + 1]);
+    }
+  }
+  return yarns;
+}
+
+std::vector<NurbsCurve> course_curves(const KnitModel& m, const std::vector<Vec3>& positions) {
+  std::vector<NurbsCurve> curves;
+  for (const auto& yarn : course_yarn_points(m, positions))
+    curves.push_back(interpolate_cubic(yarn, Parametrization::ChordLength));
+  return curves;
+}
+
+std::vector<CurveSamples> course_centerlines(const KnitModel& m, const std::vector<Vec3>& positions,
+                                             int samples_per_point) {
+  if (samples_per_point < 1) bad("samples_per_point", samples_per_point, "must be >= 1");
+  std::vector<CurveSamples> out;
+  for (const NurbsCurve& c : course_curves(m, positions)) {
+    const int intervals = static_cast<int>(c.control.size()) - 1;
+    out.push_back(sample_curve(c, samples_per_point * intervals + 1, Spacing::ArcLength));
+  }
+  return out;
+}
+
+}  // namespace knitsim

@@ -1,0 +1,202 @@
+// KnitLoops: the interlacing-point mass-spring model of weft-knitted fabric (Chang et al.
+// 2024, paper 2 Secs. 1-3; SPEC 2.9), built as a SpringNetwork, with the loops' type-value
+// points and NURBS centrelines as functions of the interlacing points.
+//
+// Chart (SPEC 2.9): one text line per course, top course first as drawn, one character per
+// wale: K knit, T tuck, M miss (float); blank lines and '#' comments (to the line's end) are
+// ignored, as are spaces and tabs around a row. Course j = 0 is the bottom course (the last
+// row drawn), wale i = 0 the leftmost column. Rules of this model (checked, with the row
+// (1-based, counted from the top as drawn) and column (1-based) in the message):
+//   - tucks and misses are knitted in neither the bottom course (no loop below to hold) nor an
+//     edge wale (the yarn would have no loop to turn at), and no miss is in the top course
+//     (the held loop would have no upper point); stacked tucks are allowed (below).
+//
+// Geometry: loop radius r (m), wale spacing w = 8r, course spacing h = 7r (paper 2 Sec. 1.2).
+// Points ("levels"): the interlacing point of wale i at level L sits at rest at
+// (i w, L h, 0); level j holds O(i,j), the lower point of loop (i,j), which is also P(i,j-1),
+// the upper point of the loop below (one particle). A level-L point exists iff L = 0 (bottom
+// course, all knits), L = courses (top) or loop (i,L) is a knit (a tuck or miss has no lower
+// point).
+// Loops: every knit and tuck (i,j) is a loop; its upper point U(i,j) is the first existing
+// point above level j in wale i: P(i,j) itself, or, for a loop held by tucks/misses above
+// it, the next existing upper point (the held loop is elongated).
+// Springs (paper 2 Sec. 2.2, Figs. 4-6; no shear or bending springs):
+//   wale     each knit loop: O(i,j) - U(i,j), rest h, stiffness k_w (a held loop starts
+//            stretched over 2h, 3h, ...: that pull is the deformation paper 2 simulates);
+//   course   consecutive loops of a course joined at their "anchors" (a knit's lower point
+//            O(i,j); a tuck's upper point U(i,j), where the open arc hangs), stiffness k_c;
+//   tuck     a course link with a tuck at one end (the paper's "combined wale/course
+//            spring"), stiffness 1/(1/k_w + 1/k_c) (a course spring and a wale spring in
+//            series);
+//   float    a course link across missed wales (the float of a miss), stiffness k_c.
+//   Course-link rest length: sqrt(w^2 + d^2), d the difference of the anchors' nominal
+//   heights (a knit's O at j h, a tuck's head at (j+1) h): w between knits, sqrt(w^2 + h^2)
+//   from a knit to a tuck's head (unstretched at the start), and w for a float whatever the
+//   number of missed wales (SPEC 2.9: the float links O(i-1,j) - O(i+1,j) with rest w, so it
+//   starts stretched and draws the fabric in). Stacked tucks all hang from the first existing
+//   point above them; each starts stretched by its own distance from it.
+// Masses: total areal density x chart area (wales w x courses h), shared equally by the
+//   points. Forces: springs and absolute damping c per point (paper 2 Sec. 3.3, F = -K_s L -
+//   K_d V); gravity (along -y, the fabric hanging in the x-y plane) and pins optional.
+// Static residual scale (SPEC 2.3): F_ref = k_w r, the force of a wale spring stretched by one
+//   loop radius (paper 2 has no external force, so the SpringNetwork default m g is
+//   meaningless); with gravity on, min(k_w r, mean point weight).
+// Mechanics of paper 2's network (measured, see tests/test_knit.cpp): with wale and course
+//   springs only, the square network is a mechanism (rows and columns shear and swing at no
+//   energy; z is free). A tuck or miss is taken up without strain: at the steady state every
+//   spring is at its rest length, and the misfit is absorbed by rigid motions of blocks of
+//   the fabric that do not decay with distance. The steady state is therefore not unique: it
+//   is where the damped dynamics from the start ends, and integrators agree only to their
+//   path error (implicit-euler converges to Verlet's state as dt -> 0). Large charts with
+//   many tucks or misses creep slowly towards it (soft modes), and implicit-euler's large
+//   steps wander along the zero-energy modes.
+// State layout: that of SpringNetwork (3 dof per free point, in point-id order); point ids
+//   are level-major: all points of level 0 by wale, then level 1, ...
+//
+// Loop geometry (paper 2 Sec. 1.1, Fig. 1; SPEC 2.9): type-value points T0..T8 per loop are
+// a fixed function of the current points. Per course and wale a local frame (B, e_x, e_y, n):
+//   B    the loop's lower point (knit) or, for tucks and misses, the linear interpolation
+//        between the nearest knits' lower points of the course;
+//   e_y  unit(U - B) (knit, tuck); for a miss interpolated like B;
+//   e_x  unit component of B(i+1) - B(i-1) orthogonal to e_y (one-sided at the edges);
+//   n    e_x x e_y (+z at rest: towards the viewer of the front view).
+// Knit loop, with P = U(i,j):
+//   T1 = B - r e_x,  T7 = B + r e_x                (feet, z = 0)
+//   T3 = P - 3r e_x, T5 = P + 3r e_x, T4 = P + r e_y - r n   (head, behind)
+//   T0, T8 = the sinker points shared with the neighbours:
+//        S(i,i+1) = (B_i + B_{i+1})/2 - r (e_y,i + e_y,i+1)/2 - r (n_i + n_i+1)/2,
+//        at the course ends B -/+ 4r e_x - r e_y - r n
+//   T2 = (T0 + T4)/2 + 2r n, T6 = (T4 + T8)/2 + 2r n   (legs in front; paper: T2, T6 are the
+//        midpoints of T0-T4 and T4-T8 in the front view, T4 and T0/T8 symmetric about them)
+// At rest (O at the origin, P = (0, h, 0)) this is exactly SPEC 2.9's
+//   T0 (-4r,-r,-r) T1 (-r,0,0) T2 (-2r,3.5r,r) T3 (-3r,7r,0) T4 (0,8r,-r) T5 (3r,7r,0)
+//   T6 (2r,3.5r,r) T7 (r,0,0) T8 (4r,-r,-r),
+// so the head of loop (i,j-1) passes behind the legs of loop (i,j) near its feet, and its
+// upper legs in front of that loop's sinker arcs: the new loop passes through the old one,
+// the courses intermesh. A tuck loop is the open arc T0 T2 T3 T4 T5 T6 T8 (no feet) with
+// its head T3..T5 pushed back by 2r behind the head of the held loop it shares the needle
+// with (SPEC 2.9 leaves the two coincident; on the face the tuck hides behind it). A float
+// passes behind each missed wale at F_i = B_i - r e_y - r n. Each course's yarn is one C^2
+// cubic NURBS through its points in wale order (T8 of a loop = T0 of the next), chord-length
+// parameters (src/nurbs.hpp).
+//
+// Failure modes: a bad chart or parameters throw std::invalid_argument at set-up (chart
+// messages name row and column). Geometry functions expect positions of every point
+// (length points.size()) and throw std::invalid_argument otherwise; a degenerate
+// configuration (coincident yarn points) throws std::invalid_argument from the NURBS fit.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "models/spring_network.hpp"
+#include "src/nurbs.hpp"
+#include "src/vec3.hpp"
+
+namespace knitsim {
+
+enum class Stitch : char { Knit = 'K', Tuck = 'T', Miss = 'M' };
+
+struct KnitChart {
+  int wales = 0;
+  int courses = 0;
+  std::vector<Stitch> stitches;  // index course * wales + wale; course 0 = bottom (drawn last)
+  Stitch at(int wale, int course) const { return stitches[course * wales + wale]; }
+  // Throws std::invalid_argument for a chart that breaks the model's rules (see above).
+  void validate() const;
+};
+
+// Parses the text of a chart file. Throws std::invalid_argument with one line naming the
+// row and column as drawn and the accepted letters.
+KnitChart parse_knit_chart(const std::string& text);
+
+enum class KnitPins { None, Bottom, Top, BottomAndTop };  // which edge levels are held fixed
+
+struct KnitParams {
+  // r, m: 14 wales/cm -> w = 8r = 1/14 cm -> r = 1/1120 cm ~ 8.93e-5 m.
+  double loop_radius = 1e-2 / 14.0 / 8.0;
+  // k_w, k_c, N/m: a documented choice (paper 2 gives no values). With springs in series
+  // along each wale and course, the fabric's tensile stiffness per unit width is
+  // k_w h/w ~ 88 N/m along the wales and k_c w/h ~ 114 N/m along the courses. Without
+  // external forces only the ratio k_w/k_c shapes the steady state; k sets the time scale.
+  double wale_stiffness = 100.0;
+  double course_stiffness = 100.0;
+  // c, N s/m per point (paper 2: F_d = -K_d V; no value given). Default ~0.2 x the
+  // critical damping 2 sqrt(k m) = 2.7e-3 of one default point (m = rho_A w h ~ 1.86e-8 kg)
+  // on one default spring: chosen by measurement, the shipped tuck and miss charts settle
+  // 2-4x faster with Verlet than at 2e-3 (slow soft modes creep at a rate ~ 1/c).
+  double damping = 5e-4;
+  double areal_density = 41.65;  // rho_A, g/m^2 (paper 1 Table 2, sample 1)
+  bool gravity = false;          // paper 2 ignores external forces; on: g = 9.81 m/s^2 along -y
+  KnitPins pins = KnitPins::None;
+  long max_points = 4'000'000;  // refuse larger charts before allocating
+
+  // Throws std::invalid_argument naming the field and the accepted range.
+  void validate() const;
+  double wale_spacing() const { return 8.0 * loop_radius; }    // w, m
+  double course_spacing() const { return 7.0 * loop_radius; }  // h, m
+};
+
+struct KnitPoint {
+  int wale = 0;
+  int level = 0;  // 0..courses: O(i,level), = P(i,level-1)
+  Vec3 rest;      // (i w, level h, 0), m: the initial position
+};
+
+struct KnitLoop {
+  int wale = 0;
+  int course = 0;
+  Stitch kind = Stitch::Knit;  // Knit or Tuck (a miss has no loop)
+  int lower = -1;              // point id of O(i,j); -1 for a tuck
+  int upper = -1;              // point id of U(i,j) (P(i,j), or higher for a held loop)
+};
+
+enum class KnitSpringKind { Wale, Course, Tuck, Float };
+const char* to_string(KnitSpringKind kind);
+
+struct KnitModel {
+  KnitChart chart;
+  KnitParams params;
+  std::vector<KnitPoint> points;            // index = point id = SpringNetwork particle
+  std::vector<KnitLoop> loops;              // by course (bottom first), then wale
+  std::vector<KnitSpringKind> spring_kind;  // parallel to network.spec().springs
+  std::vector<int> point_at;                // level * wales + wale -> point id, -1 if absent
+  std::vector<int> loop_at;                 // course * wales + wale -> loop index, -1 (miss)
+  SpringNetwork network;
+
+  int point(int wale, int level) const { return point_at[level * chart.wales + wale]; }
+  int loop(int wale, int course) const { return loop_at[course * chart.wales + wale]; }
+  int count(KnitSpringKind kind) const;  // springs of one kind
+  // Loop l is held by tucks or misses above it: its upper point lies above level course + 1.
+  bool held(int l) const { return points[loops[l].upper].level > loops[l].course + 1; }
+  // Rest positions of all points (length points.size()).
+  std::vector<Vec3> rest_positions() const;
+};
+
+KnitModel build_knit(const KnitChart& chart, const KnitParams& params);
+
+// Type-value points of one loop: k lists which T_k the loop has (0..8 for a knit;
+// 0, 2, 3, 4, 5, 6, 8 for a tuck) and t their positions, m.
+struct LoopTypeValues {
+  std::vector<int> k;
+  std::vector<Vec3> t;
+};
+// One entry per model.loops, at the given positions of all points.
+std::vector<LoopTypeValues> type_value_points(const KnitModel& model,
+                                              const std::vector<Vec3>& positions);
+
+// Per course (bottom first), the yarn's interpolation points in wale order: the loops' type-
+// value points with shared sinkers once, and a float point behind each missed wale.
+std::vector<std::vector<Vec3>> course_yarn_points(const KnitModel& model,
+                                                  const std::vector<Vec3>& positions);
+
+// Per course, the C^2 cubic NURBS through course_yarn_points (chord-length parameters).
+std::vector<NurbsCurve> course_curves(const KnitModel& model, const std::vector<Vec3>& positions);
+
+// Per course, its centreline sampled uniformly in arc length with samples_per_point samples
+// per interpolation interval (>= 1).
+std::vector<CurveSamples> course_centerlines(const KnitModel& model,
+                                             const std::vector<Vec3>& positions,
+                                             int samples_per_point = 8);
+
+}  // namespace knitsim
