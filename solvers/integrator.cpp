@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -123,6 +124,7 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
 
   using clock = std::chrono::steady_clock;
   const auto wall_start = clock::now();
+  const std::clock_t cpu_start = std::clock();
   auto wall = [&] { return std::chrono::duration<double>(clock::now() - wall_start).count(); };
 
   RunStats stats;
@@ -142,6 +144,7 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
     stats.t_final = t;
     stats.residual = sys.static_residual(t, x.data());
     stats.wall_seconds = wall();
+    stats.cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
     return stats;
   };
   auto state_ok = [&]() -> bool {

@@ -79,6 +79,8 @@ struct RunStats {
   long err_test_fails = 0;
   int max_order_used = 0;
   double wall_seconds = 0.0;
+  double cpu_seconds = 0.0;  // process CPU time during the run (robust on a loaded machine;
+                             // counts all threads of the process)
 };
 
 struct IntegratorInfo {

@@ -273,7 +273,8 @@ nlohmann::json to_json(const RunStats& s) {
           {"nonlin_fails", s.nonlin_fails},
           {"err_test_fails", s.err_test_fails},
           {"max_order_used", s.max_order_used},
-          {"wall_seconds", s.wall_seconds}};
+          {"wall_seconds", s.wall_seconds},
+          {"cpu_seconds", s.cpu_seconds}};
 }
 
 // ---- provenance --------------------------------------------------------------------------------

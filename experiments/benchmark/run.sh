@@ -31,7 +31,7 @@ done
 [ -x "$KNITSIM" ] || { echo "benchmark: $KNITSIM not built (run ./run.sh --build-only)" >&2; exit 2; }
 mkdir -p "$OUT/runs"
 runs_csv=$OUT/runs.csv
-echo "scene,integrator,repeat,status,t_final,steps,rhs_evals,jac_evals,lin_setups,residual,dt,wall_seconds" > "$runs_csv"
+echo "scene,integrator,repeat,status,t_final,steps,rhs_evals,jac_evals,lin_setups,residual,dt,wall_seconds,cpu_seconds" > "$runs_csv"
 
 # One drape; appends a row to runs.csv. Extra arguments go to knitsim drape.
 drape() {
@@ -44,7 +44,8 @@ import json, sys
 s = json.load(open(sys.argv[1]))
 print(",".join([sys.argv[2], sys.argv[3], sys.argv[4], s["status"], repr(s["t_final"]),
                 str(s["steps"]), str(s["rhs_evals"]), str(s["jac_evals"]), str(s["lin_setups"]),
-                repr(s["residual"]), repr(s["dt"]), repr(s["wall_seconds"])]))
+                repr(s["residual"]), repr(s["dt"]), repr(s["wall_seconds"]),
+                repr(s["cpu_seconds"])]))
 PY
 }
 
@@ -73,30 +74,36 @@ for scene, integ in [("four_corner", "cvode-bdf"), ("two_corner", "cvode-bdf")]:
     rs = [r for r in rows if r["scene"] == scene and r["integrator"] == integ]
     out.append(dict(scene=scene, integrator=integ, runs=len(rs), status=rs[0]["status"],
                     t_final=med(rs, "t_final"), steps=med(rs, "steps"),
-                    wall_seconds=med(rs, "wall_seconds"), measured="yes"))
+                    wall_seconds=med(rs, "wall_seconds"), cpu_seconds=med(rs, "cpu_seconds"),
+                    measured="yes"))
 eu = [r for r in rows if r["integrator"] == "euler" and r["repeat"] == "1"][0]
 per_step = float(eu["wall_seconds"]) / float(eu["steps"])
+per_step_cpu = float(eu["cpu_seconds"]) / float(eu["steps"])
 if quick:
     settle = [r for r in rows if r["integrator"] == "verlet"][0]
     t_settle = float(settle["t_final"])
     steps = t_settle / float(eu["dt"])
     out.append(dict(scene="four_corner", integrator="euler", runs=1, status="extrapolated",
                     t_final=t_settle, steps=steps, wall_seconds=steps * per_step,
+                    cpu_seconds=steps * per_step_cpu,
                     measured="no: %s steps timed, t_settle from verlet" % eu["steps"]))
 else:
     out.append(dict(scene="four_corner", integrator="euler", runs=1, status=eu["status"],
                     t_final=float(eu["t_final"]), steps=float(eu["steps"]),
-                    wall_seconds=float(eu["wall_seconds"]), measured="yes"))
+                    wall_seconds=float(eu["wall_seconds"]), cpu_seconds=float(eu["cpu_seconds"]),
+                    measured="yes"))
 w = csv.DictWriter(open(sys.argv[2], "w", newline=""), fieldnames=list(out[0].keys()))
 w.writeheader(); w.writerows(out)
-print("%-12s %-10s %4s %-13s %12s %12s %12s  %s" % ("scene", "integrator", "runs", "status",
-      "t_final s", "steps", "wall s", "measured"))
+print("%-12s %-10s %4s %-13s %11s %11s %10s %10s  %s" % ("scene", "integrator", "runs",
+      "status", "t_final s", "steps", "wall s", "cpu s", "measured"))
 for o in out:
-    print("%-12s %-10s %4d %-13s %12.4g %12.4g %12.4g  %s" % (o["scene"], o["integrator"],
-          o["runs"], o["status"], o["t_final"], o["steps"], o["wall_seconds"], o["measured"]))
-bdf4 = out[0]["wall_seconds"]
-print("euler / cvode-bdf on four_corner (wall, same residual): %.3g" % (out[2]["wall_seconds"] / bdf4))
-print("euler time per step: %.3g us (dt = %s s)" % (per_step * 1e6, eu["dt"]))
+    print("%-12s %-10s %4d %-13s %11.4g %11.4g %10.4g %10.4g  %s" % (o["scene"], o["integrator"],
+          o["runs"], o["status"], o["t_final"], o["steps"], o["wall_seconds"], o["cpu_seconds"],
+          o["measured"]))
+print("euler / cvode-bdf on four_corner, same residual: wall %.3g, cpu %.3g" % (
+      out[2]["wall_seconds"] / out[0]["wall_seconds"], out[2]["cpu_seconds"] / out[0]["cpu_seconds"]))
+print("euler time per step: %.3g us wall, %.3g us cpu (dt = %s s)" % (per_step * 1e6,
+      per_step_cpu * 1e6, eu["dt"]))
 PY
 commit=$(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)
 python3 - "$OUT/manifest.json" "$KNITSIM" "$QUICK" "$REPEATS" "$commit" <<'PY'
