@@ -228,6 +228,8 @@ void KnitParams::validate() const {
     bad("model.damping", damping, "must be >= 0 N s/m");
   if (!(areal_density > 0.0) || !std::isfinite(areal_density))
     bad("fabric.areal_density", areal_density, "must be > 0 g/m^2");
+  if (!(stabiliser_ratio >= 0.0 && stabiliser_ratio <= 1.0))
+    bad("model.stabiliser_ratio", stabiliser_ratio, "must be in [0, 1]");
   if (max_points < 1) bad("max_points", static_cast<double>(max_points), "must be >= 1");
 }
 
@@ -241,6 +243,10 @@ const char* to_string(KnitSpringKind kind) {
       return "tuck";
     case KnitSpringKind::Float:
       return "float";
+    case KnitSpringKind::Shear:
+      return "shear";
+    case KnitSpringKind::Bending:
+      return "bending";
   }
   return "unknown";
 }
@@ -318,6 +324,30 @@ KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
       }
       prev = &cur;
     }
+  }
+
+  if (p.stabiliser_ratio > 0.0) {
+    const double s = p.stabiliser_ratio;
+    auto link = [&](int a, int b, double k, KnitSpringKind kind) {
+      add(a, b, norm(points[b].rest - points[a].rest), k, kind);
+    };
+    for (int L = 0; L <= C; ++L)
+      for (int i = 0; i < W; ++i) {
+        const int a = point(i, L);
+        if (a < 0) continue;
+        if (i + 1 < W && L + 1 <= C) {
+          const int b = point(i + 1, L), c = point(i, L + 1), d = point(i + 1, L + 1);
+          if (b >= 0 && c >= 0 && d >= 0) {
+            const double k = s * 0.5 * (p.wale_stiffness + p.course_stiffness);
+            link(a, d, k, KnitSpringKind::Shear);
+            link(b, c, k, KnitSpringKind::Shear);
+          }
+        }
+        if (L + 2 <= C && point(i, L + 1) >= 0 && point(i, L + 2) >= 0)
+          link(a, point(i, L + 2), s * p.wale_stiffness, KnitSpringKind::Bending);
+        if (i + 2 < W && point(i + 1, L) >= 0 && point(i + 2, L) >= 0)
+          link(a, point(i + 2, L), s * p.course_stiffness, KnitSpringKind::Bending);
+      }
   }
 
   const int count = static_cast<int>(points.size());

@@ -50,6 +50,17 @@
 //   path error (implicit-euler converges to Verlet's state as dt -> 0). Large charts with
 //   many tucks or misses creep slowly towards it (soft modes), and implicit-euler's large
 //   steps wander along the zero-energy modes.
+// Stabiliser (opt-in, KnitParams::stabiliser_ratio = s > 0; a departure from paper 2 Sec. 2.2,
+//   which has no such springs; s = 0, the default, is the paper's model exactly): it removes
+//   the mechanism by adding, between existing interlacing points,
+//   shear    both diagonals of every quad (i,L) (i+1,L) (i,L+1) (i+1,L+1) whose four corners
+//            exist, stiffness s (k_w + k_c)/2;
+//   bending  (i,L) - (i,L+2) along a wale, stiffness s k_w, and (i,L) - (i+2,L) along a level,
+//            stiffness s k_c, where the point between them exists too (no bending spring
+//            spans a held loop or a float: those keep the paper's pull).
+//   Rest lengths are the rest distances, so a plain chart stays exactly at rest. With it the
+//   steady state is unique and a tuck's displacement decays with distance (tests/test_knit.cpp,
+//   paper_repro/knit/README.md); the pull a tuck exerts is then shared with these springs.
 // State layout: that of SpringNetwork (3 dof per free point, in point-id order); point ids
 //   are level-major: all points of level 0 by wale, then level 1, ...
 //
@@ -129,6 +140,9 @@ struct KnitParams {
   double areal_density = 41.65;  // rho_A, g/m^2 (paper 1 Table 2, sample 1)
   bool gravity = false;          // paper 2 ignores external forces; on: g = 9.81 m/s^2 along -y
   KnitPins pins = KnitPins::None;
+  // s, dimensionless, in [0, 1]: stiffness of the stabiliser's shear and bending springs
+  // relative to k_w, k_c (see above); 0 = off, paper 2's network.
+  double stabiliser_ratio = 0.0;
   long max_points = 4'000'000;  // refuse larger charts before allocating
 
   // Throws std::invalid_argument naming the field and the accepted range.
@@ -151,7 +165,7 @@ struct KnitLoop {
   int upper = -1;              // point id of U(i,j) (P(i,j), or higher for a held loop)
 };
 
-enum class KnitSpringKind { Wale, Course, Tuck, Float };
+enum class KnitSpringKind { Wale, Course, Tuck, Float, Shear, Bending };
 const char* to_string(KnitSpringKind kind);
 
 struct KnitModel {

@@ -13,9 +13,11 @@ class App;
 namespace knitsim {
 
 void register_drape_command(CLI::App& app);
+void register_knit_command(CLI::App& app);
 void register_list_command(CLI::App& app);
 void register_demo_command(CLI::App& app);
 void register_optimize_command(CLI::App& app);
 void register_taguchi_command(CLI::App& app);
+void register_fit_command(CLI::App& app);
 
 }  // namespace knitsim

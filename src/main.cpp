@@ -31,10 +31,12 @@ int main(int argc, char** argv) {
   CLI::App app{"knitsim: stiff mass-spring models of knitted fabric"};
   app.require_subcommand(1);
   knitsim::register_drape_command(app);
+  knitsim::register_knit_command(app);
   knitsim::register_list_command(app);
   knitsim::register_demo_command(app);
   knitsim::register_optimize_command(app);
   knitsim::register_taguchi_command(app);
+  knitsim::register_fit_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -427,3 +427,95 @@ TEST_CASE("verlet and implicit-euler reach the same steady state as implicit-eul
   CHECK(fine < mid / 2.5);
   CHECK(fine < 1e-2 * r);
 }
+
+namespace {
+
+// A square chart of plain jersey with one tuck at its centre wale and course.
+std::string centred_tuck_chart(int side) {
+  std::string text;
+  for (int row = 0; row < side; ++row) {
+    std::string line(side, 'K');
+    if (side - 1 - row == side / 2) line[side / 2] = 'T';
+    text += line + "\n";
+  }
+  return text;
+}
+
+// |x - x0| / r of the point of wale i at level L.
+double displacement_over_r(const KnitModel& m, const std::vector<Vec3>& pos, int i, int L) {
+  const int id = m.point(i, L);
+  return norm(pos[id] - m.points[id].rest) / m.params.loop_radius;
+}
+
+}  // namespace
+
+TEST_CASE("stabiliser: a plain chart stays at rest; shear and bending springs hand-counted") {
+  KnitParams p;
+  p.stabiliser_ratio = 0.1;
+  const KnitModel plain = model_of(chart_file("plain_jersey.chart"), p);
+  std::vector<double> x(plain.network.dof()), v(plain.network.dof());
+  plain.network.initial_state(x.data(), v.data());
+  CHECK(plain.network.static_residual(0.0, x.data()) < 1e-12);
+  CHECK(max_spring_strain(plain, plain.rest_positions()) < 1e-14);
+  // 8 wales x 7 levels: 7 x 6 quads, 2 diagonals each; bending 8 x 5 along wales, 7 x 6
+  // along levels.
+  CHECK(plain.count(KnitSpringKind::Shear) == 84);
+  CHECK(plain.count(KnitSpringKind::Bending) == 82);
+
+  // The tuck removes point (3, 2): 4 quads, 3 wale triples and 3 level triples lose a point.
+  const KnitModel off = model_of(chart_file("single_tuck.chart"));
+  const KnitModel on = model_of(chart_file("single_tuck.chart"), p);
+  CHECK(on.points.size() == off.points.size());
+  CHECK(off.count(KnitSpringKind::Shear) + off.count(KnitSpringKind::Bending) == 0);
+  CHECK(on.count(KnitSpringKind::Shear) == 76);
+  CHECK(on.count(KnitSpringKind::Bending) == 76);
+  CHECK(on.network.spec().springs.size() == off.network.spec().springs.size() + 152);
+  for (size_t s = 0; s < on.spring_kind.size(); ++s) {
+    const Spring& sp = on.network.spec().springs[s];
+    const double k = sp.stiffness;
+    switch (on.spring_kind[s]) {
+      case KnitSpringKind::Shear:
+        CHECK(k == Approx(0.1 * 0.5 * (p.wale_stiffness + p.course_stiffness)));
+        CHECK(sp.rest == Approx(std::hypot(p.wale_spacing(), p.course_spacing())));
+        break;
+      case KnitSpringKind::Bending:
+        // Two apart along a level (2w, course stiffness) or along a wale (2h, wale stiffness).
+        if (sp.rest == Approx(2 * p.wale_spacing()))
+          CHECK(k == Approx(0.1 * p.course_stiffness));
+        else
+          CHECK((sp.rest == Approx(2 * p.course_spacing()) && k == Approx(0.1 * p.wale_stiffness)));
+        break;
+      default:
+        break;
+    }
+  }
+  p.stabiliser_ratio = 1.5;
+  CHECK_THROWS_WITH(p.validate(), "model.stabiliser_ratio = 1.5: must be in [0, 1]");
+}
+
+TEST_CASE("stabiliser: a tuck's displacement decays with distance and the state is unique") {
+  // 15 x 15 jersey, one tuck at its centre (wale 7, course 7). Measured (in r) along the
+  // tuck's level, 1 .. 7 wales away: 0.83, 0.57, 0.42, 0.32, 0.27, 0.23, 0.22; corner 0.11.
+  // Paper 2's network (no stabiliser) moves the same points 1.87 r at every distance.
+  const std::string chart = centred_tuck_chart(15);
+  KnitParams p;
+  p.stabiliser_ratio = 0.1;
+  const KnitModel m = model_of(chart, p);
+  const std::vector<Vec3> coarse = relax(m, "implicit-euler", 1.0);  // a few huge steps
+  const std::vector<Vec3> fine = relax(m, "implicit-euler", 1e-4);
+  // No mechanism left: the steady state does not depend on the path.
+  CHECK(max_displacement(coarse, fine) < 1e-3 * p.loop_radius);
+  const double near = displacement_over_r(m, fine, 8, 7), far = displacement_over_r(m, fine, 14, 7);
+  INFO("near " << near << " r, far " << far << " r");
+  CHECK(near > 0.5);
+  CHECK(far < 0.35 * near);
+  CHECK(displacement_over_r(m, fine, 0, 0) < 0.2);
+
+  const KnitModel paper = model_of(chart);
+  const std::vector<Vec3> rigid = relax(paper, "implicit-euler", 1e-4);
+  const double paper_near = displacement_over_r(paper, rigid, 8, 7);
+  const double paper_far = displacement_over_r(paper, rigid, 14, 7);
+  INFO("paper 2 model: near " << paper_near << " r, far " << paper_far << " r");
+  CHECK(paper_far > 0.9 * paper_near);  // no decay: blocks move rigidly
+  CHECK(paper_far > 1.0);
+}

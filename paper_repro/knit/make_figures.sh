@@ -1,0 +1,80 @@
+#!/usr/bin/env bash
+# Paper 2 (knit loops) figures: runs `knitsim knit` on the committed charts in models/charts/
+# with paper 2's network (wale + course springs) and with the opt-in stabiliser
+# (--set knit.stabiliser=0.1), then a 40 x 40 chart with tucks (stabiliser on) with cvode-bdf,
+# implicit-euler (automatic dt = 1 s) and verlet. See README.md for which picture is which figure.
+#
+# Usage: paper_repro/knit/make_figures.sh   (from the repository root)
+#   KNITSIM=path/to/knitsim   the binary (default build/knitsim)
+#   OUT=folder                output folder (default out/knit_figures)
+# Writes $OUT/<chart>-<paper|stabilised>/ (the outputs of knitsim knit), $OUT/runs.csv (one row
+# per run: chart, variant, integrator, status, steps, t_final, wall time, max displacement / r)
+# $OUT/tucks40.chart and $OUT/figures/ (below).
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+KNITSIM=${KNITSIM:-build/knitsim}
+OUT=${OUT:-out/knit_figures}
+CHARTS=models/charts
+[ -x "$KNITSIM" ] || { echo "make_figures.sh: no knitsim binary at $KNITSIM (set KNITSIM)" >&2; exit 1; }
+mkdir -p "$OUT"
+echo "chart,variant,integrator,status,steps,t_final_s,wall_s,max_displacement_over_r" > "$OUT/runs.csv"
+
+# run NAME VARIANT CHARTFILE ARGS...: one knitsim knit run into $OUT/NAME-VARIANT, one runs.csv row.
+run() {
+  local name=$1 variant=$2 chart=$3; shift 3
+  local dir="$OUT/$name-$variant" status=0
+  "$KNITSIM" knit --chart "$chart" --frames 8 --quiet --out "$dir" "$@" || status=$?
+  if [ "$status" -ne 0 ] && [ "$status" -ne 3 ]; then
+    echo "make_figures.sh: knitsim knit failed on $chart (exit $status)" >&2; exit 1
+  fi
+  python3 - "$dir/summary.json" "$name" "$variant" >> "$OUT/runs.csv" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+print(",".join(str(v) for v in [sys.argv[2], sys.argv[3], s["integrator"], s["status"],
+      s["stats"]["steps"], s["t_final"], round(s["wall_seconds"], 4),
+      round(s["max_displacement_over_r"], 4)]))
+PY
+  tail -n 1 "$OUT/runs.csv"
+}
+
+for chart in plain_jersey single_tuck several_tucks several_misses; do
+  run "$chart" paper "$CHARTS/$chart.chart"
+  run "$chart" stabilised "$CHARTS/$chart.chart" --set knit.stabiliser=0.1
+done
+
+# 40 x 40 jersey with 25 single tucks on a staggered 8 x 8 grid (a timing benchmark).
+python3 - > "$OUT/tucks40.chart" <<'PY'
+print("# 40 x 40 jersey with single tucks on a staggered grid (paper_repro/knit/make_figures.sh)")
+for row in range(40):
+    course = 39 - row
+    line = ["K"] * 40
+    if course % 8 == 4:
+        for wale in range(4 + (course // 8 % 2) * 4, 39, 8):
+            line[wale] = "T"
+    print("".join(line))
+PY
+run tucks40 stabilised-cvode-bdf "$OUT/tucks40.chart" --set knit.stabiliser=0.1 --integrator cvode-bdf
+run tucks40 stabilised-implicit-euler "$OUT/tucks40.chart" --set knit.stabiliser=0.1 --integrator implicit-euler
+run tucks40 stabilised-verlet "$OUT/tucks40.chart" --set knit.stabiliser=0.1 --integrator verlet
+run tucks40 paper-cvode-bdf "$OUT/tucks40.chart" --integrator cvode-bdf --set run.t_max=0.05
+# The figure pictures, copied under the paper's figure numbers into $OUT/figures/. "During"
+# (Fig. 8c) is the captured frame whose largest displacement is nearest half the final one.
+mkdir -p "$OUT/figures"
+for variant in paper stabilised; do
+  cp "$OUT/plain_jersey-$variant/after.png" "$OUT/figures/fig8a_plain_jersey_$variant.png"
+  cp "$OUT/single_tuck-$variant/before.png" "$OUT/figures/fig8b_single_tuck_before_$variant.png"
+  during=$(python3 - "$OUT/single_tuck-$variant/summary.json" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+half = 0.5 * s["max_displacement_over_r"]
+f = min(s["frames"], key=lambda f: abs(f["max_displacement_over_r"] - half))
+print("%03d" % f["index"])
+PY
+)
+  cp "$OUT/single_tuck-$variant/frames/frame_$during.png" \
+    "$OUT/figures/fig8c_single_tuck_during_$variant.png"
+  cp "$OUT/single_tuck-$variant/after.png" "$OUT/figures/fig8d_single_tuck_after_$variant.png"
+  cp "$OUT/several_tucks-$variant/after.png" "$OUT/figures/fig9_several_tucks_$variant.png"
+  cp "$OUT/several_misses-$variant/after.png" "$OUT/figures/fig10_several_misses_$variant.png"
+done
+echo "make_figures.sh: outputs in $OUT (runs.csv, figures/)"

@@ -1,0 +1,117 @@
+// `knitsim knit` against the command-line contract (SPEC 2.10): a settled small chart writes
+// outputs that agree with the model; a bad chart exits 2 with one line naming row and column
+// and writes nothing.
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "models/knit_loops.hpp"
+
+#ifndef KNITSIM_EXE
+#error "KNITSIM_EXE (the path of the knitsim binary) must be defined by the build"
+#endif
+
+using namespace knitsim;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+int count_lines(const std::string& text) {
+  int n = 0;
+  for (char c : text) n += c == '\n';
+  return n;
+}
+
+// Runs `knitsim knit <args>` with stdout and stderr captured into `dir`; returns the exit code.
+int run_knit(const std::string& args, const fs::path& dir, std::string& err) {
+  const fs::path out = dir / "stdout.txt", errfile = dir / "stderr.txt";
+  const std::string cmd = std::string("'") + KNITSIM_EXE + "' knit " + args + " >'" + out.string() +
+                          "' 2>'" + errfile.string() + "' </dev/null";
+  const int raw = std::system(cmd.c_str());
+  err = slurp(errfile);
+  return WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+}
+
+}  // namespace
+
+TEST_CASE("knitsim knit: a small tuck chart settles and its outputs agree with the model") {
+  const fs::path tmp = fs::temp_directory_path() / ("knitsim-knit-cli-" + std::to_string(getpid()));
+  fs::remove_all(tmp);
+  fs::create_directories(tmp);
+  const std::string chart_text = "KKKKK\nKKTKK\nKKKKK\n";
+  std::ofstream(tmp / "small.chart") << chart_text;
+  const fs::path out = tmp / "out";
+  std::string err;
+  const int status =
+      run_knit("--chart '" + (tmp / "small.chart").string() +
+                   "' --set knit.stabiliser=0.1 --frames 3 --quiet --out '" + out.string() + "'",
+               tmp, err);
+  INFO(err);
+  REQUIRE(status == 0);
+  for (const char* f : {"points.csv", "typevalue.csv", "centerlines.csv", "centerlines.vtk",
+                        "before.png", "after.png", "summary.json", "manifest.json",
+                        "frames/centerlines_000.vtk", "frames/centerlines_002.vtk"})
+    CHECK(fs::exists(out / f));
+  CHECK(!fs::exists(out / "frames/centerlines_003.vtk"));
+
+  KnitParams p;
+  p.stabiliser_ratio = 0.1;
+  const KnitModel m = build_knit(parse_knit_chart(chart_text), p);
+  const auto summary = nlohmann::json::parse(slurp(out / "summary.json"));
+  CHECK(summary["status"] == "equilibrium");
+  CHECK(summary["points"] == m.points.size());
+  CHECK(summary["springs"] == m.network.spec().springs.size());
+  CHECK(summary["springs_by_kind"]["tuck"] == m.count(KnitSpringKind::Tuck));
+  CHECK(summary["residual"].get<double>() <= 1e-8);
+  CHECK(summary["frames"].size() == 3);
+  CHECK(summary["frames"][0]["t"] == 0.0);
+  // One header line plus one row per particle; T0..T8 per knit loop, 7 per tuck loop.
+  CHECK(count_lines(slurp(out / "points.csv")) == 1 + static_cast<int>(m.points.size()));
+  CHECK(count_lines(slurp(out / "typevalue.csv")) == 1 + 9 * 14 + 7 * 1);
+  CHECK(slurp(out / "centerlines.vtk").find("LINES 3 ") != std::string::npos);
+  fs::remove_all(tmp);
+}
+
+TEST_CASE("knitsim knit: bad input exits 2 with one line and writes nothing") {
+  const fs::path tmp =
+      fs::temp_directory_path() / ("knitsim-knit-cli-bad-" + std::to_string(getpid()));
+  fs::remove_all(tmp);
+  fs::create_directories(tmp);
+  std::ofstream(tmp / "bad.chart") << "KKKK\nKKXK\nKKKK\n";
+  std::ofstream(tmp / "good.chart") << "KKKK\nKKKK\n";
+  const fs::path out = tmp / "should-not-exist";
+  struct Case {
+    std::string args, names;
+  };
+  const std::vector<Case> cases = {
+      {"--chart '" + (tmp / "bad.chart").string() + "'", "chart row 2 (line 2), column 3"},
+      {"--chart '" + (tmp / "nope.chart").string() + "'", "cannot read"},
+      {"--chart '" + (tmp / "good.chart").string() + "' --set knit.stifness=1", "accepted keys"},
+      {"--chart '" + (tmp / "good.chart").string() + "' --set knit.stabiliser=2",
+       "stabiliser_ratio = 2: must be in [0, 1]"},
+      {"--chart '" + (tmp / "good.chart").string() + "' --integrator nope", "--integrator = nope"},
+  };
+  for (const Case& c : cases) {
+    CAPTURE(c.args);
+    std::string err;
+    CHECK(run_knit(c.args + " --out '" + out.string() + "'", tmp, err) == 2);
+    CHECK(count_lines(err) == 1);
+    CHECK(err.find(c.names) != std::string::npos);
+    CHECK(!fs::exists(out));
+  }
+  fs::remove_all(tmp);
+}
