@@ -14,6 +14,7 @@
 #include "src/commands.hpp"
 #include "src/output.hpp"
 #include "src/scene.hpp"
+#include "src/targets.hpp"
 
 namespace knitsim {
 
@@ -25,6 +26,7 @@ struct DrapeArgs {
   std::string integrator;     // empty: default_integrator()
   IntegratorOptions options;  // only the fields bound to flags below are taken from here
   std::string out;
+  std::string target;
   bool quiet = false;
 };
 
@@ -70,8 +72,16 @@ void run(const DrapeArgs& args) {
     throw std::invalid_argument(std::string("--") + e.what());  // "--integrator = X: ..."
   }
 
-  // --target (edge measurement and objective, SPEC 2.5) is read and checked here, before the
-  // output folder is made.
+  // --target: read, checked and fitted before the output folder is made.
+  std::vector<EdgeFit> target_edges;
+  if (!args.target.empty()) {
+    const Target target = read_target_csv(args.target);
+    try {
+      target_edges = fit_target_scene(target.scene(target_scene_name(scene)));
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("--target " + args.target + ": " + e.what());
+    }
+  }
 
   const std::filesystem::path dir = make_output_dir(args.out, "drape-" + scene.name);
   DrapeResult result = [&] {
@@ -79,7 +89,7 @@ void run(const DrapeArgs& args) {
                           !args.quiet);
     return run_drape(scene, integrator, &progress);
   }();
-  write_drape_outputs(dir, scene, result);
+  write_drape_outputs(dir, scene, result, args.target.empty() ? nullptr : &target_edges);
   if (!args.quiet) std::cout << human_summary(scene, result, dir.string()) << std::flush;
   if (result.stats.status != RunStatus::Equilibrium) throw CLI::RuntimeError(3);
 }
@@ -125,6 +135,9 @@ void register_drape_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--out", args->out,
                   "Output folder (default: a fresh out/drape-<scene>-<YYYYmmdd-HHMMSS>)");
+  cmd->add_option("--target", args->target,
+                  "Target edges (CSV, src/targets.hpp): adds the Eq. 5 objective and both sets of "
+                  "edge coefficients to summary.json and writes target_edges.csv");
   cmd->add_flag("--quiet", args->quiet, "No progress line and no summary on stdout");
   cmd->callback([args] { run(*args); });
 }

@@ -136,15 +136,8 @@ void run(const FitArgs& args) {
   const DrapeResult drape = run_drape(fitted, problem->integrator());
   const std::filesystem::path drape_dir = dir / "drape";
   std::filesystem::create_directories(drape_dir);
-  write_drape_outputs(drape_dir, fitted, drape);
-  write_file_atomic_with(drape_dir / "target_edges.csv", [&](const std::string& tmp) {
-    write_edges_csv(problem->measured(), tmp);
-  });
+  write_drape_outputs(drape_dir, fitted, drape, &problem->measured());
   const bool drape_ok = drape.stats.status == RunStatus::Equilibrium;
-  if (drape_ok)
-    write_file_atomic_with(drape_dir / "edges.csv", [&](const std::string& tmp) {
-      write_edges_csv(measure_edges(drape.grid, drape.positions), tmp);
-    });
 
   nlohmann::json bounds = nlohmann::json::object();
   for (int g = 0; g < kDrapeGenes; ++g)

@@ -38,23 +38,12 @@ void DrapeFitOptions::validate() const {
   if (!integrator.empty()) make_integrator(integrator);  // throws for an unknown name
 }
 
-namespace {
-
-// The target scene a base scene is compared with (see the header).
-std::string matching_target_scene(const Scene& base) {
-  if (is_target_scene(base.name)) return base.name;
-  if (base.params.layout == PinLayout::FourCorner) return "four_corner";
-  return base.params.pin_span < 1.0 ? "two_corner_slack" : "two_corner";
-}
-
-}  // namespace
-
 DrapeFitProblem::DrapeFitProblem(Scene base, const Target& target, DrapeFitOptions options)
     : base_(std::move(base)), options_(std::move(options)) {
   base_.validate();
   options_.validate();
   if (options_.integrator.empty()) options_.integrator = default_integrator();
-  target_scene_ = matching_target_scene(base_);
+  target_scene_ = target_scene_name(base_);
   measured_ = fit_target_scene(target.scene(target_scene_));
   if (measured_.empty())
     throw std::invalid_argument("target scene " + target_scene_ + ": no edges to fit");

@@ -349,13 +349,38 @@ nlohmann::json drape_summary(const Scene& scene, const DrapeResult& r) {
   return j;
 }
 
-void write_drape_outputs(const fs::path& dir, const Scene& scene, const DrapeResult& r) {
+void write_drape_outputs(const fs::path& dir, const Scene& scene, const DrapeResult& r,
+                         const std::vector<EdgeFit>* target) {
   const DrapeGrid& g = r.grid;
   const int side = g.n + 1;
   std::vector<int> pinned(r.positions.size(), 0);
   for (int p : g.network.spec().pinned) pinned[p] = 1;
 
-  write_json_atomic(dir / "summary.json", drape_summary(scene, r));
+  nlohmann::json summary = drape_summary(scene, r);
+  const bool finite = std::all_of(r.positions.begin(), r.positions.end(), [](const Vec3& p) {
+    return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+  });
+  if (finite) {
+    const std::vector<EdgeFit> edges = measure_edges(g, r.positions);
+    write_file_atomic_with(dir / "edges.csv",
+                           [&](const std::string& tmp) { write_edges_csv(edges, tmp); });
+    nlohmann::json coefficients = nlohmann::json::object();
+    for (const EdgeFit& e : edges)
+      coefficients[e.name] = std::vector<double>(e.coefficients.begin(), e.coefficients.end());
+    summary["edge_coefficients"] = coefficients;
+    if (target) {
+      summary["objective"] = objective(*target, edges);
+      nlohmann::json target_coefficients = nlohmann::json::object();
+      for (const EdgeFit& e : *target)
+        target_coefficients[e.name] =
+            std::vector<double>(e.coefficients.begin(), e.coefficients.end());
+      summary["target_edge_coefficients"] = target_coefficients;
+    }
+  }
+  if (target)
+    write_file_atomic_with(dir / "target_edges.csv",
+                           [&](const std::string& tmp) { write_edges_csv(*target, tmp); });
+  write_json_atomic(dir / "summary.json", summary);
 
   std::ostringstream nodes;
   nodes.precision(17);

@@ -17,6 +17,7 @@
 
 #include "models/drape_grid.hpp"
 #include "solvers/integrator.hpp"
+#include "src/measurement.hpp"
 #include "src/scene.hpp"
 #include "src/vec3.hpp"
 
@@ -90,8 +91,13 @@ nlohmann::json drape_summary(const Scene& scene, const DrapeResult& result);
 // particles at t_final, m), drape.vtk (the grid's quads, point data `pinned` and
 // `displacement` = position - rest position, m), drape.png (render_mesh_png, oblique view) and
 // manifest.json (options: scene, integrator, params, run options).
+// Writes summary.json, nodes.csv, drape.vtk, drape.png, and edges.csv (the measured edges,
+// SPEC 2.5) when the final state is finite. With `target` (the measured edges of the matching
+// target scene, e.g. fit_target_scene(...)), summary.json also gets `objective` (Eq. 5, %) and
+// the per-edge coefficients of both, and target_edges.csv is written.
 void write_drape_outputs(const std::filesystem::path& dir, const Scene& scene,
-                         const DrapeResult& result);
+                         const DrapeResult& result,
+                         const std::vector<EdgeFit>* target = nullptr);
 
 // ---- progress ----------------------------------------------------------------------------------
 

@@ -1,5 +1,7 @@
 #include "src/scene.hpp"
 
+#include "src/targets.hpp"
+
 #include <toml++/toml.h>
 
 #include <algorithm>
@@ -351,6 +353,12 @@ DrapeResult run_drape(const Scene& scene, const std::string& integrator, RunObse
   for (int p : net.spec().pinned) pin_z += r.positions[p].z;
   r.centre_sag = pin_z / net.spec().pinned.size() - centre_z / count;
   return r;
+}
+
+std::string target_scene_name(const Scene& scene) {
+  if (is_target_scene(scene.name)) return scene.name;
+  if (scene.params.layout == PinLayout::FourCorner) return "four_corner";
+  return scene.params.pin_span < 1.0 ? "two_corner_slack" : "two_corner";
 }
 
 }  // namespace knitsim

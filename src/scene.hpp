@@ -77,4 +77,8 @@ struct DrapeResult {
 DrapeResult run_drape(const Scene& scene, const std::string& integrator,
                       RunObserver* observer = nullptr);
 
+// The target scene (src/targets.hpp) a scene's edges are compared with: its own name if it is
+// one of four_corner, two_corner, two_corner_slack, else the one its pins imply.
+std::string target_scene_name(const Scene& scene);
+
 }  // namespace knitsim

@@ -254,3 +254,49 @@ TEST_CASE("output writers: tables, VTK, atomic files and output folders") {
   CHECK(fs::is_directory(tmp.path / b));
   CHECK(fs::is_empty(tmp.path / a));  // the writability probe is removed
 }
+
+TEST_CASE("drape --target: edges.csv always, Eq. 5 objective against a target") {
+  TempDir tmp("target");
+  const std::string common = "drape --set model.natural_length=0.1 --integrator implicit-euler ";
+  const fs::path twin = tmp.path / "twin";
+  REQUIRE(run_knitsim(common + "--out '" + twin.string() + "'", tmp).status == 0);
+  CHECK(fs::exists(twin / "edges.csv"));
+  const auto s = nlohmann::json::parse(slurp(twin / "summary.json"));
+  REQUIRE(s["edge_coefficients"].size() == 4);
+  // A coefficient target made of this run's own edges.
+  const fs::path target = tmp.path / "twin.csv";
+  {
+    std::ofstream f(target);
+    f.precision(17);
+    f << "scene,edge,kind,a,b\n";
+    for (const auto& [edge, c] : s["edge_coefficients"].items())
+      for (int k = 0; k < 5; ++k)
+        f << "four_corner," << edge << ",coeff," << k << "," << c[k].get<double>() << "\n";
+  }
+  const fs::path same = tmp.path / "same", stiffer = tmp.path / "stiffer";
+  REQUIRE(run_knitsim(common + "--target '" + target.string() + "' --out '" + same.string() + "'",
+                      tmp)
+              .status == 0);
+  REQUIRE(run_knitsim(common + "--set model.stiffness=1100 --target '" + target.string() +
+                          "' --out '" + stiffer.string() + "'",
+                      tmp)
+              .status == 0);
+  const double e_same = nlohmann::json::parse(slurp(same / "summary.json"))["objective"];
+  const double e_stiffer = nlohmann::json::parse(slurp(stiffer / "summary.json"))["objective"];
+  CHECK(e_same < 1e-9);
+  CHECK(e_stiffer > 0.1);  // percent; a stiffer sheet sags visibly less
+  CHECK(fs::exists(same / "target_edges.csv"));
+  // A target without the scene's edges: one line, exit 2, nothing written.
+  const fs::path wrong = tmp.path / "wrong.csv", none = tmp.path / "none";
+  {
+    std::ofstream f(wrong);
+    f << "scene,edge,kind,a,b\n";
+    for (int k = 0; k < 5; ++k) f << "two_corner,top,coeff," << k << ",0\n";
+  }
+  const Run bad =
+      run_knitsim(common + "--target '" + wrong.string() + "' --out '" + none.string() + "'", tmp);
+  CHECK(bad.status == 2);
+  CHECK(lines(bad.err).size() == 1);
+  CHECK(bad.err.find("--target") != std::string::npos);
+  CHECK_FALSE(fs::exists(none));
+}
