@@ -23,8 +23,8 @@ namespace knitsim {
 
 struct IntegratorOptions {
   // Relative tolerance of adaptive methods. Known limitation: at 1e-6 the BDF corrector leaves
-  // a static-residual floor of ~4e-8 on some drapes (7 of 54 random parameter sets in Table 3's
-  // box ran to t_max); 1e-8 removes it (+5 % CPU on four_corner, +17 % on two_corner) but
+  // a static-residual floor of ~4e-8 on some drapes (e.g. topology b, k 1200, c 10, L0 6 cm:
+  // t_max with residual 3.65e-8, see README); 1e-8 removes it (+5 % CPU on four_corner, +17 % on two_corner) but
   // makes arkode-imex fail its error test unless atol <= 1e-11. `knitsim fit` uses 1e-8.
   double rtol = 1e-6;
   double atol = 1e-9;  // absolute tolerance (m for positions, m/s for velocities)
