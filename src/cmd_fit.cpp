@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "src/cli_options.hpp"
 #include "src/commands.hpp"
 #include "src/drape_fit.hpp"
 #include "src/output.hpp"
@@ -45,25 +46,6 @@ struct FitArgs {
   std::string out;
   bool quiet = false;
 };
-
-// IcaOptions::validate and make_integrator name the field ("countries = 1: ..."); the user typed
-// a flag ("--countries = 1: ...").
-[[noreturn]] void rethrow_as_flag(const std::invalid_argument& e) {
-  static const std::pair<const char*, const char*> kFlags[] = {{"countries", "--countries"},
-                                                               {"imperialists", "--imperialists"},
-                                                               {"decades", "--decades"},
-                                                               {"beta", "--beta"},
-                                                               {"gamma", "--gamma"},
-                                                               {"revolution_rate", "--revolution"},
-                                                               {"xi", "--xi"},
-                                                               {"jobs", "--jobs"},
-                                                               {"integrator", "--integrator"}};
-  const std::string msg = e.what();
-  for (const auto& [field, flag] : kFlags)
-    if (msg.rfind(std::string(field) + " = ", 0) == 0)
-      throw std::invalid_argument(flag + msg.substr(std::string(field).size()));
-  throw e;
-}
 
 nlohmann::json params_json(const DrapeParams& p) {
   return {{"stiffness", p.stiffness},
@@ -102,7 +84,7 @@ void run(const FitArgs& args) {
   try {
     problem = std::make_unique<DrapeFitProblem>(base, target, options);
   } catch (const std::invalid_argument& e) {
-    rethrow_as_flag(e);
+    rethrow_with_flag_names(e, {{"integrator", "--integrator"}});
   }
   const std::filesystem::path dir = make_output_dir(args.out, "fit-" + base.name);
 
@@ -211,20 +193,7 @@ void register_fit_command(CLI::App& app) {
   cmd->add_option("--rtol", args->rtol, "Relative tolerance of every drape run (adaptive methods)")
       ->capture_default_str();
   cmd->add_option("--atol", args->atol, "Absolute tolerance, m and m/s")->capture_default_str();
-  cmd->add_option("--seed", o.seed, "random seed")->capture_default_str();
-  cmd->add_option("--jobs", o.jobs, "threads evaluating drapes (same result for any value)")
-      ->capture_default_str();
-  cmd->add_option("--decades", o.decades, "MaxIt, number of decades (>= 1)")->capture_default_str();
-  cmd->add_option("--countries", o.countries, "number of countries (> imperialists)")
-      ->capture_default_str();
-  cmd->add_option("--imperialists", o.imperialists, "number of imperialists (>= 1)")
-      ->capture_default_str();
-  cmd->add_option("--beta", o.beta, "assimilation coefficient (> 0)")->capture_default_str();
-  cmd->add_option("--gamma", o.gamma, "assimilation angle bound, rad (0 .. pi)")
-      ->capture_default_str();
-  cmd->add_option("--revolution", o.revolution_rate, "revolution rate (0 .. 1)")
-      ->capture_default_str();
-  cmd->add_option("--xi", o.xi, "colonies' share of the empire cost (>= 0)")->capture_default_str();
+  add_ica_options(cmd, o);
   cmd->add_option("--out", args->out,
                   "Output folder (default: a fresh out/fit-<scene>-<YYYYmmdd-HHMMSS>)");
   cmd->add_flag("--quiet", args->quiet, "Nothing on stdout");

@@ -12,6 +12,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "src/cli_options.hpp"
 #include "src/commands.hpp"
 #include "src/ica.hpp"
 #include "src/output.hpp"
@@ -25,38 +26,17 @@ struct OptimizeArgs {
   std::string problem;
   int dim = 0;
   IcaOptions options;
-  bool stop_one_empire = false;
 };
 
-// Validation messages name IcaOptions fields / make_test_problem arguments; the user typed
-// flags: "revolution_rate = 2: ..." -> "--revolution = 2: ...".
-[[noreturn]] void rethrow_as_flag(const std::invalid_argument& e) {
-  static const std::pair<const char*, const char*> kFlags[] = {{"countries", "--countries"},
-                                                               {"imperialists", "--imperialists"},
-                                                               {"decades", "--decades"},
-                                                               {"beta", "--beta"},
-                                                               {"gamma", "--gamma"},
-                                                               {"revolution_rate", "--revolution"},
-                                                               {"xi", "--xi"},
-                                                               {"jobs", "--jobs"},
-                                                               {"problem", "--problem"},
-                                                               {"dim", "--dim"}};
-  const std::string msg = e.what();
-  for (const auto& [field, flag] : kFlags)
-    if (msg.rfind(std::string(field) + " = ", 0) == 0)
-      throw std::invalid_argument(flag + msg.substr(std::string(field).size()));
-  throw e;
-}
 
 void run(OptimizeArgs args) {
   IcaOptions& o = args.options;
-  o.stop_when_one_empire = args.stop_one_empire;
   Problem problem;
   try {
     o.validate();
     problem = make_test_problem(args.problem, args.dim);
   } catch (const std::invalid_argument& e) {
-    rethrow_as_flag(e);
+    rethrow_with_flag_names(e, {{"problem", "--problem"}, {"dim", "--dim"}});
   }
   std::cout << "ICA on " << args.problem << ", D = " << args.dim << ": " << o.countries
             << " countries, " << o.imperialists << " imperialists, " << o.decades
@@ -90,23 +70,7 @@ void register_optimize_command(CLI::App& app) {
   cmd->add_option("--problem", args->problem, "sphere | rastrigin | rosenbrock | griewank | ackley")
       ->required();
   cmd->add_option("--dim", args->dim, "dimension D >= 1")->required();
-  cmd->add_option("--countries", o.countries, "number of countries (>= 2 x imperialists)")
-      ->capture_default_str();
-  cmd->add_option("--imperialists", o.imperialists, "number of imperialists (>= 1)")
-      ->capture_default_str();
-  cmd->add_option("--decades", o.decades, "MaxIt, number of decades (>= 1)")->capture_default_str();
-  cmd->add_option("--beta", o.beta, "assimilation coefficient (> 0)")->capture_default_str();
-  cmd->add_option("--gamma", o.gamma, "assimilation angle bound, rad (0 .. pi)")
-      ->capture_default_str();
-  cmd->add_option("--revolution", o.revolution_rate, "revolution rate (0 .. 1)")
-      ->capture_default_str();
-  cmd->add_option("--xi", o.xi, "colonies' share of the empire cost (>= 0)")->capture_default_str();
-  cmd->add_option("--seed", o.seed, "random seed")->capture_default_str();
-  cmd->add_option("--jobs", o.jobs, "threads evaluating costs (same result for any value)")
-      ->capture_default_str();
-  cmd->add_flag("--stop-one-empire", args->stop_one_empire,
-                 "stop as soon as one empire is left (paper's literal step 9; default: run all "
-                 "decades)");
+  add_ica_options(cmd, o);
   cmd->callback([args] { run(*args); });
 }
 

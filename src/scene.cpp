@@ -1,5 +1,6 @@
 #include "src/scene.hpp"
 
+#include "src/cli_options.hpp"
 #include "src/targets.hpp"
 
 #include <toml++/toml.h>
@@ -273,20 +274,14 @@ void Scene::validate() const {
     options.validate();
   } catch (const std::invalid_argument& e) {
     // IntegratorOptions names its fields; the user wrote a scene key or a command-line flag.
-    static const std::vector<std::pair<std::string, std::string>> user_names = {
-        {"t_max", "run.t_max"},
-        {"equilibrium_tol", "run.equilibrium_tol"},
-        {"rtol", "--rtol"},
-        {"atol", "--atol"},
-        {"dt", "--dt"},
-        {"max_order", "--max-order"},
-        {"max_steps", "--max-steps"},
-        {"max_wall_seconds", "--max-wall"}};
-    const std::string msg = e.what();
-    for (const auto& [field, user] : user_names)
-      if (msg.rfind(field + " = ", 0) == 0)
-        throw std::invalid_argument(user + msg.substr(field.size()));
-    throw;
+    rethrow_with_flag_names(e, {{"t_max", "run.t_max"},
+                                {"equilibrium_tol", "run.equilibrium_tol"},
+                                {"rtol", "--rtol"},
+                                {"atol", "--atol"},
+                                {"dt", "--dt"},
+                                {"max_order", "--max-order"},
+                                {"max_steps", "--max-steps"},
+                                {"max_wall_seconds", "--max-wall"}});
   }
 }
 
