@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # knitsim: one command does the whole set-up and runs the main job.
 #   ./run.sh               install missing Debian packages, build (Release), run the main job
-#   ./run.sh --build-only  the same set-up and build, no job (test.sh uses this)
+#   ./run.sh --build-only  the same set-up, builds everything including the tests, no job
+#                          (test.sh uses this)
 # Environment: BUILD_DIR (default build), OUT_DIR (default out/run), JOBS (default nproc).
 set -euo pipefail
 cd "$(dirname "$0")"
@@ -27,14 +28,18 @@ install_missing_packages() {
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 }
 
+# build [TARGET]: configure (Release, out of source) and build TARGET, or everything.
 build() {
   cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release >/dev/null
-  cmake --build "$BUILD_DIR" -j "$JOBS"
+  cmake --build "$BUILD_DIR" -j "$JOBS" ${1:+--target "$1"}
 }
 
 install_missing_packages
-build
-[ "${1:-}" = "--build-only" ] && exit 0
+if [ "${1:-}" = "--build-only" ]; then
+  build  # everything, tests included (test.sh)
+  exit 0
+fi
+build knitsim
 
 OUT_DIR=${OUT_DIR:-out/run}
 mkdir -p "$OUT_DIR"

@@ -2,74 +2,19 @@
 //   bad input: exit 2, one stderr line naming the field, nothing written;
 //   a settled run: exit 0 and outputs that agree with each other;
 //   an unsettled run: exit 3 with the outputs still written.
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <catch2/catch.hpp>
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <string>
 
 #include "src/output.hpp"
-
-#ifndef KNITSIM_EXE
-#error "KNITSIM_EXE (the path of the knitsim binary) must be defined by the build"
-#endif
+#include "tests/cli_runner.hpp"
 
 using namespace knitsim;
+using namespace knitsim::test;
 namespace fs = std::filesystem;
-
-namespace {
-
-// A fresh temporary folder, removed at the end of the test.
-struct TempDir {
-  fs::path path;
-  explicit TempDir(const std::string& tag) {
-    path =
-        fs::temp_directory_path() / ("knitsim-test-cli-" + tag + "-" + std::to_string(::getpid()));
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~TempDir() { fs::remove_all(path); }
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::vector<std::string> lines(const std::string& text) {
-  std::vector<std::string> out;
-  std::istringstream in(text);
-  for (std::string l; std::getline(in, l);) out.push_back(l);
-  return out;
-}
-
-struct Run {
-  int status = -1;
-  std::string out, err;
-};
-
-// Runs `knitsim <args>` (args already shell-quoted) with stdout/stderr captured.
-Run run_knitsim(const std::string& args, const TempDir& tmp) {
-  const fs::path out = tmp.path / "stdout.txt", err = tmp.path / "stderr.txt";
-  const std::string cmd = std::string("'") + KNITSIM_EXE + "' " + args + " >'" + out.string() +
-                          "' 2>'" + err.string() + "' </dev/null";
-  const int raw = std::system(cmd.c_str());
-  Run r;
-  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-  r.out = slurp(out);
-  r.err = slurp(err);
-  return r;
-}
-
-}  // namespace
 
 TEST_CASE("bad input: exit 2, one stderr line naming the field, --out not created") {
   TempDir tmp("bad");

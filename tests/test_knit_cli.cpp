@@ -1,34 +1,20 @@
 // `knitsim knit` against the command-line contract (SPEC 2.10): a settled small chart writes
 // outputs that agree with the model; a bad chart exits 2 with one line naming row and column
 // and writes nothing.
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <catch2/catch.hpp>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <string>
 
 #include "models/knit_loops.hpp"
-
-#ifndef KNITSIM_EXE
-#error "KNITSIM_EXE (the path of the knitsim binary) must be defined by the build"
-#endif
+#include "tests/cli_runner.hpp"
 
 using namespace knitsim;
+using namespace knitsim::test;
 namespace fs = std::filesystem;
 
 namespace {
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 int count_lines(const std::string& text) {
   int n = 0;
@@ -36,14 +22,12 @@ int count_lines(const std::string& text) {
   return n;
 }
 
-// Runs `knitsim knit <args>` with stdout and stderr captured into `dir`; returns the exit code.
-int run_knit(const std::string& args, const fs::path& dir, std::string& err) {
-  const fs::path out = dir / "stdout.txt", errfile = dir / "stderr.txt";
-  const std::string cmd = std::string("'") + KNITSIM_EXE + "' knit " + args + " >'" + out.string() +
-                          "' 2>'" + errfile.string() + "' </dev/null";
-  const int raw = std::system(cmd.c_str());
-  err = slurp(errfile);
-  return WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+// Runs `knitsim knit <args>`; returns the exit code and stderr in `err`.
+int run_knit(const std::string& args, std::string& err) {
+  TempDir capture("knit-cli-io");
+  const Run r = run_knitsim("knit " + args, capture);
+  err = r.err;
+  return r.status;
 }
 
 }  // namespace
@@ -59,7 +43,7 @@ TEST_CASE("knitsim knit: a small tuck chart settles and its outputs agree with t
   const int status =
       run_knit("--chart '" + (tmp / "small.chart").string() +
                    "' --set knit.stabiliser=0.1 --frames 3 --quiet --out '" + out.string() + "'",
-               tmp, err);
+               err);
   INFO(err);
   REQUIRE(status == 0);
   for (const char* f : {"points.csv", "typevalue.csv", "centerlines.csv", "centerlines.vtk",
@@ -108,7 +92,7 @@ TEST_CASE("knitsim knit: bad input exits 2 with one line and writes nothing") {
   for (const Case& c : cases) {
     CAPTURE(c.args);
     std::string err;
-    CHECK(run_knit(c.args + " --out '" + out.string() + "'", tmp, err) == 2);
+    CHECK(run_knit(c.args + " --out '" + out.string() + "'", err) == 2);
     CHECK(count_lines(err) == 1);
     CHECK(err.find(c.names) != std::string::npos);
     CHECK(!fs::exists(out));
