@@ -519,3 +519,16 @@ TEST_CASE("stabiliser: a tuck's displacement decays with distance and the state 
   CHECK(paper_far > 0.9 * paper_near);  // no decay: blocks move rigidly
   CHECK(paper_far > 1.0);
 }
+
+TEST_CASE("stabilised single tuck: verlet (the paper's integrator) and cvode-bdf agree") {
+  KnitParams p;
+  p.stabiliser_ratio = 0.1;
+  const KnitModel m = model_of(centred_tuck_chart(9), p);
+  RunStats sv, sb;
+  const std::vector<Vec3> verlet = relax(m, "verlet", 0.0, &sv);  // automatic stable dt
+  const std::vector<Vec3> bdf = relax(m, "cvode-bdf", 0.0, &sb);
+  const double diff = max_displacement(verlet, bdf);
+  INFO("verlet " << sv.steps << " steps, cvode-bdf " << sb.steps << " steps; max |dx| "
+                 << diff / p.loop_radius << " r");
+  CHECK(diff < 1e-3 * p.loop_radius);
+}
