@@ -30,7 +30,8 @@ install_missing_packages() {
 
 # build [TARGET]: configure (Release, out of source) and build TARGET, or everything.
 build() {
-  cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release >/dev/null
+  # KNITSIM_CMAKE_ARGS (set by test.sh --sanitize) comes last and may override the build type.
+  cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release ${KNITSIM_CMAKE_ARGS:-} >/dev/null
   cmake --build "$BUILD_DIR" -j "$JOBS" ${1:+--target "$1"}
 }
 
