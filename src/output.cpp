@@ -360,8 +360,17 @@ void write_drape_outputs(const fs::path& dir, const Scene& scene, const DrapeRes
   const bool finite = std::all_of(r.positions.begin(), r.positions.end(), [](const Vec3& p) {
     return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
   });
+  // The edges of a run that stopped early (a flat sheet, a diverged one) may not be measurable
+  // (fit_polynomial needs 5 distinct abscissae): the outputs are still written, with the reason.
+  std::vector<EdgeFit> edges;
   if (finite) {
-    const std::vector<EdgeFit> edges = measure_edges(g, r.positions);
+    try {
+      edges = measure_edges(g, r.positions);
+    } catch (const std::invalid_argument& e) {
+      summary["edges_error"] = e.what();
+    }
+  }
+  if (!edges.empty()) {
     write_file_atomic_with(dir / "edges.csv",
                            [&](const std::string& tmp) { write_edges_csv(edges, tmp); });
     nlohmann::json coefficients = nlohmann::json::object();

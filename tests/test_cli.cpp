@@ -146,6 +146,18 @@ TEST_CASE("an unsettled drape exits 3 and still writes its outputs") {
   CHECK(summary["t_final"].get<double>() == Approx(0.5));
   CHECK(fs::exists(out / "nodes.csv"));
   CHECK(fs::exists(out / "drape.png"));
+
+  // Stopped after one step the two_corner sheet is still flat: its side edges cannot be
+  // measured (no 5 distinct abscissae). The run is still reported, with the reason.
+  const fs::path flat = tmp.path / "flat";
+  const Run one = run_knitsim(
+      "drape --scene two_corner --max-steps 1 --quiet --out '" + flat.string() + "'", tmp);
+  CHECK(one.status == 3);
+  const auto flat_summary = nlohmann::json::parse(slurp(flat / "summary.json"));
+  CHECK(flat_summary["status"] == "step_limit");
+  CHECK(flat_summary.contains("edges_error"));
+  CHECK_FALSE(flat_summary.contains("edge_coefficients"));
+  CHECK(fs::exists(flat / "nodes.csv"));
 }
 
 TEST_CASE("knitsim list shows the registry and the built-in scenes") {
