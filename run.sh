@@ -3,7 +3,8 @@
 #   ./run.sh               install missing Debian packages, build (Release), run the main job
 #   ./run.sh --build-only  the same set-up, builds everything including the tests, no job
 #                          (test.sh uses this)
-# Environment: BUILD_DIR (default build), OUT_DIR (default out/run), JOBS (default nproc).
+# Environment: BUILD_DIR (default build), OUT_DIR (default out/run-<date-time>), JOBS (default
+# nproc).
 set -euo pipefail
 cd "$(dirname "$0")"
 BUILD_DIR=${BUILD_DIR:-build}
@@ -13,7 +14,8 @@ JOBS=${JOBS:-$(nproc)}
 PACKAGES=(cmake g++ make pkg-config
   libsundials-dev libsuitesparse-dev libeigen3-dev catch2
   libcairo2-dev libtomlplusplus-dev nlohmann-json3-dev libcli11-dev
-  python3-scipy python3-matplotlib)
+  python3-scipy python3-matplotlib libopenmpi-dev openmpi-bin
+  ${KNITSIM_EXTRA_PACKAGES:-})  # test.sh --fuzz adds clang and libclang-rt-14-dev (libFuzzer)
 
 install_missing_packages() {
   local missing=()
@@ -42,7 +44,27 @@ if [ "${1:-}" = "--build-only" ]; then
 fi
 build knitsim
 
-OUT_DIR=${OUT_DIR:-out/run}
+# The main job (SPEC 2.11): the quick reproduction of paper 1's Tables 4 and 6 (with the Taguchi
+# tuning, Fig. 13 and the fitted drapes), the integrator comparison on the built-in scenes, and
+# every study of experiments/ in its quick mode; one report links them.
+OUT_DIR=${OUT_DIR:-out/run-$(date +%Y%m%d-%H%M%S)}
 mkdir -p "$OUT_DIR"
-"$BUILD_DIR/knitsim" demo --out "$OUT_DIR"
+status=0
+echo "[run] 1/3 paper 1 reproduction, quick preset -> $OUT_DIR/repro"
+"$BUILD_DIR/knitsim" repro all --preset quick --jobs "$JOBS" --out "$OUT_DIR/repro" || status=1
+echo "[run] 2/3 integrator comparison -> $OUT_DIR/demo"
+"$BUILD_DIR/knitsim" demo --out "$OUT_DIR/demo" || status=1
+echo "[run] 3/3 experiments, quick mode -> $OUT_DIR/experiments"
+KNITSIM="$(cd "$BUILD_DIR" && pwd)/knitsim" experiments/run_all.sh --quick --out "$OUT_DIR/experiments" \
+  || status=1
+{
+  echo "# knitsim run ($(date -u +%Y-%m-%dT%H:%M:%SZ), commit $(git rev-parse --short HEAD 2>/dev/null || echo unknown))"
+  echo
+  echo "- Paper 1 reproduction (quick preset): [repro/report.md](repro/report.md)"
+  echo "- Integrator comparison and drape pictures: [demo/report.md](demo/report.md)"
+  echo "- Experiments, quick mode: [experiments/summary.md](experiments/summary.md)"
+  echo
+  [ -f "$OUT_DIR/experiments/summary.md" ] && sed 's/^#/##/' "$OUT_DIR/experiments/summary.md"
+} > "$OUT_DIR/report.md"
 echo "[run] report: $OUT_DIR/report.md"
+exit $status

@@ -130,4 +130,41 @@ DrapeGrid build_drape_grid(const DrapeParams& p) {
   return DrapeGrid{p, n, SpringNetwork(std::move(spec)), std::move(edges)};
 }
 
+const char* to_string(DrapeParameter p) {
+  switch (p) {
+    case DrapeParameter::Stiffness:
+      return "stiffness";
+    case DrapeParameter::Damping:
+      return "damping";
+    case DrapeParameter::ElongationLimit:
+      return "elongation_limit";
+    case DrapeParameter::NaturalLength:
+      return "natural_length";
+  }
+  return "?";
+}
+
+SpringNetworkTangent drape_tangent(const DrapeGrid& grid, DrapeParameter p, double t) {
+  const SpringNetworkSpec& spec = grid.network.spec();
+  SpringNetworkTangent d;
+  switch (p) {
+    case DrapeParameter::Stiffness:
+      d.stiffness.assign(spec.springs.size(), 1.0);
+      break;
+    case DrapeParameter::Damping:
+      break;
+    case DrapeParameter::ElongationLimit:
+      d.elongation_limit = 0.01;
+      break;
+    case DrapeParameter::NaturalLength: {
+      const double L0 = grid.params.natural_length;
+      for (const Spring& s : spec.springs) d.rest.push_back(s.rest / L0);
+      for (double m : spec.masses) d.mass.push_back(2.0 * m / L0);
+      for (const PinPath& pin : spec.pin_paths) d.pin_position.push_back((1.0 / L0) * pin.at(t));
+      break;
+    }
+  }
+  return d;
+}
+
 }  // namespace knitsim

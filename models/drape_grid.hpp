@@ -35,10 +35,10 @@ struct DrapeParams {
   double natural_length = 0.049;  // L0, m (4.9 cm; bounds 4-6 cm)
   char topology = 'a';            // 'a' | 'b' | 'c'
   PinLayout layout = PinLayout::FourCorner;
-  double pin_span = 1.0;          // final pin distance / model width, (0, 1]
-  double pin_move_time = 100.0;   // s, duration of the pin move when pin_span < 1
-  double perturbation = 0.0;      // m, amplitude of the seeded initial z perturbation
-  unsigned seed = 1;              // seed of that perturbation
+  double pin_span = 1.0;           // final pin distance / model width, (0, 1]
+  double pin_move_time = 100.0;    // s, duration of the pin move when pin_span < 1
+  double perturbation = 0.0;       // m, amplitude of the seeded initial z perturbation
+  unsigned seed = 1;               // seed of that perturbation
   long max_particles = 4'000'000;  // refuse larger grids before allocating
 
   // Throws std::invalid_argument naming the field and the accepted range.
@@ -62,6 +62,21 @@ struct DrapeGrid {
 };
 
 DrapeGrid build_drape_grid(const DrapeParams& params);
+
+// The continuous drape parameters (DrapeParams fields, same units: N/m, N s/m, percent, m).
+enum class DrapeParameter { Stiffness, Damping, ElongationLimit, NaturalLength };
+const char* to_string(DrapeParameter p);  // stiffness | damping | elongation_limit | natural_length
+
+// d(network data)/dp of build_drape_grid(params) for one parameter p, with the pins' positions
+// taken at time t, AT FIXED TOPOLOGY: n = cells() is held, although n = round(W / L0) jumps
+// at L0 = W / (n + 1/2) (there the edges jump; this is the one-sided derivative inside a bracket).
+//   Stiffness:       dk_s = 1 for every spring (one common k).
+//   NaturalLength:   the whole grid scales with L0 at fixed n: d rest_s = rest_s / L0,
+//                    dm_i = 2 m_i / L0 (total mass rho_A (n L0)^2), d pin = pin(t) / L0 (both
+//                    ends of every pin path are multiples of L0).
+//   ElongationLimit: d eps_max = 0.01 per percent (zero effect unless the limit is active).
+//   Damping:         zero (c does not enter the static force).
+SpringNetworkTangent drape_tangent(const DrapeGrid& grid, DrapeParameter p, double t);
 
 const char* to_string(PinLayout layout);
 

@@ -219,17 +219,17 @@ KnitChart parse_knit_chart(const std::string& text) {
 
 void KnitParams::validate() const {
   if (!(loop_radius > 0.0) || !std::isfinite(loop_radius))
-    bad("model.loop_radius", loop_radius, "must be > 0 m");
+    bad("knit.loop_radius", loop_radius, "must be > 0 m");
   if (!(wale_stiffness > 0.0) || !std::isfinite(wale_stiffness))
-    bad("model.wale_stiffness", wale_stiffness, "must be > 0 N/m");
+    bad("knit.wale_stiffness", wale_stiffness, "must be > 0 N/m");
   if (!(course_stiffness > 0.0) || !std::isfinite(course_stiffness))
-    bad("model.course_stiffness", course_stiffness, "must be > 0 N/m");
+    bad("knit.course_stiffness", course_stiffness, "must be > 0 N/m");
   if (!(damping >= 0.0) || !std::isfinite(damping))
-    bad("model.damping", damping, "must be >= 0 N s/m");
+    bad("knit.damping", damping, "must be >= 0 N s/m");
   if (!(areal_density > 0.0) || !std::isfinite(areal_density))
-    bad("fabric.areal_density", areal_density, "must be > 0 g/m^2");
+    bad("knit.areal_density", areal_density, "must be > 0 g/m^2");
   if (!(stabiliser_ratio >= 0.0 && stabiliser_ratio <= 1.0))
-    bad("model.stabiliser_ratio", stabiliser_ratio, "must be in [0, 1]");
+    bad("knit.stabiliser", stabiliser_ratio, "must be in [0, 1]");
   if (max_points < 1) bad("max_points", static_cast<double>(max_points), "must be >= 1");
 }
 

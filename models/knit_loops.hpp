@@ -145,7 +145,9 @@ struct KnitParams {
   double stabiliser_ratio = 0.0;
   long max_points = 4'000'000;  // refuse larger charts before allocating
 
-  // Throws std::invalid_argument naming the field and the accepted range.
+  // Throws std::invalid_argument naming the field by its `knit --set` key (knit.loop_radius,
+  // knit.wale_stiffness, knit.course_stiffness, knit.damping, knit.areal_density,
+  // knit.stabiliser; max_points has none) and the accepted range with units.
   void validate() const;
   double wale_spacing() const { return 8.0 * loop_radius; }    // w, m
   double course_spacing() const { return 7.0 * loop_radius; }  // h, m

@@ -15,6 +15,21 @@ Vec3 PinPath::at(double t) const {
 
 namespace {
 bool finite(Vec3 p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
+
+// A spring's force F on end a (free index fa) and -F on end b, into a 3-per-free-dof array;
+// a pinned end (index < 0) takes nothing.
+void add_spring_pair(double* out, int fa, int fb, Vec3 F) {
+  if (fa >= 0) {
+    out[3 * fa] += F.x;
+    out[3 * fa + 1] += F.y;
+    out[3 * fa + 2] += F.z;
+  }
+  if (fb >= 0) {
+    out[3 * fb] -= F.x;
+    out[3 * fb + 1] -= F.y;
+    out[3 * fb + 2] -= F.z;
+  }
+}
 }  // namespace
 
 SpringNetwork::SpringNetwork(SpringNetworkSpec spec) : spec_(std::move(spec)) {
@@ -159,16 +174,62 @@ void SpringNetwork::net_force(double t, const double* x, double* force) const {
     double f, df;
     spring_force_law(s, L, f, df);
     const Vec3 F = (f / L) * d;  // force on a
-    if (fa >= 0) {
-      force[3 * fa] += F.x;
-      force[3 * fa + 1] += F.y;
-      force[3 * fa + 2] += F.z;
+    add_spring_pair(force, fa, fb, F);
+  }
+}
+
+void SpringNetwork::net_force_tangent(double t, const double* x, const SpringNetworkTangent& dp,
+                                      double* df) const {
+  auto check = [](size_t size, size_t expected, const char* what) {
+    if (size != 0 && size != expected)
+      throw std::invalid_argument(std::string("net_force_tangent: ") + what + " has " +
+                                  std::to_string(size) + " entries, expected " +
+                                  std::to_string(expected) + " (or none)");
+  };
+  check(dp.stiffness.size(), spec_.springs.size(), "stiffness");
+  check(dp.rest.size(), spec_.springs.size(), "rest");
+  check(dp.mass.size(), spec_.positions.size(), "mass");
+  check(dp.pin_position.size(), spec_.pinned.size(), "pin_position");
+  update_pins(t);
+  const int n = dof();
+  std::fill(df, df + n, 0.0);
+  if (!dp.mass.empty())
+    for (int p = 0; p < particle_count(); ++p) {
+      const int f = free_index_[p];
+      if (f < 0) continue;
+      df[3 * f] += dp.mass[p] * spec_.gravity.x;
+      df[3 * f + 1] += dp.mass[p] * spec_.gravity.y;
+      df[3 * f + 2] += dp.mass[p] * spec_.gravity.z;
     }
-    if (fb >= 0) {
-      force[3 * fb] -= F.x;
-      force[3 * fb + 1] -= F.y;
-      force[3 * fb + 2] -= F.z;
+  auto pin_tangent = [&](int particle) {
+    const int slot = pin_slot_[particle];
+    return (slot < 0 || dp.pin_position.empty()) ? Vec3{} : dp.pin_position[slot];
+  };
+  for (size_t si = 0; si < spec_.springs.size(); ++si) {
+    const Spring& s = spec_.springs[si];
+    const int fa = free_index_[s.a], fb = free_index_[s.b];
+    if (fa < 0 && fb < 0) continue;
+    const Vec3 d = end_position(s.b, x) - end_position(s.a, x);
+    const double L = norm(d);
+    double f, dfdL;
+    spring_force_law(s, L, f, dfdL);
+    const double dk = dp.stiffness.empty() ? 0.0 : dp.stiffness[si];
+    const double dL0 = dp.rest.empty() ? 0.0 : dp.rest[si];
+    double dfp = dk * (L - s.rest) - s.stiffness * dL0;
+    if (spec_.elongation_limit > 0.0) {
+      const double over = L - s.rest * (1.0 + spec_.elongation_limit);
+      if (over > 0.0)
+        dfp += spec_.limit_stiffness_factor *
+               (dk * over - s.stiffness * (dL0 * (1.0 + spec_.elongation_limit) +
+                                           s.rest * dp.elongation_limit));
     }
+    Vec3 dF = (dfp / L) * d;  // on a
+    const Vec3 dd = pin_tangent(s.b) - pin_tangent(s.a);
+    if (dd.x != 0.0 || dd.y != 0.0 || dd.z != 0.0) {
+      const Vec3 u = (1.0 / L) * d;
+      dF = dF + ((dfdL - f / L) * dot(u, dd)) * u + (f / L) * dd;
+    }
+    add_spring_pair(df, fa, fb, dF);
   }
 }
 
@@ -200,8 +261,7 @@ void SpringNetwork::stiffness_values(double t, const double* x, double* values) 
     const double fl = f / L;
     double B[9];
     for (int p = 0; p < 3; ++p)
-      for (int q = 0; q < 3; ++q)
-        B[3 * p + q] = (df - fl) * u[p] * u[q] + (p == q ? fl : 0.0);
+      for (int q = 0; q < 3; ++q) B[3 * p + q] = (df - fl) * u[p] * u[q] + (p == q ? fl : 0.0);
     // Blocks aa = -B, ab = +B, ba = +B, bb = -B; row r scaled by 1/m_r.
     const int* slot = &slots_[si * 36];
     const int ends[2] = {fa, fb};
@@ -269,8 +329,8 @@ double SpringNetwork::potential_energy(double t, const double* x) const {
     }
   }
   for (int i = 0; i < dof(); i += 3)
-    e -= dof_mass_[i] * (spec_.gravity.x * x[i] + spec_.gravity.y * x[i + 1] +
-                         spec_.gravity.z * x[i + 2]);
+    e -= dof_mass_[i] *
+         (spec_.gravity.x * x[i] + spec_.gravity.y * x[i + 1] + spec_.gravity.z * x[i + 2]);
   return e;
 }
 

@@ -53,13 +53,23 @@ struct SpringNetworkSpec {
   std::vector<Vec3> positions;  // initial positions of all particles, m
   std::vector<double> masses;   // kg, all particles (pinned ones are ignored)
   std::vector<Spring> springs;
-  std::vector<int> pinned;       // particle indices
-  std::vector<PinPath> pin_paths;  // one per pinned particle
-  double damping = 0.0;           // c, N s/m per particle (absolute damping)
-  double elongation_limit = 0.0;  // eps_max as a fraction (0.05 = 5 %); <= 0: no limit
+  std::vector<int> pinned;                // particle indices
+  std::vector<PinPath> pin_paths;         // one per pinned particle
+  double damping = 0.0;                   // c, N s/m per particle (absolute damping)
+  double elongation_limit = 0.0;          // eps_max as a fraction (0.05 = 5 %); <= 0: no limit
   double limit_stiffness_factor = 100.0;  // k_lim / k above the limit (implicit paths)
   Vec3 gravity{0.0, 0.0, -9.81};          // m/s^2
   double residual_force_scale = 0.0;      // N; 0: mean free mass x |g|
+};
+
+// A direction in the network's data (d(data)/dp for one parameter p), for the equilibrium
+// sensitivities dx*/dp = -K^-1 dF/dp (src/sensitivity.hpp). An empty vector means zero.
+struct SpringNetworkTangent {
+  std::vector<double> stiffness;   // per spring: dk_s/dp, N/m per unit of p
+  std::vector<double> rest;        // per spring: dL0_s/dp, m per unit of p
+  std::vector<double> mass;        // per particle: dm_i/dp, kg per unit of p
+  std::vector<Vec3> pin_position;  // per pin: d(position at the evaluation time t)/dp, m per unit
+  double elongation_limit = 0.0;   // d eps_max/dp, fraction per unit of p
 };
 
 class SpringNetwork final : public MechanicalSystem {
@@ -91,6 +101,16 @@ class SpringNetwork final : public MechanicalSystem {
   double max_strain(double t, const double* x) const;
   // Net spring + gravity force on each free particle, N (length dof()).
   void net_force(double t, const double* x, double* f) const;
+  // dF/dp: derivative of net_force(t, x) along the data direction `dp` at fixed free positions x
+  // (length dof(), N per unit of p). Per spring (force on end a; b gets the opposite):
+  //   dF_a = (df/L) (x_b - x_a) + B (d x_b - d x_a),  B = dF_a/dx_b as in the header,
+  //   df   = dk (L - L0) - k dL0 + [L > L_max] (k_lim/k dk (L - L_max)
+  //          - k_lim (dL0 (1 + eps_max) + L0 d eps_max)),
+  // with d x = the pin tangent for pinned ends (0 for free ends); gravity adds dm_i g. An
+  // inactive elongation limit contributes exactly zero; damping never enters F.
+  // Throws std::invalid_argument if a non-empty vector has the wrong length.
+  void net_force_tangent(double t, const double* x, const SpringNetworkTangent& dp,
+                         double* df) const;
 
  private:
   Vec3 end_position(int particle, const double* x) const;
@@ -105,7 +125,8 @@ class SpringNetwork final : public MechanicalSystem {
   double residual_scale_ = 1.0;
   double pin_move_time_ = 0.0;
   CscPattern pattern_;
-  std::vector<int> slots_;  // per spring: 4 blocks (aa, ab, ba, bb) x 9 value positions, -1 if absent
+  std::vector<int>
+      slots_;  // per spring: 4 blocks (aa, ab, ba, bb) x 9 value positions, -1 if absent
   mutable std::vector<Vec3> pin_pos_;
   mutable std::vector<double> scratch_;
 };

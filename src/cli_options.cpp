@@ -1,6 +1,12 @@
 #include "src/cli_options.hpp"
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
 
 namespace knitsim {
 
@@ -27,16 +33,105 @@ void add_ica_options(CLI::App* cmd, IcaOptions& o) {
 void rethrow_with_flag_names(const std::invalid_argument& e,
                              const std::vector<std::pair<std::string, std::string>>& extra) {
   static const std::vector<std::pair<std::string, std::string>> ica = {
-      {"countries", "--countries"}, {"imperialists", "--imperialists"},
-      {"decades", "--decades"},     {"beta", "--beta"},
-      {"gamma", "--gamma"},         {"revolution_rate", "--revolution"},
-      {"xi", "--xi"},               {"jobs", "--jobs"}};
+      {"countries", "--countries"},
+      {"imperialists", "--imperialists"},
+      {"decades", "--decades"},
+      {"beta", "--beta"},
+      {"gamma", "--gamma"},
+      {"revolution_rate", "--revolution"},
+      {"xi", "--xi"},
+      {"jobs", "--jobs"}};
   const std::string msg = e.what();
   for (const auto* names : {&ica, &extra})
     for (const auto& [field, flag] : *names)
       if (msg.rfind(field + " = ", 0) == 0)
         throw std::invalid_argument(flag + msg.substr(field.size()));
   throw e;
+}
+
+const std::vector<std::pair<std::string, std::string>>& run_option_names() {
+  static const std::vector<std::pair<std::string, std::string>> names = {
+      {"t_max", "run.t_max"},
+      {"equilibrium_tol", "run.equilibrium_tol"},
+      {"rtol", "--rtol"},
+      {"atol", "--atol"},
+      {"dt", "--dt"},
+      {"max_order", "--max-order"},
+      {"max_steps", "--max-steps"},
+      {"max_wall_seconds", "--max-wall"}};
+  return names;
+}
+
+namespace {
+
+size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diagonal = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] != b[j - 1] ? 1 : 0)});
+      diagonal = up;
+    }
+  }
+  return row[b.size()];
+}
+
+}  // namespace
+
+std::string printable(const std::string& text) {
+  std::string out;
+  for (const char c : text) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u >= 0x20 && u != 0x7f) {
+      out += c;
+    } else {
+      const char* hex = "0123456789abcdef";
+      out += {'\\', 'x', hex[u >> 4], hex[u & 15]};
+    }
+  }
+  return out;
+}
+
+std::string unknown_key_message(const std::string& key, const std::vector<std::string>& valid) {
+  std::string best;
+  size_t best_distance = std::numeric_limits<size_t>::max();
+  for (const std::string& k : valid) {
+    const size_t d = edit_distance(key, k);
+    if (d < best_distance) best_distance = d, best = k;
+  }
+  std::string msg = printable(key) + ": unknown key; ";
+  if (best_distance <= std::max<size_t>(3, key.size() / 3))
+    return msg + "did you mean " + best + "?";
+  msg += "valid keys:";
+  for (const std::string& k : valid) msg += " " + k;
+  return msg;
+}
+
+bool read_input_file(const std::string& path, std::size_t max_bytes, std::string& text,
+                     std::string& why) {
+  std::error_code ec;
+  const std::filesystem::file_status st = std::filesystem::status(path, ec);
+  if (ec) return why = ec.message(), false;
+  if (std::filesystem::is_directory(st)) return why = "is a directory", false;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return why = std::strerror(errno), false;
+  text.clear();
+  char buffer[1 << 16];
+  while (in && text.size() <= max_bytes) {
+    in.read(buffer, static_cast<std::streamsize>(
+                        std::min<std::size_t>(sizeof buffer, max_bytes + 1 - text.size())));
+    text.append(buffer, static_cast<std::size_t>(in.gcount()));
+  }
+  if (in.bad()) return why = "read error", false;
+  if (text.size() > max_bytes) {
+    text.clear();
+    return why = "larger than " + std::to_string(max_bytes) + " bytes, the limit for this input",
+           false;
+  }
+  return true;
 }
 
 }  // namespace knitsim

@@ -1,6 +1,7 @@
 // Command-line pieces shared by several subcommands.
 #pragma once
 
+#include <cstddef>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -24,5 +25,26 @@ void add_ica_options(CLI::App* cmd, IcaOptions& o);
 [[noreturn]] void rethrow_with_flag_names(
     const std::invalid_argument& e,
     const std::vector<std::pair<std::string, std::string>>& extra = {});
+
+// The IntegratorOptions fields as the user writes them, for rethrow_with_flag_names: the keys
+// run.t_max and run.equilibrium_tol (scene files, drape/knit --set) and the flags --rtol, --atol,
+// --dt, --max-order, --max-steps, --max-wall.
+const std::vector<std::pair<std::string, std::string>>& run_option_names();
+
+// `text` as it may appear in a one-line message: control bytes (newline, tab, ...) and DEL as
+// \xNN, everything else unchanged.
+std::string printable(const std::string& text);
+
+// The message for a key that is not in `valid` (KEY shown printable()): "KEY: unknown key; did you
+// mean NEAREST?" when the nearest valid key is within max(3, |KEY| / 3) edits (Levenshtein), else
+// "KEY: unknown key; valid keys: K1 K2 ...".
+std::string unknown_key_message(const std::string& key, const std::vector<std::string>& valid);
+
+// Reads an input file named on the command line (scene, chart, target) into `text`. Returns
+// false with `why` set ("No such file or directory", "is a directory", "larger than N bytes, the
+// limit for this input", ...) if it cannot be read or holds more than max_bytes: reading stops
+// at max_bytes + 1, so /dev/zero or a runaway file is refused without filling memory.
+bool read_input_file(const std::string& path, std::size_t max_bytes, std::string& text,
+                     std::string& why);
 
 }  // namespace knitsim

@@ -32,6 +32,7 @@
 #include <stdexcept>
 
 #include "models/knit_loops.hpp"
+#include "src/cli_options.hpp"
 #include "src/commands.hpp"
 #include "src/output.hpp"
 #include "src/render.hpp"
@@ -81,9 +82,9 @@ void apply_sets(const std::vector<std::string>& sets, KnitParams& p, IntegratorO
     for (const SetKey& k : keys)
       if (key == k.name) found = &k;
     if (found == nullptr) {
-      std::string msg = "--set " + s + ": unknown key; accepted keys:";
-      for (const SetKey& k : keys) msg += std::string(" ") + k.name;
-      throw std::invalid_argument(msg);
+      std::vector<std::string> names;
+      for (const SetKey& k : keys) names.push_back(k.name);
+      throw std::invalid_argument(unknown_key_message(key, names));
     }
     const std::string value = eq == std::string::npos ? "" : s.substr(eq + 1);
     size_t used = 0;
@@ -100,12 +101,13 @@ void apply_sets(const std::vector<std::string>& sets, KnitParams& p, IntegratorO
 }
 
 KnitChart read_chart(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::invalid_argument("--chart " + path + ": cannot read the file");
-  std::stringstream text;
-  text << in.rdbuf();
+  // 4 million points (KnitParams::max_points) are ~4 MB of letters: a larger file is refused.
+  constexpr std::size_t kMaxChartFileBytes = std::size_t{16} << 20;
+  std::string text, why;
+  if (!read_input_file(path, kMaxChartFileBytes, text, why))
+    throw std::invalid_argument("--chart " + path + ": cannot read the file: " + why);
   try {
-    return parse_knit_chart(text.str());
+    return parse_knit_chart(text);
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(path + ": " + e.what());
   }
@@ -326,7 +328,11 @@ void run(const KnitArgs& args) {
   apply_sets(args.sets, params, opt);
   opt.rtol = args.rtol;
   opt.dt = args.dt;
-  opt.validate();
+  try {
+    opt.validate();
+  } catch (const std::invalid_argument& e) {
+    rethrow_with_flag_names(e, run_option_names());  // run.t_max, --rtol, ...
+  }
   if (args.frames < 1)
     throw std::invalid_argument("--frames = " + std::to_string(args.frames) + ": must be >= 1");
   const std::string integrator = args.integrator.empty() ? default_integrator() : args.integrator;

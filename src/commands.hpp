@@ -19,5 +19,7 @@ void register_demo_command(CLI::App& app);
 void register_optimize_command(CLI::App& app);
 void register_taguchi_command(CLI::App& app);
 void register_fit_command(CLI::App& app);
+void register_targets_command(CLI::App& app);
+void register_repro_command(CLI::App& app);
 
 }  // namespace knitsim

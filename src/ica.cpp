@@ -6,6 +6,7 @@
 #include <cmath>
 #include <exception>
 #include <limits>
+#include <locale>
 #include <numeric>
 #include <sstream>
 #include <stdexcept>
@@ -117,6 +118,23 @@ double IcaRandom::normal() {
   const double u1 = 1.0 - uniform();  // (0, 1]
   const double u2 = uniform();
   return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * kPi * u2);
+}
+
+std::string IcaRandom::state() const {
+  std::ostringstream os;
+  os.imbue(std::locale::classic());
+  os << engine_;
+  return os.str();
+}
+
+void IcaRandom::set_state(const std::string& state) {
+  std::istringstream is(state);
+  is.imbue(std::locale::classic());
+  std::mt19937_64 engine;
+  is >> engine;
+  if (!is || !(is >> std::ws).eof())
+    throw std::invalid_argument("ICA random state: not a std::mt19937_64 state");
+  engine_ = engine;
 }
 
 // ---------------------------------------------------------------------------------------
@@ -288,6 +306,15 @@ class Ica {
   IcaResult run();
 
  private:
+  // The initial empires (steps 1-2), or the state of options_.resume_from; returns the number
+  // of decades completed.
+  int start();
+  int restore(const IcaState& state);
+  void save(int decade) const;
+  double wall_seconds() const {  // of this run, over all its sessions
+    return earlier_wall_seconds_ +
+           std::chrono::duration<double>(std::chrono::steady_clock::now() - session_start_).count();
+  }
   Point random_country() {
     Point x(problem_.lower.size());
     for (std::size_t i = 0; i < x.size(); ++i)
@@ -321,6 +348,8 @@ class Ica {
   Point upper_;  // upper bounds as clipped: nextafter(upper, lower) for categorical genes
   std::vector<Empire> empires_;
   std::vector<IcaDecade> history_;
+  std::chrono::steady_clock::time_point session_start_ = std::chrono::steady_clock::now();
+  double earlier_wall_seconds_ = 0.0;  // of the sessions before a resume
 };
 
 void Ica::create_empires() {
@@ -449,24 +478,87 @@ void Ica::record(int decade) {
   history_.push_back(d);
 }
 
-IcaResult Ica::run() {
-  const auto start = std::chrono::steady_clock::now();
-  IcaResult r;
+int Ica::start() {
+  if (options_.resume_from) return restore(*options_.resume_from);
   create_empires();
   record(0);
-  r.status = IcaStatus::DecadeLimit;
-  for (int decade = 1; decade <= options_.decades; ++decade) {
+  save(0);
+  return 0;
+}
+
+int Ica::restore(const IcaState& s) {
+  auto reject = [](const std::string& what) {
+    throw std::invalid_argument("ICA resume state: " + what + " does not fit these options");
+  };
+  const std::size_t dim = problem_.lower.size();
+  auto check_point = [&](const Point& x) {
+    if (x.size() != dim) reject("a point of dimension " + std::to_string(x.size()));
+  };
+  if (s.decade < 0 || s.decade > options_.decades) reject("decade " + std::to_string(s.decade));
+  if (s.empires.empty() || s.empires.size() > static_cast<std::size_t>(options_.imperialists))
+    reject(std::to_string(s.empires.size()) + " empires");
+  if (s.history.size() != static_cast<std::size_t>(s.decade) + 1)
+    reject(std::to_string(s.history.size()) + " history entries");
+  empires_.clear();
+  for (const IcaEmpireState& e : s.empires) {
+    check_point(e.imperialist);
+    for (const Point& x : e.colonies) check_point(x);
+    if (e.colonies.empty() || e.colony_costs.size() != e.colonies.size())
+      reject("an empire of " + std::to_string(e.colonies.size()) + " colonies and " +
+             std::to_string(e.colony_costs.size()) + " colony costs");
+    empires_.push_back(
+        {e.imperialist, e.imperialist_cost, e.colonies, e.colony_costs, e.total_cost});
+  }
+  if (!s.best_x.empty()) check_point(s.best_x);
+  rng_.set_state(s.random);
+  history_ = s.history;
+  evaluate_.evaluations = s.evaluations;
+  evaluate_.failed = s.failed_evaluations;
+  evaluate_.found = s.found;
+  evaluate_.best_cost = s.best_cost;
+  evaluate_.best_x = s.best_x;
+  earlier_wall_seconds_ = s.wall_seconds;
+  return s.decade;
+}
+
+void Ica::save(int decade) const {
+  if (!options_.on_decade) return;
+  IcaState s;
+  s.decade = decade;
+  for (const Empire& e : empires_)
+    s.empires.push_back(
+        {e.imperialist, e.imperialist_cost, e.colonies, e.colony_costs, e.total_cost});
+  s.random = rng_.state();
+  s.history = history_;
+  s.evaluations = evaluate_.evaluations;
+  s.failed_evaluations = evaluate_.failed;
+  s.found = evaluate_.found;
+  s.best_cost = evaluate_.best_cost;
+  s.best_x = evaluate_.best_x;
+  s.wall_seconds = wall_seconds();
+  options_.on_decade(s);
+}
+
+IcaResult Ica::run() {
+  IcaResult r;
+  int decade = start();
+  // Step 9's rule is checked at the end of a decade, never after the initial empires.
+  auto one_empire_left = [&] {
+    return decade > 0 && options_.stop_when_one_empire && empires_.size() == 1;
+  };
+  bool stopped = one_empire_left();
+  while (!stopped && decade < options_.decades) {
+    ++decade;
     move_colonies();
     evaluate_colonies();
     for (auto& e : empires_) exchange_and_total_cost(e);
     compete();
     record(decade);
-    r.decades = decade;
-    if (options_.stop_when_one_empire && empires_.size() == 1) {
-      r.status = IcaStatus::OneEmpire;
-      break;
-    }
+    save(decade);
+    stopped = one_empire_left();
   }
+  r.decades = decade;
+  r.status = stopped ? IcaStatus::OneEmpire : IcaStatus::DecadeLimit;
   if (!evaluate_.found) r.status = IcaStatus::AllFailed;
   r.best_x = evaluate_.best_x;
   r.best_cost = evaluate_.found ? evaluate_.best_cost : options_.failure_cost;
@@ -477,7 +569,7 @@ IcaResult Ica::run() {
   msg << to_string(r.status) << " after " << r.decades << " decades, " << r.evaluations
       << " evaluations (" << r.failed_evaluations << " failed)";
   r.message = msg.str();
-  r.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  r.wall_seconds = wall_seconds();
   return r;
 }
 
@@ -487,6 +579,79 @@ IcaResult run_ica(const Problem& problem, const IcaOptions& options) {
   options.validate();
   problem.validate();
   return Ica(problem, options).run();
+}
+
+// ---------------------------------------------------------------------------------------
+// Checkpoint state as JSON
+
+nlohmann::json to_json(const IcaState& s) {
+  nlohmann::json empires = nlohmann::json::array();
+  for (const IcaEmpireState& e : s.empires)
+    empires.push_back({{"imperialist", e.imperialist},
+                       {"imperialist_cost", e.imperialist_cost},
+                       {"colonies", e.colonies},
+                       {"colony_costs", e.colony_costs},
+                       {"total_cost", e.total_cost}});
+  nlohmann::json history = nlohmann::json::array();
+  for (const IcaDecade& d : s.history)
+    history.push_back({{"decade", d.decade},
+                       {"best_cost", d.best_cost},
+                       {"mean_cost", d.mean_cost},
+                       {"empires", d.empires},
+                       {"evaluations", d.evaluations}});
+  return {{"decade", s.decade},
+          {"empires", empires},
+          {"random", s.random},
+          {"history", history},
+          {"evaluations", s.evaluations},
+          {"failed_evaluations", s.failed_evaluations},
+          {"found", s.found},
+          {"best_cost", s.best_cost},
+          {"best_x", s.best_x},
+          {"wall_seconds", s.wall_seconds}};
+}
+
+IcaState ica_state_from_json(const nlohmann::json& j) {
+  auto field = [](const nlohmann::json& object, const char* name, auto& value) {
+    try {
+      object.at(name).get_to(value);
+    } catch (const nlohmann::json::exception&) {
+      throw std::invalid_argument(std::string("ICA state field ") + name +
+                                  ": missing or of the wrong type");
+    }
+  };
+  IcaState s;
+  field(j, "decade", s.decade);
+  field(j, "random", s.random);
+  field(j, "evaluations", s.evaluations);
+  field(j, "failed_evaluations", s.failed_evaluations);
+  field(j, "found", s.found);
+  field(j, "best_cost", s.best_cost);
+  field(j, "best_x", s.best_x);
+  field(j, "wall_seconds", s.wall_seconds);
+  auto array = [](const nlohmann::json& object, const char* name) -> const nlohmann::json& {
+    if (!object.contains(name) || !object.at(name).is_array())
+      throw std::invalid_argument(std::string("ICA state field ") + name +
+                                  ": missing or not a list");
+    return object.at(name);
+  };
+  for (const nlohmann::json& e : array(j, "empires")) {
+    IcaEmpireState& es = s.empires.emplace_back();
+    field(e, "imperialist", es.imperialist);
+    field(e, "imperialist_cost", es.imperialist_cost);
+    field(e, "colonies", es.colonies);
+    field(e, "colony_costs", es.colony_costs);
+    field(e, "total_cost", es.total_cost);
+  }
+  for (const nlohmann::json& h : array(j, "history")) {
+    IcaDecade& d = s.history.emplace_back();
+    field(h, "decade", d.decade);
+    field(h, "best_cost", d.best_cost);
+    field(h, "mean_cost", d.mean_cost);
+    field(h, "empires", d.empires);
+    field(h, "evaluations", d.evaluations);
+  }
+  return s;
 }
 
 }  // namespace knitsim

@@ -77,16 +77,56 @@
 // whose output differs between standard libraries); only cost evaluations run in parallel,
 // each writing its own slot. The same seed therefore gives bit-identical results for any
 // number of jobs.
+//
+// Checkpoints: IcaOptions::on_decade receives the whole state (IcaState: empires, costs, the
+// twister's state, history, counters) after every decade, and IcaOptions::resume_from continues
+// from one; a run interrupted and resumed is bit-identical to an uninterrupted one (best_x,
+// best_cost, history, counters; only wall_seconds differs).
 #pragma once
 
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <memory>
+#include <nlohmann/json.hpp>
 #include <random>
 #include <string>
 #include <vector>
 
 namespace knitsim {
+
+// State at the end of one decade (decade 0 = the initial empires). Costs as the original
+// code's convergence plot (paper 1 Fig. 13): over the imperialists, failures at failure_cost.
+struct IcaDecade {
+  int decade = 0;
+  double best_cost = 0.0;  // min over imperialists (= best of the current population)
+  double mean_cost = 0.0;  // mean over imperialists
+  int empires = 0;
+  long evaluations = 0;  // cumulative
+};
+
+// The complete state of a run at the end of a decade: with the same problem and options, a
+// run continued from it (IcaOptions::resume_from) is bit-identical to the uninterrupted run.
+// Points are D-vectors (Problem::dimension()); costs as scored (failures at failure_cost).
+struct IcaEmpireState {
+  std::vector<double> imperialist;
+  double imperialist_cost = 0.0;
+  std::vector<std::vector<double>> colonies;
+  std::vector<double> colony_costs;  // one per colony
+  double total_cost = 0.0;           // step 6's TC
+};
+struct IcaState {
+  int decade = 0;  // decades completed (0: the initial empires)
+  std::vector<IcaEmpireState> empires;
+  std::string random;              // the Mersenne twister's state, as its operator<< writes it
+  std::vector<IcaDecade> history;  // decade + 1 entries
+  long evaluations = 0;
+  long failed_evaluations = 0;
+  bool found = false;          // some evaluation succeeded
+  double best_cost = 0.0;      // best successful cost so far (meaningful when found)
+  std::vector<double> best_x;  // its point (the first failed point while !found)
+  double wall_seconds = 0.0;   // wall time spent so far, summed over interrupted sessions
+};
 
 struct IcaOptions {
   // Defaults: paper 1's Taguchi-best combination A3 B3 C1 D2 E1 F2 G2 of Table 1, with B and C
@@ -105,6 +145,15 @@ struct IcaOptions {
   // terminated"). Off by default: with the Taguchi-best settings it ends a run after ~2
   // decades, contradicting the ~950 evaluations per run of SPEC 2.12 (see step 9 above).
   bool stop_when_one_empire = false;
+
+  // Checkpointing (knitsim fit --resume; not part of validate()). `on_decade`, when set, is
+  // called on the calling thread with the complete state after the initial empires (decade 0)
+  // and after every decade; an exception it throws ends the run and propagates. `resume_from`,
+  // when set, continues that state (from a run with the same problem and options but any
+  // `jobs`) instead of starting afresh: std::invalid_argument if it does not fit the options
+  // (dimension, decade, counts).
+  std::function<void(const IcaState&)> on_decade;
+  std::shared_ptr<const IcaState> resume_from;
 
   // Throws std::invalid_argument naming the bad field and its accepted range.
   void validate() const;
@@ -152,6 +201,11 @@ class IcaRandom {
   double uniform(double a, double b);  // a + (b - a) U[0, 1)
   int index(int n);                    // uniform integer in [0, n), n >= 1, unbiased
   double normal();                     // N(0, 1), Box-Muller from two uniform() draws
+  // The engine's state as text (operator<<, classic locale), and back (std::invalid_argument
+  // if `state` is not one).
+  std::string state() const;
+  void set_state(const std::string& state);
+
  private:
   std::mt19937_64 engine_;
 };
@@ -169,16 +223,6 @@ enum class IcaStatus {
   AllFailed,    // finished, but every evaluation failed: best_x is not a valid point
 };
 const char* to_string(IcaStatus s);
-
-// State at the end of one decade (decade 0 = the initial empires). Costs as the original
-// code's convergence plot (paper 1 Fig. 13): over the imperialists, failures at failure_cost.
-struct IcaDecade {
-  int decade = 0;
-  double best_cost = 0.0;  // min over imperialists (= best of the current population)
-  double mean_cost = 0.0;  // mean over imperialists
-  int empires = 0;
-  long evaluations = 0;  // cumulative
-};
 
 struct IcaResult {
   IcaStatus status = IcaStatus::DecadeLimit;
@@ -198,5 +242,10 @@ std::vector<int> allocate_colonies(const std::vector<double>& imperialist_costs,
 
 // Runs the ICA. Validates options and problem (std::invalid_argument).
 IcaResult run_ica(const Problem& problem, const IcaOptions& options);
+
+// IcaState as JSON (doubles written with max_digits10 digits, so they read back bit for bit)
+// and back; ica_state_from_json throws std::invalid_argument naming a missing or mistyped field.
+nlohmann::json to_json(const IcaState& state);
+IcaState ica_state_from_json(const nlohmann::json& j);
 
 }  // namespace knitsim

@@ -15,6 +15,7 @@
 
 #include "src/commands.hpp"
 #include "src/output.hpp"
+#include "src/work_units.hpp"
 
 namespace {
 
@@ -27,6 +28,8 @@ int fail(int status, std::string message) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // MPI_Init/MPI_Finalize when started by mpirun (src/work_units.hpp); nothing otherwise.
+  knitsim::ProcessGroup processes(argc, argv);
   knitsim::set_command_line(argc, argv);
   CLI::App app{"knitsim: stiff mass-spring models of knitted fabric"};
   app.require_subcommand(1);
@@ -37,6 +40,16 @@ int main(int argc, char** argv) {
   knitsim::register_optimize_command(app);
   knitsim::register_taguchi_command(app);
   knitsim::register_fit_command(app);
+  knitsim::register_targets_command(app);
+  knitsim::register_repro_command(app);
+  // Under mpirun only repro distributes its work; any other command would run once per process
+  // and every process would write the same files.
+  if (knitsim::process_count() > 1 && (argc < 2 || std::string(argv[1]) != "repro")) {
+    const std::string why = "only `knitsim repro` runs under mpirun (" +
+                            std::to_string(knitsim::process_count()) +
+                            " processes); run this command as one process";
+    return knitsim::process_rank() == 0 ? fail(2, why) : 2;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

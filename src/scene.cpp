@@ -1,8 +1,5 @@
 #include "src/scene.hpp"
 
-#include "src/cli_options.hpp"
-#include "src/targets.hpp"
-
 #include <toml++/toml.h>
 
 #include <algorithm>
@@ -11,13 +8,14 @@
 #include <climits>
 #include <cmath>
 #include <cstdlib>
-#include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <functional>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+
+#include "src/cli_options.hpp"
+#include "src/targets.hpp"
 
 namespace knitsim {
 
@@ -104,37 +102,8 @@ const std::vector<Key>& keys() {
   return table;
 }
 
-// Levenshtein distance, for "did you mean".
-size_t edit_distance(const std::string& a, const std::string& b) {
-  std::vector<size_t> row(b.size() + 1);
-  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
-  for (size_t i = 1; i <= a.size(); ++i) {
-    size_t diagonal = row[0];
-    row[0] = i;
-    for (size_t j = 1; j <= b.size(); ++j) {
-      const size_t up = row[j];
-      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] != b[j - 1] ? 1 : 0)});
-      diagonal = up;
-    }
-  }
-  return row[b.size()];
-}
-
 [[noreturn]] void unknown_key(const std::string& key, const std::string& where) {
-  std::string best;
-  size_t best_distance = std::numeric_limits<size_t>::max();
-  for (const Key& k : keys()) {
-    const size_t d = edit_distance(key, k.name);
-    if (d < best_distance) best_distance = d, best = k.name;
-  }
-  std::string msg = key + ": unknown key; ";
-  if (best_distance <= std::max<size_t>(3, key.size() / 3)) {
-    msg += "did you mean " + best + "?";
-  } else {
-    msg += "valid keys:";
-    for (const std::string& k : scene_keys()) msg += " " + k;
-  }
-  throw std::invalid_argument(msg + where);
+  throw std::invalid_argument(unknown_key_message(key, scene_keys()) + where);
 }
 
 const Key& find_key(const std::string& name, const std::string& where) {
@@ -161,7 +130,8 @@ std::string accepted(const Key& key) {
 }
 
 [[noreturn]] void bad_value(const Key& key, const std::string& shown, const std::string& where) {
-  throw std::invalid_argument(key.name + " = " + shown + ": must be " + accepted(key) + where);
+  throw std::invalid_argument(key.name + " = " + printable(shown) + ": must be " + accepted(key) +
+                              where);
 }
 
 // Sets a Number key; NaN and inf are type errors.
@@ -193,7 +163,7 @@ std::string trim(const std::string& s) {
 void apply_override(Scene& scene, const std::string& assignment) {
   const size_t eq = assignment.find('=');
   if (eq == std::string::npos)
-    throw std::invalid_argument("--set " + assignment + ": expected key=value, e.g. " +
+    throw std::invalid_argument("--set " + printable(assignment) + ": expected key=value, e.g. " +
                                 "model.stiffness=900");
   const std::string name = trim(assignment.substr(0, eq));
   std::string value = trim(assignment.substr(eq + 1));
@@ -217,7 +187,7 @@ void apply_toml(Scene& scene, const std::string& text, const std::string& source
   } catch (const toml::parse_error& e) {
     std::ostringstream os;
     os << "scene " << source << ": TOML syntax error at line " << e.source().begin.line
-       << ", column " << e.source().begin.column << ": " << e.description();
+       << ", column " << e.source().begin.column << ": " << printable(std::string(e.description()));
     throw std::invalid_argument(os.str());
   }
   auto where = [&source](const toml::node& node) {
@@ -253,19 +223,6 @@ void apply_toml(Scene& scene, const std::string& text, const std::string& source
   throw std::invalid_argument(msg);
 }
 
-std::string read_file(const std::string& path) {
-  std::error_code ec;
-  const std::filesystem::file_status st = std::filesystem::status(path, ec);
-  if (ec) unreadable(path, ec.message());
-  if (std::filesystem::is_directory(st)) unreadable(path, "is a directory");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) unreadable(path, std::strerror(errno));
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) unreadable(path, "read error");
-  return text.str();
-}
-
 }  // namespace
 
 void Scene::validate() const {
@@ -274,36 +231,31 @@ void Scene::validate() const {
     options.validate();
   } catch (const std::invalid_argument& e) {
     // IntegratorOptions names its fields; the user wrote a scene key or a command-line flag.
-    rethrow_with_flag_names(e, {{"t_max", "run.t_max"},
-                                {"equilibrium_tol", "run.equilibrium_tol"},
-                                {"rtol", "--rtol"},
-                                {"atol", "--atol"},
-                                {"dt", "--dt"},
-                                {"max_order", "--max-order"},
-                                {"max_steps", "--max-steps"},
-                                {"max_wall_seconds", "--max-wall"}});
+    rethrow_with_flag_names(e, run_option_names());
   }
 }
 
-Scene load_scene(const std::string& name_or_path, const std::vector<std::string>& overrides) {
+Scene load_scene_text(const std::string& text, const std::string& name, const std::string& source,
+                      const std::vector<std::string>& overrides) {
   Scene scene;
-  const auto& builtins = builtin_scenes();
-  const auto builtin = std::find_if(builtins.begin(), builtins.end(),
-                                    [&](const auto& s) { return s.first == name_or_path; });
-  if (builtin != builtins.end()) {
-    scene.name = builtin->first;
-    scene.source = "built-in";
-    apply_toml(scene, builtin->second, "built-in " + builtin->first);
-  } else {
-    const std::string text = read_file(name_or_path);
-    const std::string stem = std::filesystem::path(name_or_path).stem().string();
-    scene.name = is_name(stem) ? stem : "scene";
-    scene.source = name_or_path;
-    apply_toml(scene, text, name_or_path);
-  }
+  scene.name = name;
+  scene.source = source;
+  apply_toml(scene, text, source == "built-in" ? "built-in " + name : source);
   for (const std::string& o : overrides) apply_override(scene, o);
   scene.validate();
   return scene;
+}
+
+Scene load_scene(const std::string& name_or_path, const std::vector<std::string>& overrides) {
+  const auto& builtins = builtin_scenes();
+  const auto builtin = std::find_if(builtins.begin(), builtins.end(),
+                                    [&](const auto& s) { return s.first == name_or_path; });
+  if (builtin != builtins.end())
+    return load_scene_text(builtin->second, builtin->first, "built-in", overrides);
+  std::string text, why;
+  if (!read_input_file(name_or_path, kMaxSceneFileBytes, text, why)) unreadable(name_or_path, why);
+  const std::string stem = std::filesystem::path(name_or_path).stem().string();
+  return load_scene_text(text, is_name(stem) ? stem : "scene", name_or_path, overrides);
 }
 
 std::vector<std::string> scene_keys() {

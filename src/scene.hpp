@@ -19,6 +19,7 @@
 //   "scene: cannot read FILE: <reason>",  "scene FILE: TOML syntax error at line L, column C: ..."
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <utility>
 #include <vector>
@@ -47,8 +48,15 @@ struct Scene {
 };
 
 // Loads a built-in scene (by name) or a scene file (any other argument is a path), applies the
-// "key=value" overrides in order, and validates the result.
+// "key=value" overrides in order, and validates the result. A file longer than
+// kMaxSceneFileBytes is refused unread ("scene: cannot read FILE: larger than ...").
 Scene load_scene(const std::string& name_or_path, const std::vector<std::string>& overrides = {});
+constexpr std::size_t kMaxSceneFileBytes = std::size_t{1} << 20;  // scene files are ~1 kB
+
+// The same from the TOML text itself: `name` is the default scene.name, `source` the file path
+// ("built-in" for a built-in scene) as messages show it. load_scene reads, then calls this.
+Scene load_scene_text(const std::string& text, const std::string& name, const std::string& source,
+                      const std::vector<std::string>& overrides = {});
 
 // All scene keys, dotted ("model.stiffness"), in file order.
 std::vector<std::string> scene_keys();

@@ -8,6 +8,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "src/cli_options.hpp"
+
 namespace knitsim {
 
 namespace {
@@ -200,8 +202,14 @@ std::vector<EdgeFit> fit_target_scene(const TargetScene& scene) {
 }
 
 Target read_target_csv(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) bad(path + ": cannot open target file");
+  std::string text, why;
+  if (!read_input_file(path, kMaxTargetFileBytes, text, why))
+    bad(path + ": cannot open target file: " + why);
+  return parse_target_csv(text, path);
+}
+
+Target parse_target_csv(const std::string& csv, const std::string& path) {
+  std::istringstream in(csv);
   Target target;
   // Reader bookkeeping per (scene, edge): first line, whether the kind is known, powers seen.
   struct Pending {
@@ -231,7 +239,8 @@ Target read_target_csv(const std::string& path) {
     auto number = [&](const char* name, const std::string& text) {
       char* end = nullptr;
       const double v = std::strtod(text.c_str(), &end);
-      if (text.empty() || *end != '\0') field_error(name, text, "not a number");
+      if (text.empty() || end != text.c_str() + text.size())
+        field_error(name, text, "not a number");
       if (!std::isfinite(v)) field_error(name, text, "not a finite number");
       return v;
     };

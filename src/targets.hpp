@@ -43,6 +43,7 @@
 // Target::validate() makes the same per-edge checks on targets built in code.
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -89,8 +90,12 @@ bool is_target_scene(const std::string& name);
 // the `measured` argument of objective(). Throws std::invalid_argument for an invalid edge.
 std::vector<EdgeFit> fit_target_scene(const TargetScene& scene);
 
-// Reads and validates a target CSV (format above).
+// Reads and validates a target CSV (format above). A file longer than kMaxTargetFileBytes is
+// refused unread ("FILE: cannot open target file: larger than ...").
 Target read_target_csv(const std::string& path);
+constexpr std::size_t kMaxTargetFileBytes = std::size_t{64} << 20;
+// The same from the CSV text itself; `path` names it in the messages ("PATH:LINE: ...").
+Target parse_target_csv(const std::string& csv, const std::string& path);
 // Writes `target` in the same format (17 significant digits, so it reads back bit for bit),
 // after `comment` lines (each prefixed with "# "; e.g. the command that made the target).
 // Validates first (std::invalid_argument); std::runtime_error if the file cannot be written.

@@ -63,4 +63,19 @@ inline Run run_knitsim(const std::string& args, const TempDir& tmp) {
   return r;
 }
 
+// Starts `knitsim <args>` in the background (stdout/stderr to background-*.txt in `tmp`) and
+// returns its process id, for tests that signal a run (the shell execs knitsim: same pid).
+// The caller must waitpid() it.
+inline pid_t start_knitsim(const std::string& args, const TempDir& tmp) {
+  const std::string cmd = std::string("exec '") + KNITSIM_EXE + "' " + args + " >'" +
+                          (tmp.path / "background-stdout.txt").string() + "' 2>'" +
+                          (tmp.path / "background-stderr.txt").string() + "' </dev/null";
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  return pid;
+}
+
 }  // namespace knitsim::test

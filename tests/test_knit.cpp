@@ -117,19 +117,19 @@ TEST_CASE("chart errors name row (from the top as drawn), column and the accepte
 TEST_CASE("knit parameters are validated by name") {
   KnitParams p;
   p.loop_radius = 0.0;
-  CHECK_THROWS_WITH(p.validate(), "model.loop_radius = 0: must be > 0 m");
+  CHECK_THROWS_WITH(p.validate(), "knit.loop_radius = 0: must be > 0 m");
   p = {};
   p.wale_stiffness = -1.0;
-  CHECK_THROWS_WITH(p.validate(), Catch::Contains("model.wale_stiffness"));
+  CHECK_THROWS_WITH(p.validate(), Catch::Contains("knit.wale_stiffness"));
   p = {};
   p.course_stiffness = std::nan("");
-  CHECK_THROWS_WITH(p.validate(), Catch::Contains("model.course_stiffness"));
+  CHECK_THROWS_WITH(p.validate(), Catch::Contains("knit.course_stiffness"));
   p = {};
   p.damping = -1e-3;
-  CHECK_THROWS_WITH(p.validate(), Catch::Contains("model.damping"));
+  CHECK_THROWS_WITH(p.validate(), Catch::Contains("knit.damping"));
   p = {};
   p.areal_density = 0.0;
-  CHECK_THROWS_WITH(p.validate(), Catch::Contains("fabric.areal_density"));
+  CHECK_THROWS_WITH(p.validate(), Catch::Contains("knit.areal_density"));
   p = {};
   p.max_points = 10;
   CHECK_THROWS_WITH(model_of("KKKK\nKKKK\nKKKK\n", p), Catch::Contains("over the cap of 10"));
@@ -490,7 +490,7 @@ TEST_CASE("stabiliser: a plain chart stays at rest; shear and bending springs ha
     }
   }
   p.stabiliser_ratio = 1.5;
-  CHECK_THROWS_WITH(p.validate(), "model.stabiliser_ratio = 1.5: must be in [0, 1]");
+  CHECK_THROWS_WITH(p.validate(), "knit.stabiliser = 1.5: must be in [0, 1]");
 }
 
 TEST_CASE("stabiliser: a tuck's displacement decays with distance and the state is unique") {

@@ -1,0 +1,55 @@
+// Independent units of work (repro: target set x sample x ICA run; Taguchi experiment x
+// replicate), each run exactly once, checkpointed as it completes, resumable after an
+// interruption, and distributed over MPI ranks (SPEC 2.11 "beyond one machine").
+//
+// Determinism: a unit's result must depend only on the unit itself (its key, its own seed),
+// never on which rank ran it, how many threads it used, or what ran before. Results are JSON;
+// doubles survive the checkpoint bit for bit (nlohmann writes max_digits10 digits), so a
+// resumed run returns exactly what an uninterrupted one would.
+#pragma once
+
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+namespace knitsim {
+
+struct WorkUnit {
+  std::string key;                      // unique within a run, e.g. "twin/s3/run07"
+  std::function<nlohmann::json()> run;  // computes the unit's result (may throw: see below)
+};
+
+struct WorkUnitOptions {
+  std::string checkpoint;  // JSON-lines file of completed units; empty = no checkpoint
+  bool resume = false;     // read `checkpoint` first and skip the units it holds
+  nlohmann::json config;   // what must match for a resume to be valid (preset, seeds, ...)
+  bool progress = false;   // a progress line with ETA on stderr (rank 0, terminal only)
+  std::string label;       // progress label
+};
+
+// Runs every unit not already completed and returns all results in the order of `units`, on
+// rank 0 (other ranks get an empty vector). Every rank must call it with the same units.
+// Failure modes: a unit that throws std::exception is an error result {"error": what} (it is
+// not retried on resume); a checkpoint whose config differs from options.config, or that names
+// unknown units, throws std::invalid_argument before any unit runs.
+std::vector<nlohmann::json> run_work_units(const std::vector<WorkUnit>& units,
+                                           const WorkUnitOptions& options);
+
+// Where two configs first differ, as a JSON pointer ("/ica/seed"; "" when equal), for the error
+// a resume with other settings gives (here and in knitsim fit --resume).
+std::string first_config_difference(const nlohmann::json& saved, const nlohmann::json& now);
+
+// MPI (when built with it; otherwise one process of rank 0 of 1).
+int process_rank();
+int process_count();
+// Owns MPI_Init/MPI_Finalize for main(); a no-op without MPI.
+class ProcessGroup {
+ public:
+  ProcessGroup(int& argc, char**& argv);
+  ~ProcessGroup();
+  ProcessGroup(const ProcessGroup&) = delete;
+  ProcessGroup& operator=(const ProcessGroup&) = delete;
+};
+
+}  // namespace knitsim

@@ -1,0 +1,105 @@
+#include "tests/fuzz/fuzz_inputs.hpp"
+
+#include <cmath>
+#include <vector>
+
+#include "models/drape_grid.hpp"
+#include "models/knit_loops.hpp"
+#include "src/scene.hpp"
+#include "src/targets.hpp"
+
+namespace knitsim::fuzz {
+
+namespace {
+
+// Accepted inputs larger than this are only parsed: building them is what the unit tests and
+// the cap checks cover, and it would slow the fuzzer down.
+constexpr long kMaxBuiltPoints = 2500;
+
+// Runs the parser; true if it accepted. A rejection must be std::invalid_argument with one
+// non-empty line.
+template <class Parse>
+bool accepted(Parse&& parse) {
+  try {
+    parse();
+    return true;
+  } catch (const std::invalid_argument& e) {
+    check_rejection_message(e.what());
+    return false;
+  }
+}
+
+// Runs a stage after the parser accepted: any exception there is a finding.
+template <class Stage>
+void must_succeed(const char* what, Stage&& stage) {
+  try {
+    stage();
+  } catch (const FuzzFinding&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw FuzzFinding(std::string("accepted input, then ") + what + " threw: " + e.what());
+  }
+}
+
+void require_finite(double value, const char* what) {
+  if (!std::isfinite(value)) throw FuzzFinding(std::string("accepted input, non-finite ") + what);
+}
+
+}  // namespace
+
+// The initial state of an accepted model is finite, and so is its static residual there.
+void check_initial_state(const SpringNetwork& net) {
+  std::vector<double> x(net.dof()), v(net.dof());
+  net.initial_state(x.data(), v.data());
+  for (double xi : x) require_finite(xi, "initial position");
+  require_finite(net.static_residual(0.0, x.data()), "static residual at the start");
+}
+
+void check_rejection_message(const std::string& message) {
+  if (message.empty()) throw FuzzFinding("rejected with an empty message");
+  if (message.find('\n') != std::string::npos)
+    throw FuzzFinding("rejected with a message of several lines: " + message);
+}
+
+void check_scene_input(const std::string& text) {
+  Scene scene;
+  if (!accepted([&] { scene = load_scene_text(text, "fuzz", "fuzz.toml"); })) return;
+  const long side = scene.params.cells() + 1L;
+  if (side * side > kMaxBuiltPoints) return;
+  must_succeed("building the grid",
+               [&] { check_initial_state(build_drape_grid(scene.params).network); });
+}
+
+void check_chart_input(const std::string& text) {
+  KnitChart chart;
+  if (!accepted([&] { chart = parse_knit_chart(text); })) return;
+  if (static_cast<long>(chart.wales) * (chart.courses + 1) > kMaxBuiltPoints) return;
+  must_succeed("building the model and its geometry at rest", [&] {
+    const KnitModel model = build_knit(chart, KnitParams{});
+    check_initial_state(model.network);
+    const std::vector<Vec3> rest = model.rest_positions();
+    for (const LoopTypeValues& loop : type_value_points(model, rest))
+      for (const Vec3& t : loop.t) require_finite(t.x + t.y + t.z, "type-value point at rest");
+    for (const CurveSamples& line : course_centerlines(model, rest))
+      for (const Vec3& p : line.points) require_finite(p.x + p.y + p.z, "centreline point");
+  });
+}
+
+void check_target_input(const std::string& text) {
+  Target target;
+  if (!accepted([&] { target = parse_target_csv(text, "fuzz.csv"); })) return;
+  must_succeed("validating and fitting it", [&] {
+    target.validate();
+    for (const TargetScene& scene : target.scenes)
+      for (const EdgeFit& fit : fit_target_scene(scene))
+        for (double c : fit.coefficients) require_finite(c, "edge coefficient");
+  });
+}
+
+const std::vector<FuzzEntry>& fuzz_entries() {
+  static const std::vector<FuzzEntry> entries = {
+      {"scene", check_scene_input}, {"chart", check_chart_input}, {"target", check_target_input}};
+  return entries;
+}
+
+}  // namespace knitsim::fuzz

@@ -1,0 +1,41 @@
+// The fuzzed entry points (tests/fuzz/fuzz_*.cpp, libFuzzer) and their oracle, shared with the
+// normal suite (tests/test_fuzz_regressions.cpp replays tests/fuzz/corpus/ and
+// tests/fuzz/regressions/ through the same functions).
+//
+// Each check feeds one input to a parser the command line reaches with user files:
+//   scene   load_scene_text (TOML scene, SPEC 2.10), then, if accepted and small, the grid;
+//   chart   parse_knit_chart (SPEC 2.9), then, if accepted and small, the model and its
+//           type-value points and centrelines at rest;
+//   target  parse_target_csv (src/targets.hpp), then every scene's edge fits.
+// Oracle: the parser either accepts the input or throws std::invalid_argument with one
+// non-empty line (SPEC 2.10: "one clear line naming the bad input"). Once it has accepted, the
+// later stages must succeed (validation promised they would) and give finite numbers. Anything
+// else -- another exception, a multi-line message, a non-finite result -- throws
+// FuzzFinding; crashes, UB, leaks and hangs are caught by the sanitizers and libFuzzer.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace knitsim::fuzz {
+
+struct FuzzFinding : std::logic_error {
+  using std::logic_error::logic_error;
+};
+
+// The rejection half of the oracle: throws FuzzFinding for an empty or multi-line message.
+void check_rejection_message(const std::string& message);
+
+void check_scene_input(const std::string& text);
+void check_chart_input(const std::string& text);
+void check_target_input(const std::string& text);
+
+// The fuzz targets by name (the folder names under tests/fuzz/corpus and regressions).
+struct FuzzEntry {
+  const char* name;
+  void (*check)(const std::string& text);
+};
+const std::vector<FuzzEntry>& fuzz_entries();
+
+}  // namespace knitsim::fuzz

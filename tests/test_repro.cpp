@@ -1,0 +1,300 @@
+// knitsim repro (src/repro.hpp) and its plot (src/plot.hpp): the tick rules, the seed and
+// budget helpers, and a tiny-budget Table 4 + 6 run whose CSVs are checked against
+// paper_data and against objective() recomputed from the fitted parameters, and for
+// independence of the thread count. Matching the paper's numbers is NOT tested.
+#include <cairo.h>
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "src/drape_fit.hpp"
+#include "src/output.hpp"
+#include "src/paper_data.hpp"
+#include "src/plot.hpp"
+#include "src/repro.hpp"
+#include "src/scene.hpp"
+#include "src/test_functions.hpp"
+#include "tests/cli_runner.hpp"
+
+using namespace knitsim;
+using knitsim::test::TempDir;
+namespace fs = std::filesystem;
+
+namespace {
+
+// CSV without quoted cells (repro's tables quote nothing numeric) as rows of cells.
+std::vector<std::vector<std::string>> read_csv(const fs::path& p) {
+  std::vector<std::vector<std::string>> rows;
+  for (const std::string& line : knitsim::test::lines(knitsim::test::slurp(p))) {
+    std::vector<std::string> cells;
+    std::string cell;
+    std::istringstream in(line);
+    while (std::getline(in, cell, ',')) cells.push_back(cell);
+    if (!line.empty() && line.back() == ',') cells.push_back("");
+    rows.push_back(cells);
+  }
+  return rows;
+}
+
+size_t col(const std::vector<std::string>& header, const std::string& name) {
+  const auto it = std::find(header.begin(), header.end(), name);
+  REQUIRE(it != header.end());
+  return static_cast<size_t>(it - header.begin());
+}
+
+ReproOptions tiny_options(int jobs) {
+  ReproOptions o = repro_preset("quick");
+  o.task = ReproTask::Table6;  // Table 6 needs (and writes) Table 4's fits
+  o.samples = {1};
+  o.sets = {SyntheticSet::Twin};
+  o.runs = 2;
+  o.ica.countries = 4;
+  o.ica.imperialists = 2;
+  o.ica.decades = 1;
+  o.ica.jobs = jobs;
+  o.pictures = false;
+  o.progress = false;
+  const fs::path committed = fs::path(KNITSIM_PAPER_DATA) / "targets";
+  if (fs::is_directory(committed)) o.targets_dir = committed.string();
+  return o;
+}
+
+// The country of a table row: the 4 genes as written (17 digits) and a topology gene inside the
+// written topology's unit interval.
+std::vector<double> country(const std::vector<std::string>& header,
+                            const std::vector<std::string>& row) {
+  std::vector<double> x;
+  for (const char* p : {"stiffness", "damping", "elongation_limit", "natural_length"})
+    x.push_back(std::stod(row[col(header, p)]));
+  x.push_back(row[col(header, "topology")].at(0) - 'a' + 0.5);
+  return x;
+}
+
+Scene sample_scene(const std::string& name, int sample) {
+  Scene s = load_scene(
+      name, {"fabric.areal_density=" + format_number(paper_sample(sample).areal_density, 17)});
+  s.options.rtol = 1e-8;
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("nice_ticks: 1-2-5 steps covering the range, at most max_ticks", "[plot]") {
+  CHECK(nice_ticks(0.0, 9.3) == std::vector<double>{0, 2, 4, 6, 8, 10});
+  for (auto [lo, hi] : std::vector<std::pair<double, double>>{
+           {0.0, 9.3}, {-3.7, 141.0}, {0.013, 0.0171}, {5.0, 5.0}, {-1e6, 3e5}}) {
+    const std::vector<double> t = nice_ticks(lo, hi, 8);
+    REQUIRE(t.size() >= 2);
+    CHECK(t.size() <= 8);
+    CHECK(t.front() <= lo + 1e-12 * std::abs(lo));  // a tick may be an ulp off lo or hi
+    CHECK(t.back() >= hi - 1e-12 * std::abs(hi));
+    const double step = t[1] - t[0];
+    const double mantissa = step / std::pow(10.0, std::floor(std::log10(step) + 1e-9));
+    CHECK((std::abs(mantissa - 1) < 1e-6 || std::abs(mantissa - 2) < 1e-6 ||
+           std::abs(mantissa - 5) < 1e-6));
+  }
+}
+
+TEST_CASE("log_ticks: powers of ten, with 2 and 5 over at most two decades", "[plot]") {
+  CHECK(log_ticks(0.3, 40.0) == std::vector<double>{0.1, 1.0, 10.0, 100.0});
+  const std::vector<double> t = log_ticks(1.2, 3.0);
+  REQUIRE(t.size() == 4);
+  CHECK(t[0] == 1.0);
+  CHECK(t[1] == 2.0);
+  CHECK(t[2] == 5.0);
+  CHECK(t[3] == 10.0);
+  CHECK_THROWS_AS(log_ticks(0.0, 1.0), std::invalid_argument);
+}
+
+TEST_CASE("render_line_plot_png: a PNG of the requested size; bad plots are rejected", "[plot]") {
+  TempDir tmp("plot");
+  LinePlot p;
+  p.width = 640;
+  p.height = 400;
+  p.log_y = true;
+  PlotSeries s;
+  s.x = {0, 1, 2, 3};
+  s.y = {10, 3, 1, -1};  // the last point is not drawable on a log axis and is skipped
+  p.series.push_back(s);
+  const std::string file = (tmp.path / "p.png").string();
+  render_line_plot_png(file, p);
+  cairo_surface_t* img = cairo_image_surface_create_from_png(file.c_str());
+  REQUIRE(cairo_surface_status(img) == CAIRO_STATUS_SUCCESS);
+  CHECK(cairo_image_surface_get_width(img) == 640);
+  CHECK(cairo_image_surface_get_height(img) == 400);
+  cairo_surface_destroy(img);
+  p.series[0].y.pop_back();
+  CHECK_THROWS_AS(render_line_plot_png(file, p), std::invalid_argument);  // x, y lengths
+  p.series[0].x.pop_back();
+  p.series[0].y = {-1, -2, -3};
+  CHECK_THROWS_AS(render_line_plot_png(file, p), std::invalid_argument);  // nothing drawable
+}
+
+TEST_CASE("unit_seed depends on the key and the base seed only", "[repro]") {
+  CHECK(unit_seed(2017, "fit/twin/s1/run00") == unit_seed(2017, "fit/twin/s1/run00"));
+  CHECK(unit_seed(2017, "fit/twin/s1/run00") != unit_seed(2017, "fit/twin/s1/run01"));
+  CHECK(unit_seed(2017, "fit/twin/s1/run00") != unit_seed(2017, "fit/cross/s1/run00"));
+  CHECK(unit_seed(2017, "fit/twin/s1/run00") != unit_seed(2018, "fit/twin/s1/run00"));
+}
+
+TEST_CASE("ica_evaluation_estimate equals the ICA's count when no empire can collapse", "[repro]") {
+  IcaOptions o;
+  o.countries = 10;
+  o.imperialists = 1;  // one empire: nothing collapses
+  o.decades = 5;
+  const IcaResult r = run_ica(make_test_problem("sphere", 3), o);
+  CHECK(r.evaluations == ica_evaluation_estimate(o));
+  CHECK(ica_evaluation_estimate(o) == 10 + 5 * 9);
+  o.countries = 15;  // Table 1's B1 C3: fewer colonies than imperialists -> 2 x 10 countries
+  o.imperialists = 10;
+  CHECK(ica_evaluation_estimate(o) == 20 + 5 * 10);
+}
+
+TEST_CASE("presets and validation", "[repro]") {
+  const ReproOptions paper = repro_preset("paper");
+  CHECK(paper.runs == 10);
+  CHECK(paper.ica.countries == 25);
+  CHECK(paper.ica.imperialists == 2);
+  CHECK(paper.ica.decades == 40);
+  CHECK(paper.taguchi_decades == std::array<int, 3>{10, 20, 40});
+  CHECK_NOTHROW(repro_preset("quick").validate());
+  CHECK_THROWS_WITH(repro_preset("fast"), Catch::Contains("preset = fast"));
+  ReproOptions o = repro_preset("quick");
+  o.samples = {1, 10};
+  CHECK_THROWS_WITH(o.validate(), Catch::Contains("samples = 10"));
+  o.samples = {2, 2};
+  CHECK_THROWS_WITH(o.validate(), Catch::Contains("samples = 2"));
+  o = repro_preset("quick");
+  o.runs = 0;
+  CHECK_THROWS_WITH(o.validate(), Catch::Contains("runs = 0"));
+  CHECK_THROWS_WITH(repro_task_from_name("table5"), Catch::Contains("task = table5"));
+}
+
+TEST_CASE(
+    "repro table6, one sample, tiny budget: columns, paper values, errors recomputed, "
+    "independent of --jobs",
+    "[repro]") {
+  TempDir tmp("repro");
+  const fs::path d1 = tmp.path / "jobs1", d2 = tmp.path / "jobs2";
+  fs::create_directories(d1);
+  fs::create_directories(d2);
+  const ReproOptions o1 = tiny_options(1);
+  ReproTargets targets(o1);
+  run_repro(o1, targets, d1, false);
+  run_repro(tiny_options(2), targets, d2, false);
+
+  // Determinism: the tables do not depend on the number of threads.
+  for (const char* f : {"table4.csv", "table6.csv"})
+    CHECK(knitsim::test::slurp(d1 / f) == knitsim::test::slurp(d2 / f));
+
+  const Target& target = targets.get(SyntheticSet::Twin, 1);
+  const PaperSample& paper = paper_sample(1);
+  const auto t4 = read_csv(d1 / "table4.csv");
+  REQUIRE(t4.size() == 2);  // header + twin sample 1
+  const std::vector<std::string>& h = t4[0];
+  const std::vector<std::string> expected = {"set",
+                                             "sample",
+                                             "runs",
+                                             "best_run",
+                                             "stiffness",
+                                             "damping",
+                                             "elongation_limit",
+                                             "natural_length",
+                                             "topology",
+                                             "error",
+                                             "stiffness_min",
+                                             "stiffness_max",
+                                             "damping_min",
+                                             "damping_max",
+                                             "elongation_limit_min",
+                                             "elongation_limit_max",
+                                             "natural_length_min",
+                                             "natural_length_max",
+                                             "topologies",
+                                             "error_max",
+                                             "evaluations",
+                                             "failed_evaluations",
+                                             "status",
+                                             "paper_stiffness",
+                                             "paper_damping",
+                                             "paper_elongation_limit",
+                                             "paper_natural_length",
+                                             "paper_topology",
+                                             "paper_error",
+                                             "true_stiffness",
+                                             "true_natural_length",
+                                             "stiffness_rel_error",
+                                             "natural_length_rel_error"};
+  CHECK(h == expected);
+  const std::vector<std::string>& r = t4[1];
+  REQUIRE(r.size() == h.size());
+  CHECK(r[col(h, "set")] == "twin");
+  CHECK(r[col(h, "runs")] == "2");
+  CHECK(std::stod(r[col(h, "paper_stiffness")]) == paper.stiffness);
+  CHECK(std::stod(r[col(h, "paper_damping")]) == paper.damping);
+  CHECK(std::stod(r[col(h, "paper_elongation_limit")]) == paper.elongation_limit);
+  CHECK(std::stod(r[col(h, "paper_natural_length")]) == paper.natural_length);
+  CHECK(r[col(h, "paper_topology")] == std::string(1, paper.topology));
+  CHECK(std::stod(r[col(h, "paper_error")]) == paper.table4_error);
+  CHECK(std::stod(r[col(h, "true_stiffness")]) == paper.stiffness);
+  // 2 runs x (4 countries + 1 decade x 2 colonies), unless an empire collapsed.
+  CHECK(std::stol(r[col(h, "evaluations")]) >= 2 * 6);
+  // The best run's parameters lie within the runs' spread.
+  for (const char* p : {"stiffness", "damping", "elongation_limit", "natural_length"}) {
+    const double v = std::stod(r[col(h, p)]);
+    CHECK(v >= std::stod(r[col(h, std::string(p) + "_min")]) * (1 - 1e-5));
+    CHECK(v <= std::stod(r[col(h, std::string(p) + "_max")]) * (1 + 1e-5));
+  }
+  const std::vector<double> x = country(h, r);
+  CHECK(std::stod(r[col(h, "stiffness_rel_error")]) ==
+        Approx((x[0] - paper.stiffness) / paper.stiffness).epsilon(1e-5));
+
+  // Our Table 4 error is objective() of the written parameters, recomputed.
+  DrapeFitOptions fo;
+  fo.ica.jobs = 1;
+  const DrapeFitProblem four(sample_scene("four_corner", 1), target, fo);
+  const DrapeEvaluation e4 = four.evaluate(x);
+  REQUIRE_FALSE(e4.failed);
+  CHECK(std::stod(r[col(h, "error")]) == Approx(e4.objective).epsilon(1e-12));
+
+  // Table 6: the same parameters, the two_corner error recomputed, the paper's column.
+  const auto t6 = read_csv(d1 / "table6.csv");
+  REQUIRE(t6.size() == 2);
+  const std::vector<std::string>& h6 = t6[0];
+  CHECK(h6 == std::vector<std::string>{"set", "sample", "stiffness", "damping", "elongation_limit",
+                                       "natural_length", "topology", "table4_error", "error",
+                                       "drape_status", "paper_table4_error", "paper_error"});
+  const std::vector<std::string>& r6 = t6[1];
+  REQUIRE(r6.size() == h6.size());
+  CHECK(country(h6, r6) == x);
+  CHECK(r6[col(h6, "table4_error")] == r[col(h, "error")]);
+  CHECK(std::stod(r6[col(h6, "paper_error")]) == paper.table6_error);
+  const DrapeFitProblem two(sample_scene("two_corner", 1), target, fo);
+  const DrapeEvaluation e6 = two.evaluate(x);
+  REQUIRE_FALSE(e6.failed);
+  CHECK(r6[col(h6, "drape_status")] == "equilibrium");
+  CHECK(std::stod(r6[col(h6, "error")]) == Approx(e6.objective).epsilon(1e-12));
+
+  // The report and the manifest are there.
+  CHECK(fs::exists(d1 / "report.md"));
+  CHECK(fs::exists(d1 / "manifest.json"));
+}
+
+TEST_CASE("knitsim repro: bad input is one line, exit 2, nothing written", "[repro][cli]") {
+  TempDir tmp("repro-cli");
+  for (const std::string& args :
+       {std::string("table5"), std::string("table4 --samples 0"),
+        std::string("table4 --preset fast"), std::string("table4 --jobs 0"),
+        std::string("all --sets twin,wool"), std::string("table4 --targets /nonexistent")}) {
+    const fs::path out = tmp.path / "out";
+    const knitsim::test::Run run =
+        knitsim::test::run_knitsim("repro " + args + " --out '" + out.string() + "'", tmp);
+    INFO(args << " -> " << run.err);
+    CHECK(run.status == 2);
+    CHECK(knitsim::test::lines(run.err).size() == 1);
+    CHECK_FALSE(fs::exists(out));
+  }
+}

@@ -1,0 +1,240 @@
+// Resumable ICA runs (src/ica.hpp checkpoints, knitsim fit --resume): the twister's state round
+// trip, a run continued from any decade's saved state (through JSON) is bit-identical to the
+// uninterrupted run, states that do not fit are refused, and `knitsim fit` killed with SIGKILL
+// after a decade then resumed writes the same best country, objective and history as a run
+// never interrupted.
+#include <signal.h>
+#include <sys/types.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <chrono>
+#include <limits>
+#include <memory>
+#include <stdexcept>
+#include <thread>
+
+#include "src/ica.hpp"
+#include "src/test_functions.hpp"
+#include "tests/cli_runner.hpp"
+
+using namespace knitsim;
+
+namespace {
+
+// Rastrigin in D = 6, failing (NaN) where x0 > 4: exercises the failure counters too.
+Problem failing_rastrigin() {
+  Problem p = make_test_problem("rastrigin", 6);
+  p.cost = [f = p.cost](const std::vector<double>& x) {
+    return x[0] > 4.0 ? std::numeric_limits<double>::quiet_NaN() : f(x);
+  };
+  return p;
+}
+
+IcaOptions small_options() {
+  IcaOptions o;
+  o.decades = 20;
+  o.countries = 20;
+  o.imperialists = 4;
+  o.seed = 5;
+  return o;
+}
+
+// Runs the ICA collecting every saved state.
+IcaResult run_saving(const Problem& p, IcaOptions o, std::vector<IcaState>& states) {
+  states.clear();
+  o.on_decade = [&states](const IcaState& s) { states.push_back(s); };
+  return run_ica(p, o);
+}
+
+// A state as the checkpoint file carries it: to JSON text and back.
+std::shared_ptr<const IcaState> through_json(const IcaState& s) {
+  return std::make_shared<const IcaState>(
+      ica_state_from_json(nlohmann::json::parse(to_json(s).dump())));
+}
+
+// Everything of a state but the wall time.
+nlohmann::json without_wall(const IcaState& s) {
+  nlohmann::json j = to_json(s);
+  j.erase("wall_seconds");
+  return j;
+}
+
+void check_same_run(const IcaResult& r, const IcaResult& ref) {
+  CHECK(r.status == ref.status);
+  CHECK(r.best_x == ref.best_x);  // exact comparison of doubles, on purpose
+  CHECK(r.best_cost == ref.best_cost);
+  CHECK(r.evaluations == ref.evaluations);
+  CHECK(r.failed_evaluations == ref.failed_evaluations);
+  CHECK(r.decades == ref.decades);
+  REQUIRE(r.history.size() == ref.history.size());
+  for (std::size_t d = 0; d < r.history.size(); ++d) {
+    CHECK(r.history[d].best_cost == ref.history[d].best_cost);
+    CHECK(r.history[d].mean_cost == ref.history[d].mean_cost);
+    CHECK(r.history[d].empires == ref.history[d].empires);
+    CHECK(r.history[d].evaluations == ref.history[d].evaluations);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("the random state round trip continues the same stream", "[resume]") {
+  IcaRandom a(11);
+  for (int k = 0; k < 1000; ++k) a.uniform();
+  const std::string saved = a.state();
+  std::vector<double> next;
+  for (int k = 0; k < 20; ++k) next.push_back(a.normal());
+  IcaRandom b(99);
+  b.set_state(saved);
+  for (int k = 0; k < 20; ++k) CHECK(b.normal() == next[k]);
+  CHECK_THROWS_AS(b.set_state("1 2 3"), std::invalid_argument);
+  CHECK_THROWS_AS(b.set_state(saved + " 7"), std::invalid_argument);
+}
+
+TEST_CASE("a run resumed from any decade's state is bit-identical to the uninterrupted one",
+          "[resume]") {
+  const Problem p = failing_rastrigin();
+  const IcaOptions o = small_options();
+  std::vector<IcaState> states;
+  const IcaResult ref = run_saving(p, o, states);
+  REQUIRE(ref.failed_evaluations > 0);
+  REQUIRE(states.size() == 21);
+  for (int d = 0; d <= 20; ++d) CHECK(states[d].decade == d);
+  CHECK(states.back().evaluations == ref.evaluations);
+
+  for (int d : {0, 1, 9, 19, 20}) {
+    INFO("resumed from decade " << d);
+    IcaOptions again = o;
+    again.jobs = 3;  // threads do not change the run, resumed or not
+    again.resume_from = through_json(states[d]);
+    std::vector<IcaState> later;
+    check_same_run(run_saving(p, again, later), ref);
+    // The states after the resume are the uninterrupted run's, field by field.
+    REQUIRE(later.size() == states.size() - d - 1);
+    for (std::size_t k = 0; k < later.size(); ++k)
+      CHECK(without_wall(later[k]) == without_wall(states[d + 1 + k]));
+  }
+  SECTION("the test can fail: one decade's state with another decade's random state") {
+    IcaState mixed = states[9];
+    mixed.random = states[8].random;
+    IcaOptions again = o;
+    again.resume_from = std::make_shared<const IcaState>(mixed);
+    CHECK(run_ica(p, again).history.back().mean_cost != ref.history.back().mean_cost);
+  }
+}
+
+TEST_CASE("resume with the step-9 rule: a run that stopped at one empire stays stopped",
+          "[resume]") {
+  const Problem p = make_test_problem("sphere", 4);
+  IcaOptions o = small_options();
+  o.imperialists = 2;
+  o.stop_when_one_empire = true;
+  std::vector<IcaState> states;
+  const IcaResult ref = run_saving(p, o, states);
+  REQUIRE(ref.status == IcaStatus::OneEmpire);
+  REQUIRE(states.back().empires.size() == 1);
+  for (std::size_t d : {std::size_t{0}, states.size() - 1}) {
+    IcaOptions again = o;
+    again.resume_from = through_json(states[d]);
+    check_same_run(run_ica(p, again), ref);
+  }
+}
+
+TEST_CASE("a state that does not fit the options or is incomplete is refused", "[resume]") {
+  const Problem p = failing_rastrigin();
+  IcaOptions o = small_options();
+  std::vector<IcaState> states;
+  run_saving(p, o, states);
+  IcaOptions again = o;
+  again.resume_from = std::make_shared<const IcaState>(states[9]);
+  SECTION("fewer decades than the state has run") {
+    again.decades = 8;
+    CHECK_THROWS_WITH(run_ica(p, again), Catch::Contains("decade 9 does not fit"));
+  }
+  SECTION("another dimension") {
+    CHECK_THROWS_WITH(run_ica(make_test_problem("rastrigin", 5), again),
+                      Catch::Contains("dimension 6 does not fit"));
+  }
+  SECTION("more empires than imperialists") {
+    REQUIRE(states[0].empires.size() == 4);
+    again.resume_from = std::make_shared<const IcaState>(states[0]);
+    again.imperialists = 1;
+    again.countries = 20;
+    CHECK_THROWS_WITH(run_ica(p, again), Catch::Contains("empires does not fit"));
+  }
+  nlohmann::json j = to_json(states[9]);
+  j.erase("random");
+  CHECK_THROWS_WITH(ica_state_from_json(j), Catch::Contains("field random"));
+  j = to_json(states[9]);
+  j["history"] = 3;
+  CHECK_THROWS_WITH(ica_state_from_json(j), Catch::Contains("field history"));
+}
+
+TEST_CASE("knitsim fit killed after a decade and resumed equals an uninterrupted fit",
+          "[resume][cli]") {
+  using namespace knitsim::test;
+  TempDir tmp("resume");
+  // A four_corner target given by coefficients (any valid target serves: the test compares two
+  // fits of it): d(s) = 0.3 s - 0.3 s^2 on every edge.
+  {
+    std::ofstream t(tmp.path / "target.csv");
+    t << "scene,edge,kind,a,b\n";
+    for (const char* edge : {"top", "bottom", "left", "right"})
+      for (int i = 0; i <= 4; ++i)
+        t << "four_corner," << edge << ",coeff," << i << ","
+          << (i == 1   ? "0.3"
+              : i == 2 ? "-0.3"
+                       : "0")
+          << "\n";
+  }
+  const std::string args = "fit --scene four_corner --set fabric.width=0.3 --target '" +
+                           (tmp.path / "target.csv").string() +
+                           "' --decades 5 --countries 6 --imperialists 2 --quiet";
+  const fs::path whole = tmp.path / "whole", cut = tmp.path / "cut";
+  const Run reference = run_knitsim(args + " --seed 3 --out '" + whole.string() + "'", tmp);
+  REQUIRE(reference.status == 0);
+
+  // The same fit, killed once its checkpoint holds decade 1 or later.
+  const pid_t pid = start_knitsim(args + " --seed 3 --out '" + cut.string() + "'", tmp);
+  REQUIRE(pid > 0);
+  const fs::path checkpoint = cut / "ica_checkpoint.json";
+  int decade = -1, status = 0;
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (decade < 1 && std::chrono::steady_clock::now() < give_up &&
+         ::waitpid(pid, &status, WNOHANG) == 0) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    if (fs::exists(checkpoint))  // written atomically: always whole
+      decade = nlohmann::json::parse(slurp(checkpoint)).at("state").at("decade").get<int>();
+  }
+  ::kill(pid, SIGKILL);
+  ::waitpid(pid, &status, 0);
+  INFO("checkpoint decade " << decade << "; " << slurp(tmp.path / "background-stderr.txt"));
+  REQUIRE(WIFSIGNALED(status));  // killed before it finished
+  REQUIRE(decade >= 1);
+  REQUIRE(decade < 5);
+  CHECK(!fs::exists(cut / "summary.json"));
+
+  // Other settings are refused with one line; --resume needs --out.
+  const Run other = run_knitsim(args + " --seed 4 --out '" + cut.string() + "' --resume", tmp);
+  CHECK(other.status == 2);
+  CHECK(lines(other.err).size() == 1);
+  CHECK(other.err.find("first difference: /ica/seed") != std::string::npos);
+  const Run no_out = run_knitsim(args + " --seed 3 --resume", tmp);
+  CHECK(no_out.status == 2);
+  CHECK(no_out.err.find("--resume: needs --out") != std::string::npos);
+
+  // Resumed with 2 threads: the same fit, bit for bit.
+  const Run resumed =
+      run_knitsim(args + " --seed 3 --jobs 2 --out '" + cut.string() + "' --resume", tmp);
+  REQUIRE(resumed.status == 0);
+  const nlohmann::json a = nlohmann::json::parse(slurp(whole / "summary.json"));
+  const nlohmann::json b = nlohmann::json::parse(slurp(cut / "summary.json"));
+  CHECK(b.at("resumed_from_decade").get<int>() >= decade);
+  for (const char* key : {"best_country", "objective", "params", "history", "evaluations",
+                          "failed_evaluations", "status"}) {
+    INFO(key);
+    CHECK(b.at(key) == a.at(key));
+  }
+  CHECK(slurp(cut / "history.csv") == slurp(whole / "history.csv"));
+}

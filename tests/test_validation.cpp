@@ -1,0 +1,150 @@
+// Validation at the boundary (SPEC 2.10: "non-zero with one clear line naming the bad input;
+// never a crash or a hang on bad input"): oversized and endless input files, NaN/inf and unknown
+// keys where knit --set and the target reader missed them, and an unwritable --out for every
+// command that writes. Each case states the message it expects; each failed before its fix
+// (noted per case) or pins down behaviour the fuzzers and the CLI rely on.
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <chrono>
+#include <fstream>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "src/scene.hpp"
+#include "src/targets.hpp"
+#include "tests/cli_runner.hpp"
+
+using namespace knitsim;
+using namespace knitsim::test;
+
+namespace {
+
+int count_lines(const std::string& s) {
+  return static_cast<int>(std::count(s.begin(), s.end(), '\n'));
+}
+
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+// Runs knitsim and expects the bad-input contract: exit 2, one stderr line containing `names`,
+// nothing on stdout.
+void expect_bad_input(const std::string& args, const std::string& names, const TempDir& tmp) {
+  CAPTURE(args);
+  const Run r = run_knitsim(args, tmp);
+  CHECK(r.status == 2);
+  CHECK(count_lines(r.err) == 1);
+  CHECK(r.err.find(names) != std::string::npos);
+  CHECK(r.out.empty());
+}
+
+}  // namespace
+
+TEST_CASE("input files over their size cap are refused unread, endless ones too") {
+  TempDir tmp("validation-size");
+  // A scene file one byte over the cap, all of it a valid TOML comment: was accepted.
+  const fs::path big = tmp.path / "big.toml";
+  {
+    std::ofstream out(big);
+    out << "#" << std::string(kMaxSceneFileBytes, 'x');
+  }
+  CHECK(error_of([&] { load_scene(big.string()); }) ==
+        "scene: cannot read " + big.string() + ": larger than " +
+            std::to_string(kMaxSceneFileBytes) + " bytes, the limit for this input");
+  // /dev/zero never ends: before the cap the reader filled memory until killed.
+  expect_bad_input("drape --scene /dev/zero --out '" + (tmp.path / "o1").string() + "'",
+                   "scene: cannot read /dev/zero: larger than", tmp);
+  expect_bad_input("knit --chart /dev/zero --out '" + (tmp.path / "o2").string() + "'",
+                   "--chart /dev/zero: cannot read the file: larger than", tmp);
+  expect_bad_input("drape --target /dev/zero --out '" + (tmp.path / "o3").string() + "'",
+                   "/dev/zero: cannot open target file: larger than", tmp);
+  for (const char* o : {"o1", "o2", "o3"}) CHECK(!fs::exists(tmp.path / o));
+}
+
+TEST_CASE("a drape grid over the particle cap is refused before allocating") {
+  // 1e4 x 1e4 particles would need ~10 GB: the message comes at once, naming the key.
+  CHECK(error_of([] { load_scene("four_corner", {"model.natural_length=5e-5"}); }) ==
+        "model.natural_length = 5e-05: gives a 10001 x 10001 grid, over the cap of 4000000 "
+        "particles");
+}
+
+TEST_CASE("knit --set: messages name the keys the user types, nearest key suggested") {
+  TempDir tmp("validation-knit");
+  const fs::path chart = tmp.path / "c.chart";
+  std::ofstream(chart) << "KKK\nKTK\nKKK\n";
+  const std::string base =
+      "knit --chart '" + chart.string() + "' --out '" + (tmp.path / "out").string() + "' ";
+  // Before: "--set knit.dampng=1: unknown key; accepted keys: ..." (no suggestion).
+  expect_bad_input(base + "--set knit.dampng=1",
+                   "knit.dampng: unknown key; did you mean knit.damping?", tmp);
+  // Before: "model.loop_radius = nan: ..." although the user typed knit.loop_radius.
+  expect_bad_input(base + "--set knit.loop_radius=nan", "knit.loop_radius = nan: must be > 0 m",
+                   tmp);
+  expect_bad_input(base + "--set knit.stabiliser=inf", "knit.stabiliser = inf: must be in [0, 1]",
+                   tmp);
+  expect_bad_input(base + "--set knit.areal_density=-1",
+                   "knit.areal_density = -1: must be > 0 g/m^2", tmp);
+  // Before: "t_max = inf: must be > 0 s" and "rtol = nan: ..." (struct field names).
+  expect_bad_input(base + "--set run.t_max=inf", "run.t_max = inf: must be > 0 s", tmp);
+  expect_bad_input(base + "--rtol nan", "--rtol = nan: must be in (0, 1)", tmp);
+  CHECK(!fs::exists(tmp.path / "out"));
+}
+
+TEST_CASE("drape: NaN and inf in --set, scene files and flags name the key and the range") {
+  TempDir tmp("validation-drape");
+  const std::string out = " --out '" + (tmp.path / "out").string() + "'";
+  expect_bad_input("drape --set fabric.width=inf" + out,
+                   "fabric.width = inf: must be a number > 0 m", tmp);
+  expect_bad_input("drape --set pins.span=nan" + out, "pins.span = nan: must be a number in (0, 1]",
+                   tmp);
+  expect_bad_input("drape --rtol inf" + out, "--rtol = inf: must be in (0, 1)", tmp);
+  const fs::path scene = tmp.path / "s.toml";
+  std::ofstream(scene) << "[model]\nstiffness = inf\n";
+  expect_bad_input("drape --scene '" + scene.string() + "'" + out,
+                   "model.stiffness = inf: must be a number > 0 N/m", tmp);
+  CHECK(!fs::exists(tmp.path / "out"));
+}
+
+TEST_CASE("target CSV: a number with trailing bytes after a NUL is not a number") {
+  // Before: strtod stopped at the NUL and the row was read as 0.04.
+  const std::string csv =
+      std::string("scene,edge,kind,a,b\nfour_corner,top,point,0.5,0.04") + '\0' + "junk\n";
+  CHECK(error_of([&] { parse_target_csv(csv, "t.csv"); }).rfind("t.csv:2: field b = '0.04", 0) ==
+        0);
+}
+
+TEST_CASE("an unwritable --out fails before any work, for every command that writes") {
+  TempDir tmp("validation-out");
+  const fs::path file = tmp.path / "a-file";
+  std::ofstream(file) << "not a folder\n";
+  const fs::path target = fs::path(KNITSIM_FUZZ_CORPUS) / "target" / "points_four_corner.csv";
+  const fs::path chart = tmp.path / "c.chart";
+  std::ofstream(chart) << "KKK\nKTK\nKKK\n";
+  const fs::path responses = tmp.path / "r.csv";
+  {
+    std::ofstream out(responses);
+    for (int run = 1; run <= 27; ++run) out << run << "," << run + 0.5 << "\n";
+  }
+  const std::vector<std::string> commands = {
+      "drape --set model.natural_length=0.1",
+      "knit --chart '" + chart.string() + "'",
+      "fit --scene four_corner --set model.natural_length=0.1 --target '" + target.string() +
+          "' --decades 1 --countries 4 --imperialists 1",
+      "taguchi --responses '" + responses.string() + "'",
+      "demo",
+  };
+  for (const fs::path& bad : {fs::path("/proc/knitsim-out"), file / "sub"})
+    for (const std::string& c : commands) {
+      const auto start = std::chrono::steady_clock::now();
+      expect_bad_input(c + " --out '" + bad.string() + "'", "--out " + bad.string(), tmp);
+      // No run started: a fit or a demo would take seconds to minutes.
+      CHECK(std::chrono::steady_clock::now() - start < std::chrono::seconds(5));
+      CHECK(!fs::exists(bad));
+    }
+}
