@@ -1,0 +1,188 @@
+"""Shared pieces of the experiment drivers (experiments/*/driver.py): run the knitsim binary,
+read its outputs, compare states, write raw CSV and the manifest (STYLE.md practice 10).
+
+Only the Python standard library: drivers must run under Debian's /usr/bin/python3 without
+anything installed; the plot scripts alone need matplotlib.
+
+Conventions of every driver using it:
+  * command line `--quick` (seconds to a minute, exercised by CI) and `--out DIR`;
+  * the knitsim binary is $KNITSIM, else <repo>/build/knitsim;
+  * each knitsim run writes into DIR/runs/<label>/ (deleted at the end unless --keep-runs);
+  * DIR ends up with the raw CSV files, manifest.json and (after the plot script) PNGs.
+"""
+import argparse
+import csv
+import datetime
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+REUSE = False  # set by parse_args (--reuse)
+
+
+def knitsim_path():
+    path = os.environ.get("KNITSIM", os.path.join(ROOT, "build", "knitsim"))
+    if not os.access(path, os.X_OK):
+        sys.exit("%s not built (run ./run.sh --build-only, or set KNITSIM)" % path)
+    return path
+
+
+def parse_args(name, default_out, add_arguments=None):
+    """The common command line; `add_arguments(parser)` adds a study's own flags."""
+    p = argparse.ArgumentParser(prog="experiments/%s/run.sh" % name)
+    p.add_argument("--quick", action="store_true", help="small sweep (seconds to a minute)")
+    p.add_argument("--out", default=os.path.join(ROOT, "out", "experiments", default_out),
+                   help="output folder (CSV, manifest.json, PNG)")
+    p.add_argument("--keep-runs", action="store_true",
+                   help="keep every knitsim output folder under OUT/runs/")
+    p.add_argument("--reuse", action="store_true",
+                   help="reuse a run found in OUT/runs/ made by the same knitsim command (to "
+                        "resume an interrupted study; implies --keep-runs)")
+    if add_arguments:
+        add_arguments(p)
+    a = p.parse_args()
+    a.out = os.path.abspath(a.out)
+    a.keep_runs = a.keep_runs or a.reuse
+    global REUSE
+    REUSE = a.reuse
+    os.makedirs(os.path.join(a.out, "runs"), exist_ok=True)
+    return a
+
+
+class Run:
+    """One knitsim invocation: its folder, exit status and summary.json (None if absent)."""
+
+    def __init__(self, folder, returncode, summary, stderr):
+        self.folder, self.returncode = folder, returncode
+        self.summary, self.stderr = summary, stderr
+
+    def stats(self):
+        """The run statistics (drape: top level of summary.json; knit: its "stats")."""
+        s = self.summary or {}
+        return s.get("stats", s)
+
+
+def run_knitsim(out, label, args, timeout=None):
+    """knitsim ARGS --quiet --out OUT/runs/LABEL. Exit 0 (equilibrium) and 3 (another status,
+    outputs written) are results; anything else (bad input) stops the driver."""
+    folder = os.path.join(out, "runs", label)
+    cmd = [knitsim_path()] + [str(a) for a in args] + ["--quiet", "--out", folder]
+    summary_path = os.path.join(folder, "summary.json")
+    manifest_path = os.path.join(folder, "manifest.json")
+    if REUSE and os.path.exists(summary_path) and os.path.exists(manifest_path) and \
+            json.load(open(manifest_path)).get("command_line") == " ".join(cmd):
+        summary = json.load(open(summary_path))
+        status = summary.get("stats", summary).get("status")
+        return Run(folder, 0 if status == "equilibrium" else 3, summary, "")
+    shutil.rmtree(folder, ignore_errors=True)
+    try:
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return Run(folder, None, None, "timeout after %s s" % timeout)
+    if p.returncode not in (0, 3):
+        sys.exit("knitsim failed (exit %d): %s\n%s" % (p.returncode, " ".join(cmd), p.stderr))
+    summary = json.load(open(summary_path)) if os.path.exists(summary_path) else None
+    return Run(folder, p.returncode, summary, p.stderr)
+
+
+def read_positions(run):
+    """Particle positions of a drape (nodes.csv) or knit (points.csv) run: {id: (x, y, z)} in m."""
+    for name in ("nodes.csv", "points.csv"):
+        path = os.path.join(run.folder, name)
+        if os.path.exists(path):
+            return {int(r["id"]): (float(r["x"]), float(r["y"]), float(r["z"]))
+                    for r in csv.DictReader(open(path))}
+    raise FileNotFoundError("no nodes.csv or points.csv in " + run.folder)
+
+
+def max_position_error(a, b):
+    """max over particles of |x_a - x_b| (Euclidean), m; inf if the particle sets differ or a
+    position is not finite."""
+    if set(a) != set(b):
+        return math.inf
+    err = 0.0
+    for k, pa in a.items():
+        d = math.sqrt(sum((u - v) ** 2 for u, v in zip(pa, b[k])))
+        if not math.isfinite(d):
+            return math.inf
+        err = max(err, d)
+    return err
+
+
+def write_target_from(run, path):
+    """A coefficient target (src/targets.hpp CSV) holding the edge coefficients of `run`."""
+    s = run.summary
+    with open(path, "w") as f:
+        f.write("# edge coefficients of %s (%s)\n" % (run.folder, s["integrator"]))
+        f.write("scene,edge,kind,a,b\n")
+        for edge, coeffs in sorted(s["edge_coefficients"].items()):
+            for i, c in enumerate(coeffs):
+                f.write("%s,%s,coeff,%d,%r\n" % (s["scene"], edge, i, c))
+
+
+def coefficient_error(a, b):
+    """Eq. 5 between two edge-coefficient sets ({edge: [p0..p4]}): 100 sqrt(mean sq. diff), %."""
+    d = [(x - y) ** 2 for e in a for x, y in zip(a[e], b[e])]
+    return 100.0 * math.sqrt(sum(d) / len(d))
+
+
+def write_csv(path, rows, fields=None):
+    fields = fields or list(rows[0].keys())
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=fields, extrasaction="ignore")
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: (repr(v) if isinstance(v, float) else v) for k, v in r.items()})
+
+
+def loglog_slope(xs, ys):
+    """Least-squares slope of log y against log x over the finite positive pairs; nan if < 2."""
+    pts = [(math.log(x), math.log(y)) for x, y in zip(xs, ys)
+           if x > 0 and y > 0 and math.isfinite(x) and math.isfinite(y)]
+    if len(pts) < 2:
+        return math.nan
+    mx = sum(p[0] for p in pts) / len(pts)
+    my = sum(p[1] for p in pts) / len(pts)
+    sxx = sum((p[0] - mx) ** 2 for p in pts)
+    return sum((p[0] - mx) * (p[1] - my) for p in pts) / sxx if sxx > 0 else math.nan
+
+
+def write_manifest(args, name, sample_run=None, extra=None):
+    """OUT/manifest.json: study, command line, git commit, knitsim binary and its own manifest
+    (build type, libraries), machine load, and the study's parameters (`extra`)."""
+    try:
+        commit = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"],
+                                capture_output=True, text=True).stdout.strip() or "unknown"
+        dirty = subprocess.run(["git", "-C", ROOT, "status", "--porcelain"],
+                               capture_output=True, text=True).stdout.strip() != ""
+    except OSError:
+        commit, dirty = "unknown", False
+    m = {"experiment": name,
+         "command": " ".join(["experiments/%s/run.sh" % name] + sys.argv[1:]),
+         "quick": args.quick,
+         "git_commit": commit + ("+dirty" if dirty else ""),
+         "knitsim": knitsim_path(),
+         "created_utc": datetime.datetime.utcnow().isoformat(timespec="seconds") + "Z",
+         "nproc": os.cpu_count(),
+         "load_average": os.getloadavg()}
+    if sample_run is not None:
+        kp = os.path.join(sample_run.folder, "manifest.json")
+        if os.path.exists(kp):
+            km = json.load(open(kp))
+            m["knitsim_build"] = {k: km.get(k) for k in ("git_commit", "build_type", "compiler",
+                                                          "libraries")}
+    m.update(extra or {})
+    with open(os.path.join(args.out, "manifest.json"), "w") as f:
+        json.dump(m, f, indent=2)
+
+
+def finish(args):
+    """Remove the per-run folders unless --keep-runs."""
+    if not args.keep_runs:
+        shutil.rmtree(os.path.join(args.out, "runs"), ignore_errors=True)

@@ -1,0 +1,105 @@
+#!/usr/bin/python3
+"""Reductions study (issue 5 item 5): what each "model only what the scene requires" reduction
+saves against the full model, measured where the code allows it (SPEC 1, 2.1-2.3, 2.12).
+
+  state.csv     pinned particles are scene data, not state (SPEC 2.1): dof of each scene vs the
+                3 x all-particles count a pinned-in-the-state model would integrate.
+  topology.csv  springs of the chosen topology only: springs, CPU per explicit-Euler step
+                (fixed step count, the cost of one RHS) and a cvode-bdf drape, for a, b, c.
+  stop.csv      stopping at equilibrium (SPEC 2.3) vs running to a fixed end time with the
+                check disabled (run.equilibrium_tol = 1e-30): CPU, steps, and the max position
+                difference from the equilibrium-stop state.
+  static.csv    the `static` integrator (cvode-bdf relaxation + KINSOL Newton polish) vs
+                cvode-bdf alone: CPU, steps, final residual, max position difference.
+CPU figures are medians of REPEATS runs of the solver's own cpu_seconds (set-up and output
+excluded). Symmetry reduction of four_corner is not measured: the code has no mirror boundary
+conditions (see README).
+"""
+import os
+import statistics
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+import expkit  # noqa: E402
+
+
+def main():
+    args = expkit.parse_args("reductions", "reductions")
+    repeats = 1 if args.quick else 3
+    scenes = ["four_corner"] if args.quick else ["four_corner", "two_corner"]
+    counter = [0]
+
+    def drape(scene, integ, extra):
+        counter[0] += 1
+        return expkit.run_knitsim(args.out, "r%d" % counter[0], ["drape", "--scene", scene,
+                                  "--integrator", integ] + [str(e) for e in extra])
+
+    def median_run(scene, integ, extra):
+        runs = [drape(scene, integ, extra) for _ in range(repeats)]
+        cpu = statistics.median(r.summary["cpu_seconds"] for r in runs)
+        return runs[-1], cpu
+
+    topo = []
+    euler_steps = 20000 if args.quick else 100000
+    for t in ("a", "b", "c"):
+        eu, eu_cpu = median_run("four_corner", "euler", ["--set", "model.topology=" + t,
+                                                         "--max-steps", euler_steps])
+        bdf, bdf_cpu = median_run("four_corner", "cvode-bdf", ["--set", "model.topology=" + t])
+        topo.append(dict(topology=t, springs=eu.summary["grid"]["springs"],
+                         euler_us_per_step=1e6 * eu_cpu / eu.summary["steps"],
+                         bdf_status=bdf.summary["status"], bdf_steps=bdf.summary["steps"],
+                         bdf_t_final=bdf.summary["t_final"], bdf_cpu_seconds=bdf_cpu))
+        print("topology %s: %d springs, euler %.3g us/step, cvode-bdf %s %d steps %.3g s CPU" % (
+            t, topo[-1]["springs"], topo[-1]["euler_us_per_step"], bdf.summary["status"],
+            bdf.summary["steps"], bdf_cpu), flush=True)
+    expkit.write_csv(os.path.join(args.out, "topology.csv"), topo)
+
+    state, stop, static = [], [], []
+    for scene in scenes:
+        eq, eq_cpu = median_run(scene, "cvode-bdf", [])
+        g = eq.summary["grid"]
+        state.append(dict(scene=scene, particles=g["particles"], pinned=g["pinned"],
+                          dof_in_state=g["dof"], dof_if_pins_were_state=3 * g["particles"],
+                          saved_fraction=1 - g["dof"] / (3 * g["particles"])))
+        eq_x = expkit.read_positions(eq)
+        stop.append(dict(scene=scene, stop="equilibrium", t_final=eq.summary["t_final"],
+                         steps=eq.summary["steps"], residual=eq.summary["residual"],
+                         cpu_seconds=eq_cpu, cpu_ratio=1.0, max_position_difference_m=0.0))
+        t_eq = eq.summary["t_final"]
+        ends = [10 * t_eq] if args.quick else [2 * t_eq, 10 * t_eq, 1e7]
+        for t_end in ends:
+            r, cpu = median_run(scene, "cvode-bdf", ["--set", "run.equilibrium_tol=1e-30",
+                                                     "--set", "run.t_max=%r" % t_end])
+            stop.append(dict(scene=scene, stop="fixed t_end = %.3g s" % t_end,
+                             t_final=r.summary["t_final"], steps=r.summary["steps"],
+                             residual=r.summary["residual"], cpu_seconds=cpu,
+                             cpu_ratio=cpu / eq_cpu,
+                             max_position_difference_m=expkit.max_position_error(
+                                 expkit.read_positions(r), eq_x)))
+        st, st_cpu = median_run(scene, "static", [])
+        static.append(dict(scene=scene, integrator="cvode-bdf", status=eq.summary["status"],
+                           t_final=t_eq, steps=eq.summary["steps"],
+                           residual=eq.summary["residual"], cpu_seconds=eq_cpu,
+                           cpu_ratio=1.0, max_position_difference_m=0.0,
+                           message=eq.summary["message"]))
+        static.append(dict(scene=scene, integrator="static", status=st.summary["status"],
+                           t_final=st.summary["t_final"], steps=st.summary["steps"],
+                           residual=st.summary["residual"], cpu_seconds=st_cpu,
+                           cpu_ratio=st_cpu / eq_cpu,
+                           max_position_difference_m=expkit.max_position_error(
+                               expkit.read_positions(st), eq_x),
+                           message=st.summary["message"]))
+        for row in stop[-len(ends) - 1:] + static[-2:]:
+            print(scene, {k: row[k] for k in row if k != "scene"}, flush=True)
+    expkit.write_csv(os.path.join(args.out, "state.csv"), state)
+    expkit.write_csv(os.path.join(args.out, "stop.csv"), stop)
+    expkit.write_csv(os.path.join(args.out, "static.csv"), static)
+    expkit.write_manifest(args, "reductions", extra={"repeats": repeats, "scenes": scenes})
+    expkit.finish(args)
+    worst = max(r["max_position_difference_m"] for r in stop + static)
+    if worst > 1e-6:  # the study's own check: every reduction lands on the same equilibrium
+        sys.exit("reductions: a reduced run ends %.3g m from the equilibrium-stop state" % worst)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,96 @@
+#!/usr/bin/env bash
+# Scaling study (issue 5 item 7; SPEC 2.12 "report how cost grows with the number of
+# particles"): four_corner drapes of one 50 x 50 cm sheet refined from 11 x 11 to 101 x 101
+# particles (and 141 x 141 in full mode) with cvode-bdf (Schur LDL^T and KLU), cvode-bdf-gmres
+# and implicit-euler. CPU time, steps and peak memory per run; growth exponents fitted by
+# plot.py (reads only the CSV).
+#
+#   experiments/scaling/run.sh [--quick] [--out DIR] [--max-wall S]
+#
+# Refinement: cells per side n, natural length L0 = W / n (W = 0.50 m, so the sheet is the
+# same at every n), stiffness k = 852 N/m per spring (one spring stands for a strip of
+# fabric whose tensile stiffness does not depend on its length-to-width ratio when refined in
+# both directions), damping scaled with the particle mass, c = 12 N s/m x (L0 / 0.049 m)^2,
+# i.e. the paper's damping rate c/m at every n (SPEC 2.12: the paper's damping is absolute per
+# particle, so an unscaled c would add total damping under refinement and slow the settling
+# without changing the equilibrium). Each run is capped at --max-wall seconds of wall time
+# (status wall_limit then; default 1800 s, 300 s with --quick: wall time, so on a loaded machine
+# raise it). Grids: n = 10 20 40 60 80 100
+# 140; --quick: 10 20 40.
+# Writes DIR/runs.csv (one row per run), DIR/manifest.json, DIR/runs/<n>-<solver>/ (each
+# knitsim output folder and its /usr/bin/time -v log); default DIR = out/scaling.
+set -euo pipefail
+here=$(cd "$(dirname "$0")" && pwd)
+root=$(cd "$here/../.." && pwd)
+KNITSIM=${KNITSIM:-$root/build/knitsim}
+QUICK=0
+OUT=$root/out/scaling
+MAX_WALL=
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --quick) QUICK=1 ;;
+    --out) OUT=$2; shift ;;
+    --max-wall) MAX_WALL=$2; shift ;;
+    *) echo "usage: $0 [--quick] [--out DIR] [--max-wall S]" >&2; exit 2 ;;
+  esac
+  shift
+done
+[ -x "$KNITSIM" ] || { echo "scaling: $KNITSIM not built (run ./run.sh --build-only)" >&2; exit 2; }
+[ -x /usr/bin/time ] || { echo "scaling: /usr/bin/time (GNU time) is needed for peak memory" >&2; exit 2; }
+if [ "$QUICK" = 1 ]; then GRIDS="10 20 40"; MAX_WALL=${MAX_WALL:-300}; else GRIDS="10 20 40 60 80 100 140"; MAX_WALL=${MAX_WALL:-1800}; fi
+mkdir -p "$OUT/runs"
+runs_csv=$OUT/runs.csv
+echo "n,particles,dof,natural_length_m,damping_Ns_per_m,solver,status,t_final,steps,rhs_evals,jac_evals,lin_setups,nonlin_iters,residual,centre_sag_m,cpu_seconds,wall_seconds,max_rss_kb" > "$runs_csv"
+
+# One drape: run n solver integrator [knitsim options...]; appends a row to runs.csv.
+run() {
+  local n=$1 solver=$2 integ=$3; shift 3
+  local dir=$OUT/runs/$n-$solver
+  local L0 c
+  L0=$(python3 -c "print(repr(0.50 / $n))")
+  c=$(python3 -c "print(repr(12.0 * ((0.50 / $n) / 0.049) ** 2))")
+  rm -rf "$dir"; mkdir -p "$dir"
+  /usr/bin/time -v -o "$dir/time.txt" "$KNITSIM" drape --scene four_corner \
+    --set model.natural_length="$L0" --set model.damping="$c" --integrator "$integ" \
+    --max-wall "$MAX_WALL" --quiet --out "$dir/drape" "$@" > "$dir/stdout.txt" 2>&1 || true
+  python3 - "$dir" "$n" "$solver" "$L0" "$c" >> "$runs_csv" <<'PY'
+import json, re, sys
+d, n, solver, L0, c = sys.argv[1:6]
+rss = re.search(r"Maximum resident set size \(kbytes\): (\d+)", open(d + "/time.txt").read())
+try:
+    s = json.load(open(d + "/drape/summary.json"))
+except (OSError, ValueError):
+    s = None
+n = int(n)
+if s is None:  # the run failed before writing its summary (e.g. out of memory): keep a row
+    print(",".join([str(n), str((n + 1) ** 2), "", L0, c, solver, "failed"] + [""] * 10 +
+                   [rss.group(1) if rss else ""]))
+else:
+    print(",".join(str(v) for v in [n, s["grid"]["particles"], s["grid"]["dof"],
+          L0, c, solver, s["status"], repr(s["t_final"]), s["steps"], s["rhs_evals"],
+          s["jac_evals"], s["lin_setups"], s["nonlin_iters"], repr(s["residual"]),
+          repr(s["centre_sag_m"]), repr(s["cpu_seconds"]), repr(s["wall_seconds"]),
+          rss.group(1) if rss else ""]))
+PY
+  tail -n 1 "$runs_csv"
+}
+
+for n in $GRIDS; do
+  run "$n" cvode-bdf-ldl cvode-bdf --newton-solver ldl
+  run "$n" cvode-bdf-klu cvode-bdf --newton-solver klu
+  run "$n" cvode-bdf-gmres cvode-bdf-gmres
+  run "$n" implicit-euler implicit-euler
+done
+
+commit=$(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)
+python3 - "$OUT/manifest.json" "$KNITSIM" "$QUICK" "$MAX_WALL" "$commit" "$GRIDS" <<'PY'
+import datetime, json, os, sys
+json.dump({"experiment": "scaling",
+           "command": "experiments/scaling/run.sh" + (" --quick" if sys.argv[3] == "1" else ""),
+           "grids_n": [int(g) for g in sys.argv[6].split()], "max_wall_seconds": float(sys.argv[4]),
+           "knitsim": sys.argv[2], "git_commit": sys.argv[5],
+           "created_utc": datetime.datetime.utcnow().isoformat() + "Z",
+           "load_average": os.getloadavg(), "nproc": os.cpu_count()},
+          open(sys.argv[1], "w"), indent=2)
+PY
+echo "scaling: wrote $runs_csv and $OUT/manifest.json; plot: /usr/bin/python3 $here/plot.py $OUT"

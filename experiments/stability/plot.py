@@ -1,0 +1,66 @@
+#!/usr/bin/python3
+"""Plots of experiments/stability from its CSV files only:
+  map.png     per method (euler, verlet): the dt x stiffness map (colour = log10 max position
+              error vs cvode-bdf at t_end, x = unstable) with the limit lines of limits.csv
+              (predicted = Gershgorin, exact = linear analysis, measured = bisection);
+  limits.png  measured / predicted and measured / exact for every case and method.
+Usage: plot.py OUT (reads OUT/limits.csv, OUT/map.csv; writes the PNGs into OUT)."""
+import csv
+import math
+import os
+import sys
+
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+out = sys.argv[1]
+limits = list(csv.DictReader(open(os.path.join(out, "limits.csv"))))
+cells = list(csv.DictReader(open(os.path.join(out, "map.csv"))))
+f = lambda r, k: float(r[k])
+
+fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), sharey=True)
+for ax, method in zip(axes, ("euler", "verlet")):
+    mc = [c for c in cells if c["method"] == method]
+    stable = [c for c in mc if c["stable"] == "1"]
+    errs = [max(f(c, "error_m"), 1e-16) for c in stable]
+    sc = ax.scatter([f(c, "stiffness") for c in stable], [f(c, "dt") for c in stable],
+                    c=[math.log10(e) for e in errs], cmap="viridis", s=80, marker="s")
+    bad = [c for c in mc if c["stable"] != "1"]
+    ax.scatter([f(c, "stiffness") for c in bad], [f(c, "dt") for c in bad], c="red", marker="x",
+               s=50, label="unstable")
+    line = sorted((r for r in limits if r["method"] == method and r["group"] in ("base", "stiffness")),
+                  key=lambda r: f(r, "stiffness"))
+    k = [f(r, "stiffness") for r in line]
+    for key, style in (("predicted", "k--"), ("exact", "k-"), ("measured", "wo")):
+        ax.plot(k, [f(r, key) for r in line], style, mec="k", label=key + " limit")
+    ax.set_xscale("log"); ax.set_yscale("log")
+    ax.set_xlabel("stiffness k (N/m)")
+    t_end = mc[0]["t_end"] if mc else "?"
+    ax.set_title("%s: c 12 N s/m, 41.65 g/m^2, L0 4.9 cm, run to t = %s s" % (method, t_end),
+                 fontsize=9)
+    ax.legend(fontsize=7, loc="lower left")
+    fig.colorbar(sc, ax=ax, label="log10 max position error (m)")
+axes[0].set_ylabel("dt (s)")
+fig.tight_layout()
+fig.savefig(os.path.join(out, "map.png"), dpi=110)
+
+fig, ax = plt.subplots(figsize=(11, 4.2))
+labels = []
+for i, r in enumerate(limits):
+    labels.append("%s %s" % (r["case"], r["method"]))
+    for key, mk, col in (("measured_over_predicted", "v", "tab:orange"),
+                         ("measured_over_exact", "o", "tab:blue")):
+        v = f(r, key)
+        if math.isfinite(v):
+            ax.plot(i, v, mk, color=col, label=key if i == 0 or not ax.get_legend_handles_labels()[1].count(key) else None)
+ax.axhline(1.0, color="k", lw=0.6)
+ax.axhspan(0.95, 1.05, color="0.9")
+ax.set_xticks(range(len(labels)))
+ax.set_xticklabels(labels, rotation=90, fontsize=5)
+ax.set_ylabel("measured / linear-analysis limit")
+ax.legend(fontsize=8)
+ax.set_title("Stability limits: measured vs predict_stable_dt (Gershgorin) and exact linear analysis",
+             fontsize=9)
+fig.tight_layout()
+fig.savefig(os.path.join(out, "limits.png"), dpi=110)
