@@ -63,12 +63,12 @@ void IntegratorOptions::validate() const {
   if (!(t_max > 0.0) || !std::isfinite(t_max)) bad_option("t_max", t_max, "must be > 0 s");
   if (!(equilibrium_tol > 0.0) || !std::isfinite(equilibrium_tol))
     bad_option("equilibrium_tol", equilibrium_tol, "must be > 0");
-  if (!(max_wall_seconds >= 0.0))
-    bad_option("max_wall_seconds", max_wall_seconds, "must be >= 0 s (0 = no cap)");
+  if (!(max_wall_seconds >= 0.0) || !std::isfinite(max_wall_seconds))
+    bad_option("max_wall_seconds", max_wall_seconds, "must be >= 0 s and finite (0 = no cap)");
   if (check_every < 0)
     bad_option("check_every", static_cast<double>(check_every), "must be >= 0 (0 = automatic)");
-  if (!(runaway_position > 0.0))
-    bad_option("runaway_position", runaway_position, "must be > 0 m");
+  if (!(runaway_position > 0.0) || !std::isfinite(runaway_position))
+    bad_option("runaway_position", runaway_position, "must be > 0 m and finite");
   if (krylov_dim < 0 || krylov_dim > 500)
     bad_option("krylov_dim", krylov_dim, "must be in 0..500 (0 = default)");
 }

@@ -104,6 +104,9 @@ TEST_CASE("drape: NaN and inf in --set, scene files and flags name the key and t
   expect_bad_input("drape --set pins.span=nan" + out, "pins.span = nan: must be a number in (0, 1]",
                    tmp);
   expect_bad_input("drape --rtol inf" + out, "--rtol = inf: must be in (0, 1)", tmp);
+  // An infinite wall-clock cap would be no cap at all (0 is the way to say so).
+  expect_bad_input("drape --max-wall inf" + out,
+                   "--max-wall = inf: must be >= 0 s and finite (0 = no cap)", tmp);
   const fs::path scene = tmp.path / "s.toml";
   std::ofstream(scene) << "[model]\nstiffness = inf\n";
   expect_bad_input("drape --scene '" + scene.string() + "'" + out,
