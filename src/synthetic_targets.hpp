@@ -18,11 +18,12 @@
 //           and the finer sheet drapes differently -- the model error the fit has to absorb.
 //           Damping c/9: the damper acts per particle and the particle mass falls by 9
 //           (interior mass rho_A h^2), so c/m, the damping rate of every mode, is unchanged; the
-//           equilibrium does not depend on c anyway. Run option atol / 9 (1.1e-11): the
+//           equilibrium does not depend on c anyway. Run option atol 1e-9 / 9 (1.1e-10): the
 //           static residual is normalised by the mean particle weight, 9x smaller, and with
-//           the twin's atol the two_corner drapes stalled just above equilibrium_tol (1e-8).
-// Run options: cvode-bdf, rtol 1e-8, atol 1e-10 (twin; at the drape default 1e-9 the twin
-// two_corner drape of sample 2 stalls at a residual just above 1e-8 until t_max).
+//           atol 1e-9 the two_corner drapes of samples 1 and 4 stalled just above
+//           equilibrium_tol (1e-8).
+// Run options: cvode-bdf, rtol 1e-8; atol 1e-10 for the twin (at the drape default 1e-9 the
+// twin two_corner drape of sample 2 stalls at a residual just above 1e-8 until t_max).
 // Both scenes (four_corner and two_corner) are simulated to equilibrium from the flat state
 // (run_drape, cvode-bdf, rtol 1e-8, the scene's equilibrium_tol 1e-8), their edges are measured
 // with measure_edges (src/measurement.hpp: the same normalisation as any simulation), and noise
