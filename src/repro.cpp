@@ -656,11 +656,13 @@ ReproSummary run_repro(const ReproOptions& o, ReproTargets& targets, const fs::p
     report << "Reading: damping only sets how fast the sheet settles and the elongation limit "
               "only acts on springs stretched beyond it, so neither changes the equilibrium the "
               "edges measure: their fitted values are arbitrary within the box (wide spread), "
-              "while stiffness (through the sag k / (rho g)) and natural length (the sheet's "
-              "size against the pins) are what the fit identifies. On twin the recovery errors "
-              "of k and L0 are in the columns stiffness_rel_error, natural_length_rel_error of "
-              "table4.csv; with a reduced budget (quick preset) the ICA is far from converged, "
-              "so expect errors of several percent.\n\n";
+              "while stiffness and natural length are determined only together: at a fixed "
+              "grid size n = round(W / L0) the edges depend on k / L0 alone (src/sensitivity.hpp, "
+              "experiments/identifiability/README.md), so the fit identifies k / L0, n and the "
+              "topology, and k and L0 slide together along a valley of equal error. On twin the "
+              "recovery errors of k and L0 are in the columns stiffness_rel_error, "
+              "natural_length_rel_error of table4.csv; with a reduced budget (quick preset) the "
+              "ICA is also far from converged.\n\n";
   }
 
   // ---- Table 6 ----
