@@ -3,12 +3,17 @@
 // paper_data and against objective() recomputed from the fitted parameters, and for
 // independence of the thread count. Matching the paper's numbers is NOT tested.
 #include <cairo.h>
+#include <signal.h>
+#include <sys/wait.h>
 
+#include <algorithm>
 #include <catch2/catch.hpp>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <thread>
 
 #include "src/drape_fit.hpp"
 #include "src/output.hpp"
@@ -297,4 +302,47 @@ TEST_CASE("knitsim repro: bad input is one line, exit 2, nothing written", "[rep
     CHECK(knitsim::test::lines(run.err).size() == 1);
     CHECK_FALSE(fs::exists(out));
   }
+}
+
+TEST_CASE("knitsim repro killed after a unit and resumed writes the uninterrupted tables",
+          "[repro][resume][cli]") {
+  using namespace knitsim::test;
+  TempDir tmp("repro-resume");
+  const std::string args =
+      "repro table4 --samples 1 --sets twin --runs 4 --decades 2 --countries 4 "
+      "--imperialists 2 --no-pictures --quiet --out '";
+  const fs::path whole = tmp.path / "whole", cut = tmp.path / "cut";
+  REQUIRE(run_knitsim(args + whole.string() + "'", tmp).status == 0);
+
+  // The same run, killed once its checkpoint holds the config line and at least one unit.
+  const pid_t pid = start_knitsim(args + cut.string() + "'", tmp);
+  REQUIRE(pid > 0);
+  const fs::path checkpoint = cut / "fits.jsonl";
+  int status = 0;
+  size_t done = 0;
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (done < 2 && std::chrono::steady_clock::now() < give_up &&
+         ::waitpid(pid, &status, WNOHANG) == 0) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    if (fs::exists(checkpoint)) done = lines(slurp(checkpoint)).size();
+  }
+  ::kill(pid, SIGKILL);
+  ::waitpid(pid, &status, 0);
+  REQUIRE(WIFSIGNALED(status));  // killed before it finished
+  REQUIRE(done >= 2);
+  CHECK(!fs::exists(cut / "table4.csv"));
+  // The complete lines before the kill (a last line may have been cut short mid-write).
+  std::vector<std::string> before = lines(slurp(checkpoint));
+  if (!before.empty() && slurp(checkpoint).back() != '\n') before.pop_back();
+
+  const Run resumed = run_knitsim(args + cut.string() + "' --resume", tmp);
+  INFO(resumed.err);
+  REQUIRE(resumed.status == 0);
+  CHECK(slurp(cut / "table4.csv") == slurp(whole / "table4.csv"));
+  // The units done before the kill were kept, not re-run: the checkpoint starts with them and
+  // holds each of the 4 units once.
+  const std::vector<std::string> after = lines(slurp(checkpoint));
+  CHECK(after.size() == 1 + 4);
+  REQUIRE(after.size() >= before.size());
+  CHECK(std::equal(before.begin(), before.end(), after.begin()));
 }
