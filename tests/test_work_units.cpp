@@ -308,4 +308,28 @@ TEST_CASE("mpirun -np 2: units split i % 2, rank 0 returns what one process does
   CHECK(lines_of(slurp(dir / "two.jsonl")).size() == 1 + 9);
   fs::remove_all(dir);
 }
+
+TEST_CASE("mpirun -np 2 knitsim repro writes the single-process table4.csv", "[.][mpi]") {
+  const fs::path dir = temp_file("mpi-repro");
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string args =
+      " repro table4 --samples 1 --sets twin --runs 4 --decades 1 --countries 4 "
+      "--imperialists 2 --no-pictures --quiet --out '";
+  const auto run = [&](const std::string& launcher, const fs::path& out) {
+    const std::string cmd = launcher + "'" + KNITSIM_EXE + "'" + args + out.string() + "' >'" +
+                            (dir / "log.txt").string() + "' 2>&1 </dev/null";
+    const int raw = std::system(cmd.c_str());
+    return WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  };
+  REQUIRE(run("", dir / "one") == 0);
+  const int two = run(std::string("'") + KNITSIM_MPIEXEC + "' -np 2 --oversubscribe" +
+                          (::geteuid() == 0 ? " --allow-run-as-root " : " "),
+                      dir / "two");
+  INFO(slurp(dir / "log.txt"));
+  REQUIRE(two == 0);
+  CHECK(slurp(dir / "two" / "table4.csv") == slurp(dir / "one" / "table4.csv"));
+  CHECK(lines_of(slurp(dir / "two" / "fits.jsonl")).size() == 1 + 4);
+  fs::remove_all(dir);
+}
 #endif
