@@ -5,14 +5,4 @@
 #   experiments/fit_tolerance/run.sh [--quick] [--out DIR] [--keep-runs]
 #
 # Default OUT: out/experiments/fit_tolerance. The knitsim binary: $KNITSIM, else build/knitsim.
-set -euo pipefail
-here=$(cd "$(dirname "$0")" && pwd)
-out=$(cd "$here/../.." && pwd)/out/experiments/fit_tolerance
-args=("$@")
-for ((i = 0; i < ${#args[@]}; i++)); do
-  [ "${args[i]}" = "--out" ] && out=${args[i + 1]:-$out}
-done
-status=0
-/usr/bin/python3 "$here/driver.py" "$@" || status=$?
-[ -f "$out/fits.csv" ] && /usr/bin/python3 "$here/plot.py" "$out"
-exit $status
+exec "$(dirname "$0")/../study.sh" fit_tolerance fits.csv "$@"
