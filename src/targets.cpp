@@ -149,6 +149,10 @@ std::vector<EdgeFit> checked_fits(const TargetScene& scene, const std::vector<st
   for (size_t k = 0; k < scene.edges.size(); ++k) {
     try {
       fits.push_back(fit_target_edge(scene, scene.edges[k]));
+      // Finite but huge points (1e308) can overflow the fit (found by fuzz_target).
+      for (double c : fits.back().coefficients)
+        if (!std::isfinite(c))
+          bad("the fitted coefficients overflow: the edge's values are too large to fit");
     } catch (const std::invalid_argument& e) {
       bad((edge_at.empty() ? "" : edge_at[k]) + where(scene, scene.edges[k]) + e.what());
     }
