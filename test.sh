@@ -29,6 +29,10 @@ if [ "${1:-}" = "--fuzz" ]; then
   ./run.sh --build-only
   work="$BUILD_DIR/fuzz-work"
   failed=0
+  # Fixed seed and a fixed number of inputs per target (FUZZ_SEED, FUZZ_RUNS_<target>), so a CI
+  # run replays exactly the inputs a local run tried; FUZZ_SECONDS bounds the time either way.
+  declare -A runs=([scene]=${FUZZ_RUNS_scene:-30000} [chart]=${FUZZ_RUNS_chart:-2000}
+                   [target]=${FUZZ_RUNS_target:-400000})
   for target in scene chart target; do
     # New inputs go to the work corpus; the committed seeds and regressions are only read.
     mkdir -p "$work/corpus-$target" "$work/artifacts"
@@ -37,10 +41,11 @@ if [ "${1:-}" = "--fuzz" ]; then
     log="$work/$target.log"
     if "$BUILD_DIR/tests/fuzz/fuzz_$target" "$work/corpus-$target" "${seeds[@]}" \
         -dict="tests/fuzz/$target.dict" -max_total_time="${FUZZ_SECONDS:-60}" -timeout=10 \
+        -seed="${FUZZ_SEED:-1}" -runs="${runs[$target]}" \
         -rss_limit_mb=2048 -print_final_stats=1 -artifact_prefix="$work/artifacts/$target-" \
         >"$log" 2>&1; then
       echo "[fuzz] $target: $(awk '/stat::number_of_executed_units/ {print $2}' "$log")" \
-        "executions in ${FUZZ_SECONDS:-60} s, no finding (log: $log)"
+        "executions (seed ${FUZZ_SEED:-1}), no finding (log: $log)"
     else
       tail -n 40 "$log"
       echo "[fuzz] $target: FINDING (log: $log; input: $work/artifacts/$target-*)"
