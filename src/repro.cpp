@@ -535,6 +535,16 @@ ReproSummary run_repro(const ReproOptions& o, ReproTargets& targets, const fs::p
       const int s = sample;
       units.push_back({key, [&o, target, s, ica] { return fit_unit(o, *target, s, ica); }});
     }
+  // Checkpoint <name>.jsonl in the output folder, shared settings (src/work_units.hpp).
+  const auto unit_options = [&](const std::string& name) {
+    WorkUnitOptions wo;
+    wo.checkpoint = (dir / (name + ".jsonl")).string();
+    wo.resume = resume;
+    wo.config = config;
+    wo.progress = o.progress;
+    wo.label = "repro " + name;
+    return wo;
+  };
   std::vector<json> fit_results;
   if (!units.empty()) {
     if (root)
@@ -542,13 +552,7 @@ ReproSummary run_repro(const ReproOptions& o, ReproTargets& targets, const fs::p
                          std::to_string(fit_samples.size()) + " set x sample, " +
                          std::to_string(o.runs) + " runs each), ~" +
                          std::to_string(ica_evaluation_estimate(o.ica)) + " drapes per run");
-    WorkUnitOptions wo;
-    wo.checkpoint = (dir / "fits.jsonl").string();
-    wo.resume = resume;
-    wo.config = config;
-    wo.progress = o.progress;
-    wo.label = "repro fits";
-    fit_results = run_work_units(units, wo);
+    fit_results = run_work_units(units, unit_options("fits"));
   }
 
   // ---- Taguchi ----
@@ -570,13 +574,7 @@ ReproSummary run_repro(const ReproOptions& o, ReproTargets& targets, const fs::p
       print_stage(o, "taguchi: L27 x " + std::to_string(o.taguchi_replicates) + " ICA runs on " +
                          to_string(o.taguchi_set) + "_sample" + std::to_string(o.taguchi_sample) +
                          ", ~" + std::to_string(drapes) + " drapes");
-    WorkUnitOptions wo;
-    wo.checkpoint = (dir / "taguchi.jsonl").string();
-    wo.resume = resume;
-    wo.config = config;
-    wo.progress = o.progress;
-    wo.label = "repro taguchi";
-    taguchi_results = run_work_units(tunits, wo);
+    taguchi_results = run_work_units(tunits, unit_options("taguchi"));
   }
   ReproSummary summary;
   if (!root) return summary;
