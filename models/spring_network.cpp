@@ -286,6 +286,21 @@ double SpringNetwork::static_residual(double t, const double* x) const {
   return std::sqrt(worst) / residual_scale_;
 }
 
+double SpringNetwork::residual_roundoff(double t, const double* x) const {
+  update_pins(t);
+  std::fill(scratch_.begin(), scratch_.end(), 0.0);  // per free particle, at 3 f
+  for (const Spring& s : spec_.springs) {
+    const int fa = free_index_[s.a], fb = free_index_[s.b];
+    if (fa < 0 && fb < 0) continue;
+    const double e = s.stiffness * std::numeric_limits<double>::epsilon() *
+                     (norm(end_position(s.a, x)) + norm(end_position(s.b, x)));
+    if (fa >= 0) scratch_[3 * fa] += e;
+    if (fb >= 0) scratch_[3 * fb] += e;
+  }
+  if (scratch_.empty()) return 0.0;
+  return *std::max_element(scratch_.begin(), scratch_.end()) / residual_scale_;
+}
+
 bool SpringNetwork::project(double t, double* x, double* /*v*/) const {
   if (spec_.elongation_limit <= 0.0) return false;
   update_pins(t);

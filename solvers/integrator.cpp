@@ -15,6 +15,10 @@ namespace knitsim {
 
 namespace {
 
+// The round-off floor (residual_roundoff, one pass over the springs) is only worth evaluating
+// when the residual is within this factor of equilibrium_tol.
+constexpr double kFloorCheckFactor = 1e3;
+
 [[noreturn]] void bad_option(const std::string& field, double value, const std::string& range) {
   std::ostringstream os;
   os << field << " = " << value << ": " << range;
@@ -143,6 +147,7 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
     stats.message = std::move(message);
     stats.t_final = t;
     stats.residual = sys.static_residual(t, x.data());
+    stats.residual_floor = sys.residual_roundoff(t, x.data());
     stats.wall_seconds = wall();
     stats.cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
     return stats;
@@ -185,6 +190,15 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
       if (observer) observer->on_check(t, integ.positions(), integ.velocities(), r);
       if (t >= t_start_eq && r <= opt.equilibrium_tol)
         return finish(RunStatus::Equilibrium, "static residual below equilibrium_tol");
+      if (t >= t_start_eq && r <= kFloorCheckFactor * opt.equilibrium_tol) {
+        const double floor = sys.residual_roundoff(t, integ.positions());
+        if (r <= floor) {
+          std::ostringstream os;
+          os << "static residual " << r << " at its round-off floor " << floor
+             << " (above equilibrium_tol " << opt.equilibrium_tol << ")";
+          return finish(RunStatus::Equilibrium, os.str());
+        }
+      }
       if (opt.max_wall_seconds > 0.0 && wall() > opt.max_wall_seconds)
         return finish(RunStatus::WallLimit, "wall-clock cap reached");
     }

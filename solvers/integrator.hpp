@@ -7,7 +7,9 @@
 //
 // Integrators see only a MechanicalSystem (src/mechanical_system.hpp); they never know which
 // model they run. Every run stops by the same criterion (SPEC 2.3): static residual below
-// equilibrium_tol (checked every `check_every` steps, and only from the model's
+// equilibrium_tol -- or below the model's round-off floor (MechanicalSystem::
+// residual_roundoff) when that is larger, reported in RunStats.message and residual_floor --
+// (checked every `check_every` steps, and only from the model's
 // equilibrium_start_time() on), or at t_max, the
 // step cap or the wall-clock cap -- and RunStats.status says which. Numerical failure (a
 // SUNDIALS error, a non-finite or runaway state) is a status, never an exception.
@@ -56,7 +58,7 @@ struct IntegratorOptions {
 };
 
 enum class RunStatus {
-  Equilibrium,    // static residual <= equilibrium_tol
+  Equilibrium,    // static residual <= max(equilibrium_tol, its round-off floor)
   TimeLimit,      // reached t_max first
   StepLimit,      // reached max_steps first
   WallLimit,      // reached max_wall_seconds first
@@ -70,7 +72,9 @@ struct RunStats {
   RunStatus status = RunStatus::SolverFailure;
   std::string message;        // why it stopped, with the SUNDIALS flag name where relevant
   double t_final = 0.0;       // s
-  double residual = 0.0;      // static residual at the end
+  double residual = 0.0;  // static residual at the end
+  // Round-off floor of that residual (MechanicalSystem::residual_roundoff) at the end.
+  double residual_floor = 0.0;
   double dt = 0.0;            // fixed step used (fixed-step methods), s
   double dt_predicted = 0.0;  // predicted stability limit (explicit methods), s
   long steps = 0;

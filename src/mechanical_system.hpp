@@ -57,6 +57,13 @@ class MechanicalSystem {
   // the net force at rest, e.g. max_i |F_i(x)| / (mean mass x g).
   virtual double static_residual(double t, const double* x) const = 0;
 
+  // Round-off floor of static_residual at (t, x): an upper estimate of the residual that
+  // rounding alone leaves at an exact equilibrium, in the same units. run_to_equilibrium
+  // accepts r <= max(equilibrium_tol, this) as equilibrium (and says which applied), so a
+  // stiff model is not integrated to t_max chasing a residual its arithmetic cannot reach.
+  // Default 0: no floor known.
+  virtual double residual_roundoff(double /*t*/, const double* /*x*/) const { return 0.0; }
+
   // Equilibrium may only be declared from this time on (e.g. after prescribed pin motion).
   virtual double equilibrium_start_time() const { return 0.0; }
 

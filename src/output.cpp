@@ -262,6 +262,7 @@ nlohmann::json to_json(const RunStats& s) {
           {"message", s.message},
           {"t_final", s.t_final},
           {"residual", s.residual},
+          {"residual_floor", s.residual_floor},
           {"dt", s.dt},
           {"dt_predicted", s.dt_predicted},
           {"steps", s.steps},

@@ -1,10 +1,12 @@
 // SpringNetwork and DrapeGrid: analytic Jacobian vs finite differences, closed forms, energy.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "models/drape_grid.hpp"
 #include "models/spring_network.hpp"
+#include "solvers/integrator.hpp"
 #include "src/jacobian_check.hpp"
 
 using namespace knitsim;
@@ -149,4 +151,49 @@ TEST_CASE("Provot projection shortens over-stretched springs to exactly the limi
   for (int pass = 0; pass < 200 && g.network.max_strain(0.0, x.data()) > 0.05 + 1e-12; ++pass)
     g.network.project(0.0, x.data(), v.data());
   CHECK(g.network.max_strain(0.0, x.data()) <= 0.05 + 1e-12);
+}
+
+TEST_CASE("residual round-off floor: closed form for one spring, proportional to stiffness") {
+  SpringNetworkSpec spec;
+  spec.positions = {{0.0, 0.0, 1.0}, {0.0, 0.3, 0.4}};  // |x_a| = 1, |x_b| = 0.5 m
+  spec.masses = {1.0, 2e-3};
+  spec.springs = {{0, 1, 0.1, 1e5}};
+  spec.pinned = {0};
+  spec.pin_paths = {PinPath{spec.positions[0], spec.positions[0], 0.0}};
+  const SpringNetwork net(spec);
+  std::vector<double> x(3), v(3);
+  net.initial_state(x.data(), v.data());
+  const double eps = std::numeric_limits<double>::epsilon();
+  CHECK(net.residual_roundoff(0.0, x.data()) ==
+        Approx(1e5 * eps * 1.5 / (2e-3 * 9.81)).epsilon(1e-12));
+  spec.springs[0].stiffness = 3e5;
+  CHECK(SpringNetwork(spec).residual_roundoff(0.0, x.data()) ==
+        Approx(3.0 * net.residual_roundoff(0.0, x.data())).epsilon(1e-12));
+}
+
+TEST_CASE("a drape too stiff for equilibrium_tol stops at its round-off floor, not at t_max") {
+  // k = 3e5 N/m: measured residual at rest ~9e-8 for every integrator (static included),
+  // above the default equilibrium_tol 1e-8, and below the floor bound.
+  DrapeParams p;
+  p.stiffness = 3e5;
+  p.natural_length = 0.1;  // n = 5: a small, fast grid
+  const DrapeGrid g = build_drape_grid(p);
+  IntegratorOptions opt;
+  opt.t_max = 1e6;
+  std::vector<double> x, v;
+  const RunStats s = run_to_equilibrium(g.network, "cvode-bdf", opt, x, v);
+  INFO(s.message << " residual " << s.residual << " floor " << s.residual_floor);
+  CHECK(s.status == RunStatus::Equilibrium);
+  CHECK(s.residual <= s.residual_floor);
+  CHECK(s.residual_floor > opt.equilibrium_tol);
+  CHECK(s.message.find("round-off floor") != std::string::npos);
+  // At the paper's stiffness the floor is far below the tolerance and changes nothing.
+  p.stiffness = 1000.0;
+  const DrapeGrid soft = build_drape_grid(p);
+  x.clear();
+  v.clear();
+  const RunStats s1 = run_to_equilibrium(soft.network, "cvode-bdf", opt, x, v);
+  CHECK(s1.status == RunStatus::Equilibrium);
+  CHECK(s1.residual <= opt.equilibrium_tol);
+  CHECK(s1.residual_floor < opt.equilibrium_tol);
 }
