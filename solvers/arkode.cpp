@@ -19,10 +19,12 @@
 // Each step() is one *StepEvolve(..., ARK_ONE_STEP) call with the stop time t_stop, so the
 // integrator never steps past t_stop. ARKODE's per-call step cap is set to
 // IntegratorOptions::max_steps (run_to_equilibrium enforces the run's cap); scalar rtol,
-// atol. The Jacobian refresh interval is set explicitly (kJacobianEvalFrequency, equal to
-// CVODE's default so cvode-bdf and the ARKODE methods are compared on equal terms) and, as
-// ARKODE requires, only after the linear solver is attached. max_order_used reports the
-// order of the Butcher table in use. rhs_evals counts f_E plus f_I calls.
+// atol, or per component (atol on x, velocity_atol on v) when velocity_atol > 0
+// (sun::absolute_tolerances). The Jacobian refresh interval is set explicitly
+// (kJacobianEvalFrequency, equal to CVODE's default so cvode-bdf and the ARKODE methods are
+// compared on equal terms) and, as ARKODE requires, only after the linear solver is attached.
+// max_order_used reports the order of the Butcher table in use. rhs_evals counts f_E plus f_I
+// calls.
 //
 // Implicit stage derivatives are deduced from the stage equations (ARKStepSetDeduceImplicitRhs)
 // instead of re-evaluating f_I at the Newton solution: otherwise the Newton error of a stiff
@@ -144,7 +146,10 @@ class Arkode final : public Integrator {
       void* mem = s->erk.get();
       check(ERKStepSetErrHandlerFn(mem, record_error, &s->log), "ERKStepSetErrHandlerFn", kErk);
       check(ERKStepSetUserData(mem, s->problem.get()), "ERKStepSetUserData", kErk, log);
-      check(ERKStepSStolerances(mem, opt.rtol, opt.atol), "ERKStepSStolerances", kErk, log);
+      if (const VectorPtr abstol = absolute_tolerances(opt, n, ctx))
+        check(ERKStepSVtolerances(mem, opt.rtol, abstol.get()), "ERKStepSVtolerances", kErk, log);
+      else
+        check(ERKStepSStolerances(mem, opt.rtol, opt.atol), "ERKStepSStolerances", kErk, log);
       check(ERKStepSetMaxNumSteps(mem, opt.max_steps), "ERKStepSetMaxNumSteps", kErk, log);
       if (opt.max_order > 0)
         check(ERKStepSetOrder(mem, opt.max_order), "ERKStepSetOrder", kErk, log);
@@ -157,7 +162,10 @@ class Arkode final : public Integrator {
       void* mem = s->ark.get();
       check(ARKStepSetErrHandlerFn(mem, record_error, &s->log), "ARKStepSetErrHandlerFn", kArk);
       check(ARKStepSetUserData(mem, s->problem.get()), "ARKStepSetUserData", kArk, log);
-      check(ARKStepSStolerances(mem, opt.rtol, opt.atol), "ARKStepSStolerances", kArk, log);
+      if (const VectorPtr abstol = absolute_tolerances(opt, n, ctx))
+        check(ARKStepSVtolerances(mem, opt.rtol, abstol.get()), "ARKStepSVtolerances", kArk, log);
+      else
+        check(ARKStepSStolerances(mem, opt.rtol, opt.atol), "ARKStepSStolerances", kArk, log);
       check(ARKStepSetMaxNumSteps(mem, opt.max_steps), "ARKStepSetMaxNumSteps", kArk, log);
       check(ARKStepSetDeduceImplicitRhs(mem, SUNTRUE), "ARKStepSetDeduceImplicitRhs", kArk, log);
       if (split) {

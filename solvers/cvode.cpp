@@ -20,8 +20,9 @@
 // Each step() is one CVode(..., CV_ONE_STEP) call with CVodeSetStopTime(t_stop), so the
 // integrator never steps past t_stop. CVODE's per-call step cap (default 500) is set to
 // IntegratorOptions::max_steps; run_to_equilibrium enforces the run's cap. Tolerances:
-// scalar rtol, atol. max_order caps the BDF (<= 5) or Adams (<= 12) order; the largest order
-// used is tracked with CVodeGetLastOrder after each step.
+// scalar rtol, atol, or per component (atol on x, velocity_atol on v) when velocity_atol > 0
+// (sun::absolute_tolerances). max_order caps the BDF (<= 5) or Adams (<= 12) order; the
+// largest order used is tracked with CVodeGetLastOrder after each step.
 //
 // BDF stability limit detection (CVodeSetStabLimDet) is on: BDF orders 3-5 are not A-stable,
 // and at tight tolerances the order-5 steps go unstable on two_corner (rtol 1e-8, atol 1e-10:
@@ -266,7 +267,10 @@ class Cvode final : public Integrator {
     check(CVodeSetErrHandlerFn(mem, record_error, &s->log), "CVodeSetErrHandlerFn", kName);
     check(CVodeInit(mem, ode_rhs, t0, y), "CVodeInit", kName, log);
     check(CVodeSetUserData(mem, s->problem.get()), "CVodeSetUserData", kName, log);
-    check(CVodeSStolerances(mem, opt.rtol, opt.atol), "CVodeSStolerances", kName, log);
+    if (const VectorPtr abstol = absolute_tolerances(opt, n, ctx))
+      check(CVodeSVtolerances(mem, opt.rtol, abstol.get()), "CVodeSVtolerances", kName, log);
+    else
+      check(CVodeSStolerances(mem, opt.rtol, opt.atol), "CVodeSStolerances", kName, log);
     check(CVodeSetMaxNumSteps(mem, opt.max_steps), "CVodeSetMaxNumSteps", kName, log);
     if (opt.max_order > 0) check(CVodeSetMaxOrd(mem, opt.max_order), "CVodeSetMaxOrd", kName, log);
     if (bdf) {

@@ -58,6 +58,8 @@ const std::vector<Entry>& registry() {
 void IntegratorOptions::validate() const {
   if (!(rtol > 0.0 && rtol < 1.0)) bad_option("rtol", rtol, "must be in (0, 1)");
   if (!(atol > 0.0) || !std::isfinite(atol)) bad_option("atol", atol, "must be > 0");
+  if (!(velocity_atol >= 0.0) || !std::isfinite(velocity_atol))
+    bad_option("velocity_atol", velocity_atol, "must be >= 0 m/s and finite (0 = same as atol)");
   if (!(dt >= 0.0) || !std::isfinite(dt)) bad_option("dt", dt, "must be >= 0 s (0 = automatic)");
   if (!(dt_safety > 0.0 && dt_safety <= 1.0))
     bad_option("dt_safety", dt_safety, "must be in (0, 1]");

@@ -30,6 +30,17 @@ struct IntegratorOptions {
   // makes arkode-imex fail its error test unless atol <= 1e-11. `knitsim fit` uses 1e-8.
   double rtol = 1e-6;
   double atol = 1e-9;  // absolute tolerance (m for positions, m/s for velocities)
+  // Absolute tolerance of the velocities (m/s) of the adaptive SUNDIALS methods; 0 = atol
+  // (one scalar pair (rtol, atol) for all of y = [x; v], bit for bit the behaviour before this
+  // option existed). Positions (m) and velocities (m/s) have different units, so one number
+  // cannot suit both: a velocity error e_v moves the positions by ~ e_v / omega, so the natural
+  // scale is velocity_atol ~ atol x omega, omega (rad/s) the fastest motion one wants resolved.
+  // For an equilibrium the ringing of the stiff, lightly damped modes (omega up to ~2e5 rad/s
+  // on the knit network) need not be followed: with atol on the velocities too, BDF resolves
+  // that ringing until it has decayed below 1e-9 m/s (experiments/benchmark/README.md, "Knit
+  // case"). Used by cvode-* and arkode-* (CVodeSVtolerances, ARKStepSVtolerances,
+  // ERKStepSVtolerances); the fixed-step methods and static have no error control.
+  double velocity_atol = 0.0;
   // Fixed step (s) of euler, verlet and implicit-euler. 0 = automatic: explicit methods take
   // dt_safety x the predicted linear stability limit (predict_stable_dt); implicit-euler 1 s.
   double dt = 0.0;

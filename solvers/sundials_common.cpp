@@ -86,6 +86,14 @@ VectorPtr make_state(const double* x0, const double* v0, int n, SUNContext ctx) 
   return y;
 }
 
+VectorPtr absolute_tolerances(const IntegratorOptions& opt, int n, SUNContext ctx) {
+  if (opt.velocity_atol == 0.0) return nullptr;
+  VectorPtr atol = make_vector(2L * n, ctx);
+  std::fill_n(vec_data(atol.get()), n, opt.atol);
+  std::fill_n(vec_data(atol.get()) + n, n, opt.velocity_atol);
+  return atol;
+}
+
 void write_csc_pattern(const CscPattern& pattern, SUNMatrix A) {
   sunindextype* colptr = SUNSparseMatrix_IndexPointers(A);
   sunindextype* rowind = SUNSparseMatrix_IndexValues(A);

@@ -213,4 +213,11 @@ int ode_rhs(double t, N_Vector y, N_Vector ydot, void* user_data);
 // The state as an owned 2n vector [x0; v0].
 VectorPtr make_state(const double* x0, const double* v0, int n, SUNContext ctx);
 
+// The per-component absolute tolerances of y = [x; v] (IntegratorOptions::velocity_atol): the
+// 2n vector [atol (n positions, m); velocity_atol (n velocities, m/s)], or null when
+// velocity_atol is 0 -- then the caller sets the scalar pair (rtol, atol) exactly as before the
+// option existed. For CVodeSVtolerances / ARKStepSVtolerances / ERKStepSVtolerances, which copy
+// the vector (it may be freed right after the call).
+VectorPtr absolute_tolerances(const IntegratorOptions& opt, int n, SUNContext ctx);
+
 }  // namespace knitsim::sun

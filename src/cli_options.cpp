@@ -30,6 +30,17 @@ void add_ica_options(CLI::App* cmd, IcaOptions& o) {
                 "decades)");
 }
 
+CLI::Option* add_atol_options(CLI::App* cmd, double& atol, double& velocity_atol) {
+  cmd->add_option("--atol", atol,
+                  "Absolute tolerance, m (positions) and m/s (velocities, unless --velocity-atol)")
+      ->capture_default_str();
+  return cmd
+      ->add_option("--velocity-atol", velocity_atol,
+                   "Absolute tolerance of the velocities, m/s (0 = --atol); ~ atol x the rate "
+                   "(rad/s) of the motion to resolve")
+      ->capture_default_str();
+}
+
 void rethrow_with_flag_names(const std::invalid_argument& e,
                              const std::vector<std::pair<std::string, std::string>>& extra) {
   static const std::vector<std::pair<std::string, std::string>> ica = {
@@ -55,6 +66,7 @@ const std::vector<std::pair<std::string, std::string>>& run_option_names() {
       {"equilibrium_tol", "run.equilibrium_tol"},
       {"rtol", "--rtol"},
       {"atol", "--atol"},
+      {"velocity_atol", "--velocity-atol"},
       {"dt", "--dt"},
       {"max_order", "--max-order"},
       {"max_steps", "--max-steps"},

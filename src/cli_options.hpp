@@ -11,6 +11,7 @@
 
 namespace CLI {
 class App;
+class Option;
 }
 
 namespace knitsim {
@@ -18,6 +19,12 @@ namespace knitsim {
 // The ICA flags (SPEC 2.10): --seed --jobs --decades --countries --imperialists --beta --gamma
 // --revolution --xi --stop-one-empire, bound to `o`.
 void add_ica_options(CLI::App* cmd, IcaOptions& o);
+
+// The absolute-tolerance flags of drape, knit and fit (IntegratorOptions::atol, velocity_atol):
+// --atol (m, and m/s for the velocities unless --velocity-atol is given) and --velocity-atol
+// (m/s; 0 = --atol), bound to `atol` and `velocity_atol`; help shows their current values.
+// Returns the --velocity-atol option (knit appends its own default rule to the description).
+CLI::Option* add_atol_options(CLI::App* cmd, double& atol, double& velocity_atol);
 
 // Validation messages name struct fields ("revolution_rate = 2: ..."); the user typed flags.
 // Rethrows `e` with the field replaced by its flag ("--revolution = 2: ..."), for the ICA
@@ -28,7 +35,7 @@ void add_ica_options(CLI::App* cmd, IcaOptions& o);
 
 // The IntegratorOptions fields as the user writes them, for rethrow_with_flag_names: the keys
 // run.t_max and run.equilibrium_tol (scene files, drape/knit --set) and the flags --rtol, --atol,
-// --dt, --max-order, --max-steps, --max-wall.
+// --velocity-atol, --dt, --max-order, --max-steps, --max-wall.
 const std::vector<std::pair<std::string, std::string>>& run_option_names();
 
 // `text` as it may appear in a one-line message: control bytes (newline, tab, ...) and DEL as

@@ -58,6 +58,7 @@ struct FitArgs {
   // be scored as failures (src/drape_fit.hpp).
   double rtol = 1e-8;
   double atol = IntegratorOptions{}.atol;
+  double velocity_atol = IntegratorOptions{}.velocity_atol;
   IcaOptions ica;
   std::string out;
   bool resume = false;
@@ -263,6 +264,7 @@ void run(const FitArgs& args) {
   Scene base = load_scene(args.scene, args.sets);
   base.options.rtol = args.rtol;
   base.options.atol = args.atol;
+  base.options.velocity_atol = args.velocity_atol;
   base.validate();
   const Target target = read_target_csv(args.target);
   DrapeFitOptions options;
@@ -411,7 +413,7 @@ void register_fit_command(CLI::App& app) {
                   "Integrator of every evaluation (knitsim list integrators); default cvode-bdf");
   cmd->add_option("--rtol", args->rtol, "Relative tolerance of every drape run (adaptive methods)")
       ->capture_default_str();
-  cmd->add_option("--atol", args->atol, "Absolute tolerance, m and m/s")->capture_default_str();
+  add_atol_options(cmd, args->atol, args->velocity_atol);
   add_ica_options(cmd, o);
   cmd->add_option("--out", args->out,
                   "Output folder (default: a fresh out/fit-<scene>-<YYYYmmdd-HHMMSS>)");

@@ -13,6 +13,7 @@
 
 #include "models/drape_grid.hpp"
 #include "solvers/integrator.hpp"
+#include "solvers/sundials_common.hpp"
 #include "src/first_order.hpp"
 #include "tests/test_systems.hpp"
 
@@ -404,6 +405,13 @@ TEST_CASE("driver statuses: time, step and wall limits, divergence, bad options"
     opt.rtol = 2.0;
     CHECK_THROWS_WITH(run_to_equilibrium(net, "implicit-euler", opt, x, v),
                       Catch::StartsWith("rtol = 2"));
+    opt.rtol = 1e-6;
+    opt.velocity_atol = -1e-3;
+    CHECK_THROWS_WITH(opt.validate(), Catch::StartsWith("velocity_atol = -0.001: must be >= 0"));
+    opt.velocity_atol = std::nan("");
+    CHECK_THROWS_WITH(opt.validate(), Catch::StartsWith("velocity_atol = nan: must be >= 0"));
+    opt.velocity_atol = HUGE_VAL;
+    CHECK_THROWS_WITH(opt.validate(), Catch::StartsWith("velocity_atol = inf: must be >= 0"));
     CHECK_THROWS_WITH(
         make_integrator("no-such-method"),
         Catch::Contains("integrator = no-such-method") && Catch::Contains("implicit-euler"));
@@ -439,5 +447,43 @@ TEST_CASE("every implicit integrator lands on the implicit-euler drape equilibri
                    << " s; max |x - x_ref| " << diff << " m");
     CHECK(s.status == RunStatus::Equilibrium);
     CHECK(diff <= (info.name == "cvode-bdf-gmres" ? 1e-4 : 1e-6));
+  }
+}
+
+TEST_CASE("velocity_atol: the per-component tolerance vector [atol; velocity_atol]") {
+  SECTION("velocity_atol = atol takes exactly the steps of the scalar tolerance (0)") {
+    // velocity_atol 0 sets CVODE/ARKODE's scalar pair (rtol, atol); any other value the vector
+    // [atol (x); velocity_atol (v)]. With the two equal the error weights are the same numbers,
+    // so every adaptive method must take the same steps to the same state.
+    const SpringNetwork net(build_chain(hanging(4)));
+    for (const IntegratorInfo& info : integrator_catalog()) {
+      if (!info.adaptive) continue;
+      IntegratorOptions scalar;
+      scalar.max_steps = 100'000;
+      IntegratorOptions vector = scalar;
+      vector.velocity_atol = scalar.atol;
+      RunStats s0, s1;
+      const auto x0 = equilibrium(net, info.name, scalar, s0);
+      const auto x1 = equilibrium(net, info.name, vector, s1);
+      INFO(info.name << ": " << s0.steps << " vs " << s1.steps << " steps");
+      CHECK(s0.status == RunStatus::Equilibrium);
+      CHECK(s1.steps == s0.steps);
+      CHECK(s1.rhs_evals == s0.rhs_evals);
+      CHECK(max_abs_difference(x0, x1) == 0.0);
+    }
+  }
+  SECTION("the vector: atol on the n positions, velocity_atol on the n velocities") {
+    const sun::ContextPtr ctx = sun::make_context();
+    IntegratorOptions opt;
+    opt.atol = 1e-9;
+    opt.velocity_atol = 1e-3;
+    const sun::VectorPtr tol = sun::absolute_tolerances(opt, 3, ctx.get());
+    REQUIRE(tol != nullptr);
+    REQUIRE(N_VGetLength(tol.get()) == 6);
+    const double* t = sun::vec_data(tol.get());
+    CHECK(std::vector<double>(t, t + 6) ==
+          std::vector<double>{1e-9, 1e-9, 1e-9, 1e-3, 1e-3, 1e-3});  // y = [x; v]
+    opt.velocity_atol = 0.0;
+    CHECK(sun::absolute_tolerances(opt, 3, ctx.get()) == nullptr);  // scalar (rtol, atol)
   }
 }
