@@ -25,6 +25,9 @@
 namespace knitsim {
 
 enum class PinLayout { FourCorner, TwoCorner };
+// What run_drape integrates: the whole grid, or one quarter of a four_corner grid with mirror
+// conditions on the two mid-planes (models/mirror_quarter.hpp; the result is unfolded).
+enum class DrapeSymmetry { None, Quarter };
 
 struct DrapeParams {
   double width = 0.50;            // W, m (paper: 50 x 50 cm samples)
@@ -35,10 +38,12 @@ struct DrapeParams {
   double natural_length = 0.049;  // L0, m (4.9 cm; bounds 4-6 cm)
   char topology = 'a';            // 'a' | 'b' | 'c'
   PinLayout layout = PinLayout::FourCorner;
-  double pin_span = 1.0;           // final pin distance / model width, (0, 1]
-  double pin_move_time = 100.0;    // s, duration of the pin move when pin_span < 1
-  double perturbation = 0.0;       // m, amplitude of the seeded initial z perturbation
-  unsigned seed = 1;               // seed of that perturbation
+  double pin_span = 1.0;         // final pin distance / model width, (0, 1]
+  double pin_move_time = 100.0;  // s, duration of the pin move when pin_span < 1
+  double perturbation = 0.0;     // m, amplitude of the seeded initial z perturbation
+  unsigned seed = 1;             // seed of that perturbation
+  // none | quarter (four_corner without perturbation; models/mirror_quarter.hpp)
+  DrapeSymmetry symmetry = DrapeSymmetry::None;
   long max_particles = 4'000'000;  // refuse larger grids before allocating
 
   // Throws std::invalid_argument naming the field and the accepted range.
@@ -79,5 +84,6 @@ const char* to_string(DrapeParameter p);  // stiffness | damping | elongation_li
 SpringNetworkTangent drape_tangent(const DrapeGrid& grid, DrapeParameter p, double t);
 
 const char* to_string(PinLayout layout);
+const char* to_string(DrapeSymmetry symmetry);  // none | quarter
 
 }  // namespace knitsim

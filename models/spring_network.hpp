@@ -104,6 +104,8 @@ class SpringNetwork final : public MechanicalSystem {
   const SpringNetworkSpec& spec() const { return spec_; }
   int particle_count() const { return static_cast<int>(spec_.positions.size()); }
   int free_index(int particle) const { return free_index_[particle]; }  // -1 if pinned
+  // F_ref of the static residual, N (residual_force_scale, or mean free mass x |g|).
+  double residual_force_scale() const { return residual_scale_; }
   // Positions of all particles (free from x, pinned from their paths at t).
   void all_positions(double t, const double* x, std::vector<Vec3>& out) const;
   // Largest strain (L - L0)/L0 over all springs at (t, x).

@@ -14,6 +14,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "models/mirror_quarter.hpp"
 #include "src/cli_options.hpp"
 #include "src/targets.hpp"
 
@@ -81,6 +82,18 @@ const std::vector<Key>& keys() {
           return true;
         },
         "an integer in 0..4294967295");
+    other(
+        "model.symmetry", Kind::Text,
+        [](Scene& s, const std::string& v) {
+          if (v == "none")
+            s.params.symmetry = DrapeSymmetry::None;
+          else if (v == "quarter")
+            s.params.symmetry = DrapeSymmetry::Quarter;
+          else
+            return false;
+          return true;
+        },
+        "one of none, quarter");
     other(
         "pins.layout", Kind::Text,
         [](Scene& s, const std::string& v) {
@@ -282,10 +295,20 @@ std::string default_integrator() {
 DrapeResult run_drape(const Scene& scene, const std::string& integrator, RunObserver* observer) {
   scene.validate();
   auto integ = make_integrator(integrator);
-  DrapeResult r{build_drape_grid(scene.params), RunStats{}, {}, {}};
+  DrapeResult r{build_drape_grid(scene.params), 0, RunStats{}, {}, {}};
   const SpringNetwork& net = r.grid.network;
   std::vector<double> x, v;
-  r.stats = run_to_equilibrium(net, *integ, scene.options, x, v, observer);
+  if (scene.params.symmetry == DrapeSymmetry::Quarter) {
+    const MirrorQuarter quarter = make_drape_quarter(r.grid);
+    std::vector<double> q, qv;
+    r.stats = run_to_equilibrium(quarter, *integ, scene.options, q, qv, observer);
+    r.integrated_dof = quarter.dof();
+    x.resize(net.dof());
+    quarter.unfold(q.data(), x.data());
+  } else {
+    r.stats = run_to_equilibrium(net, *integ, scene.options, x, v, observer);
+    r.integrated_dof = net.dof();
+  }
   const double t = r.stats.t_final;
   net.all_positions(t, x.data(), r.positions);
   r.rest = net.spec().positions;

@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """Plot of experiments/reductions from its CSV only: CPU of each variant relative to the
-reduced default (cvode-bdf, stop at equilibrium, topology a) -> reductions.png.
+reduced default (cvode-bdf, stop at equilibrium, topology a; for the symmetry-reduced quarter:
+relative to the full grid of the same n and integrator) -> reductions.png.
 Usage: plot.py OUT"""
 import csv
 import os
@@ -24,15 +25,21 @@ for r in topo:
     if r["topology"] != "a":
         labels.append("four_corner euler step\ntopology %s (%s springs)" % (r["topology"], r["springs"]))
         vals.append(float(r["euler_us_per_step"]) / float(a["euler_us_per_step"]))
-fig, ax = plt.subplots(figsize=(10, 4))
+if os.path.exists(os.path.join(out, "symmetry.csv")):
+    for r in read("symmetry.csv"):
+        if r["model"] == "quarter":
+            labels.append("four_corner n=%s %s\nquarter (%s dof)" % (r["n"], r["integrator"], r["dof"]))
+            vals.append(1.0 / float(r["speedup"]))
+fig, ax = plt.subplots(figsize=(12, 5.5))
 ax.bar(range(len(vals)), vals, color="tab:blue")
 ax.axhline(1.0, color="k", lw=0.7)
 ax.set_xticks(range(len(vals)))
-ax.set_xticklabels(labels, fontsize=6)
+ax.set_xticklabels(labels, fontsize=6, rotation=40, ha="right")
 ax.set_ylabel("CPU relative to the reduced default")
 for i, v in enumerate(vals):
     ax.text(i, v, "%.3g" % v, ha="center", va="bottom", fontsize=7)
-ax.set_title("Reductions: equilibrium stop vs fixed end time, static polish, springs per topology",
+ax.set_title("Reductions: equilibrium stop vs fixed end time, static polish, springs per topology, "
+             "quarter by symmetry",
              fontsize=9)
 fig.tight_layout()
 fig.savefig(os.path.join(out, "reductions.png"), dpi=120)
