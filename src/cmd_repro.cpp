@@ -3,8 +3,12 @@
 // written).
 //
 //   knitsim repro table4|table6|taguchi|fig13|all [--preset quick|paper] [--jobs J] [--out DIR]
-//                 [--resume] [--targets DIR] [overrides of the preset: --samples --sets --runs
-//                 --decades --countries --imperialists --replicates --seed] [--no-pictures]
+//                 [--resume] [--targets DIR] [--optimizer ica|lm|ica,lm] [overrides of the
+//                 preset: --samples --sets --runs --decades --countries --imperialists
+//                 --replicates --seed] [--no-pictures]
+//
+// --optimizer: the optimizers of Tables 4 and 6 (default ica); lm adds table4_lm.csv,
+// table6_lm.csv and lm_vs_ica.csv (src/repro.hpp); Taguchi and Fig. 13 always use the ICA.
 //
 // Targets: read from --targets DIR (<set>_sample<s>.csv, written by `knitsim targets`), by
 // default the source tree's paper_repro/data/targets as configured at build time
@@ -48,6 +52,7 @@ struct ReproArgs {
   std::string targets;
   std::vector<int> samples;
   std::vector<std::string> sets;
+  std::vector<std::string> optimizers;
   int runs = 0, decades = 0, countries = 0, imperialists = 0, replicates = 0;
   std::uint64_t seed = 0;
   bool no_pictures = false;
@@ -79,9 +84,15 @@ void run(const ReproArgs& a, const CLI::App& cmd) {
     o.targets_dir = KNITSIM_TARGETS_DIR;
   }
   try {
+    if (cmd.count("--optimizer")) {
+      o.optimizers.clear();
+      for (const std::string& m : a.optimizers)
+        o.optimizers.push_back(repro_optimizer_from_name(m));
+    }
     o.validate();
   } catch (const std::invalid_argument& e) {
     rethrow_with_flag_names(e, {{"taguchi_replicates", "--replicates"},
+                                {"optimizers", "--optimizer"},
                                 {"runs", "--runs"},
                                 {"samples", "--samples"},
                                 {"sets", "--sets"}});
@@ -137,6 +148,10 @@ void register_repro_command(CLI::App& app) {
   cmd->add_option("--samples", args->samples, "Override: samples of Tables 4/6, e.g. 1,2,3")
       ->delimiter(',');
   cmd->add_option("--sets", args->sets, "Override: target sets, twin,cross")->delimiter(',');
+  cmd->add_option("--optimizer", args->optimizers,
+                  "Optimizers of Tables 4 and 6: ica (default), lm (multi-start "
+                  "Levenberg-Marquardt, src/lm_fit.hpp) or ica,lm (LM next to the ICA)")
+      ->delimiter(',');
   cmd->add_option("--runs", args->runs, "Override: ICA runs per sample (best kept)");
   cmd->add_option("--decades", args->decades, "Override: ICA decades per fit");
   cmd->add_option("--countries", args->countries, "Override: ICA countries per fit");

@@ -47,6 +47,16 @@ ReproTask repro_task_from_name(const std::string& name) {
   throw std::invalid_argument("task = " + name + ": accepted table4|table6|taguchi|fig13|all");
 }
 
+const char* to_string(ReproOptimizer optimizer) {
+  return optimizer == ReproOptimizer::Ica ? "ica" : "lm";
+}
+
+ReproOptimizer repro_optimizer_from_name(const std::string& name) {
+  for (ReproOptimizer o : {ReproOptimizer::Ica, ReproOptimizer::Lm})
+    if (name == to_string(o)) return o;
+  throw std::invalid_argument("optimizers = " + name + ": accepted ica|lm");
+}
+
 namespace {
 
 [[noreturn]] void bad(const std::string& field, const std::string& value,
@@ -70,6 +80,16 @@ void ReproOptions::validate() const {
   }
   if (sets.empty() || (sets.size() == 2 && sets[0] == sets[1]) || sets.size() > 2)
     bad("sets", std::to_string(sets.size()) + " sets", "accepted twin, cross or both, once each");
+  if (optimizers.empty() || optimizers.size() > 2 ||
+      (optimizers.size() == 2 && optimizers[0] == optimizers[1]))
+    bad("optimizers", std::to_string(optimizers.size()) + " optimizers",
+        "accepted ica, lm or both, once each");
+  const bool lm_used =
+      std::find(optimizers.begin(), optimizers.end(), ReproOptimizer::Lm) != optimizers.end();
+  if (lm_used && (task == ReproTask::Taguchi || task == ReproTask::Fig13))
+    bad("optimizers", "lm",
+        std::string("accepted for the tasks table4|table6|all only (") + to_string(task) +
+            " studies the ICA)");
   if (runs < 1) bad("runs", std::to_string(runs), "accepted >= 1");
   check_sample("fig13_sample", fig13_sample);
   check_sample("taguchi_sample", taguchi_sample);
@@ -82,6 +102,7 @@ void ReproOptions::validate() const {
   fit.ica = ica;
   fit.integrator = integrator;
   fit.validate();
+  lm.validate();
   synthetic.validate();
 }
 
@@ -213,28 +234,98 @@ DrapeFitOptions fit_options(const ReproOptions& o, const IcaOptions& ica) {
   return f;
 }
 
-// One ICA fit of the sample's four_corner scene: the unit result.
-json fit_unit(const ReproOptions& o, const Target& target, int sample, const IcaOptions& ica) {
-  const DrapeFitProblem problem(sample_scene("four_corner", sample, o), target,
-                                fit_options(o, ica));
-  const double cpu0 = cpu_now();
-  const DrapeFitResult r = fit_drape(problem);
-  json history = json::array();
-  for (const IcaDecade& d : r.history) history.push_back({d.best_cost, d.mean_cost});
-  return {{"best_x", r.best_x},
-          {"objective", r.objective},
-          {"evaluations", r.evaluations},
-          {"failed_evaluations", r.failed_evaluations},
-          {"status", to_string(r.status)},
-          {"seed", ica.seed},
-          {"history", history},
-          {"wall_seconds", r.wall_seconds},
-          {"cpu_seconds", cpu_now() - cpu0}};
+// How one fit is made: the optimizer and its options (seeds already set for the unit).
+struct FitMethod {
+  ReproOptimizer optimizer = ReproOptimizer::Ica;
+  IcaOptions ica;  // the ICA's; also the DrapeFitProblem's options
+  DrapeLmOptions lm;
+};
+
+// k fitted by LM with L0 and the topology held at the twin's true values (damping and the
+// elongation limit, which the equilibrium does not see, held at the box centre): the stiffness
+// the edges give when L0 is known. Result {stiffness, objective, evaluations, status}.
+json stiffness_at_true_length(const DrapeFitProblem& problem, const PaperSample& truth,
+                              const DrapeLmOptions& options) {
+  const DrapeFitBounds& box = problem.options().bounds;
+  LmProblem lp;
+  lp.lower.assign(box.lower.begin(), box.lower.begin() + kDrapeContinuous);
+  lp.upper.assign(box.upper.begin(), box.upper.begin() + kDrapeContinuous);
+  lp.lower[kGeneNaturalLength] = lp.upper[kGeneNaturalLength] = truth.natural_length;
+  lp.lower[kGeneDamping] = lp.upper[kGeneDamping] =
+      0.5 * (box.lower[kGeneDamping] + box.upper[kGeneDamping]);
+  lp.lower[kGeneElongation] = lp.upper[kGeneElongation] =
+      0.5 * (box.lower[kGeneElongation] + box.upper[kGeneElongation]);
+  const double topology_gene = truth.topology - 'a' + 0.5;
+  lp.evaluate = [&](const std::vector<double>& x, Eigen::VectorXd& r, Eigen::MatrixXd& J) {
+    std::vector<double> country = x;
+    country.push_back(topology_gene);
+    DrapeResiduals e = drape_residuals(problem, country, options.polish);
+    if (e.failed) return false;
+    r = std::move(e.r);
+    J = std::move(e.J);
+    return true;
+  };
+  std::vector<double> x0 = lp.lower;
+  x0[kGeneStiffness] = 0.5 * (box.lower[kGeneStiffness] + box.upper[kGeneStiffness]);
+  const LmResult fit = run_lm(lp, x0, options.lm);
+  const bool ok = fit.status != LmStatus::StartFailed;
+  return {{"stiffness", ok ? json(fit.x[kGeneStiffness]) : json(nullptr)},
+          {"objective",
+           ok ? json(100.0 * std::sqrt(fit.r.squaredNorm() / fit.r.size())) : json(nullptr)},
+          {"evaluations", fit.evaluations},
+          {"status", to_string(fit.status)}};
 }
 
-std::string fit_key(SyntheticSet set, int sample, int run) {
+// The LM status of the start that gave the best point ("screened": never refined).
+std::string lm_status(const DrapeLmResult& r) {
+  for (const DrapeLmStart& s : r.starts)
+    if (s.x == r.best_x) return s.refined ? to_string(s.lm.status) : "screened";
+  return "no start";
+}
+
+// One fit of the sample's four_corner scene to `target` by `m`: the unit result (src/repro.hpp).
+json fit_unit(const ReproOptions& o, const Target& target, SyntheticSet set, int sample,
+              const FitMethod& m) {
+  const DrapeFitProblem problem(sample_scene("four_corner", sample, o), target,
+                                fit_options(o, m.ica));
+  const double cpu0 = cpu_now();
+  json unit;
+  if (m.optimizer == ReproOptimizer::Ica) {
+    const DrapeFitResult r = fit_drape(problem);
+    json history = json::array();
+    for (const IcaDecade& d : r.history) history.push_back({d.best_cost, d.mean_cost});
+    unit = {{"best_x", r.best_x},
+            {"objective", r.objective},
+            {"evaluations", r.evaluations},
+            {"failed_evaluations", r.failed_evaluations},
+            {"status", to_string(r.status)},
+            {"seed", m.ica.seed},
+            {"history", history},
+            {"wall_seconds", r.wall_seconds}};
+  } else {
+    const DrapeLmResult r = fit_drape_lm(problem, m.lm);
+    if (!r.ok) throw std::runtime_error("lm: " + r.message);
+    unit = {{"best_x", r.best_x},
+            {"objective", r.objective},
+            {"evaluations", r.evaluations},
+            {"failed_evaluations", r.failed_evaluations},
+            {"status", lm_status(r)},
+            {"seed", m.lm.seed},
+            {"wall_seconds", r.wall_seconds}};
+  }
+  unit["cpu_seconds"] = cpu_now() - cpu0;
+  if (m.optimizer == ReproOptimizer::Lm && set == SyntheticSet::Twin)
+    unit["known_length"] = stiffness_at_true_length(problem, paper_sample(sample), m.lm);
+  return unit;
+}
+
+// "fit/<set>/s<sample>/run<NN>" (ICA) or "lm/<set>/s<sample>" (one LM fit per sample).
+std::string fit_key(ReproOptimizer optimizer, SyntheticSet set, int sample, int run) {
   char buf[64];
-  std::snprintf(buf, sizeof buf, "fit/%s/s%d/run%02d", to_string(set), sample, run);
+  if (optimizer == ReproOptimizer::Ica)
+    std::snprintf(buf, sizeof buf, "fit/%s/s%d/run%02d", to_string(set), sample, run);
+  else
+    std::snprintf(buf, sizeof buf, "lm/%s/s%d", to_string(set), sample);
   return buf;
 }
 
@@ -262,13 +353,30 @@ IcaOptions taguchi_ica(const ReproOptions& o, int e) {
 
 bool ok(const json& unit) { return !unit.contains("error"); }
 
-// The runs of one (set, sample) and the best of them.
+// The runs of one (optimizer, set, sample) and the best of them.
 struct SampleFits {
+  ReproOptimizer optimizer = ReproOptimizer::Ica;
   SyntheticSet set = SyntheticSet::Twin;
   int sample = 0;
   std::vector<json> runs;  // unit results in run order
   int best = -1;           // index of the lowest error among runs without error; -1 if none
   std::string error;       // the first unit error, if every run failed
+
+  long evaluations() const {  // drape evaluations of the good runs
+    long n = 0;
+    for (const json& r : runs)
+      if (ok(r)) n += r["evaluations"].get<long>();
+    return n;
+  }
+  double cpu_seconds() const {  // CPU seconds of the good runs
+    double t = 0.0;
+    for (const json& r : runs)
+      if (ok(r)) t += r["cpu_seconds"].get<double>();
+    return t;
+  }
+  std::vector<double> best_x() const {  // best >= 0
+    return runs[best]["best_x"].get<std::vector<double>>();
+  }
 
   std::vector<int> by_objective() const {  // indices of the good runs, best first
     std::vector<int> idx;
@@ -313,7 +421,8 @@ size_t column(const Table& t, const std::string& name) {
                              t.columns.begin());
 }
 
-Table table4(const std::vector<SampleFits>& fits) {
+// Table 4 of `fits` (src/repro.hpp); cpu_column: a last column cpu_seconds (all runs).
+Table table4(const std::vector<SampleFits>& fits, bool cpu_column) {
   Table t;
   t.columns = {"set", "sample", "runs", "best_run"};
   for (const char* p : kParamColumns) t.columns.push_back(p);
@@ -328,6 +437,7 @@ Table table4(const std::vector<SampleFits>& fits) {
   t.columns.insert(t.columns.end(),
                    {"paper_topology", "paper_error", "true_stiffness", "true_natural_length",
                     "stiffness_rel_error", "natural_length_rel_error"});
+  if (cpu_column) t.columns.push_back("cpu_seconds");
   for (const SampleFits& f : fits) {
     const PaperSample& paper = paper_sample(f.sample);
     std::vector<std::string> row = {to_string(f.set), std::to_string(f.sample),
@@ -344,7 +454,7 @@ Table table4(const std::vector<SampleFits>& fits) {
       row.push_back(fitted_topology(x));
       row.push_back(cell(best["objective"].get<double>(), 17));
       std::set<std::string> topologies;
-      long evaluations = 0, failed = 0;
+      long failed = 0;
       for (int g = 0; g < 4; ++g) {
         double lo = std::numeric_limits<double>::infinity(), hi = -lo;
         for (int r : good) {
@@ -357,14 +467,13 @@ Table table4(const std::vector<SampleFits>& fits) {
       }
       for (int r : good) {
         topologies.insert(fitted_topology(f.runs[r]["best_x"].get<std::vector<double>>()));
-        evaluations += f.runs[r]["evaluations"].get<long>();
         failed += f.runs[r]["failed_evaluations"].get<long>();
       }
       std::string topo;
       for (const std::string& s : topologies) topo += s;
       row.push_back(topo);
       row.push_back(cell(f.runs[good.back()]["objective"].get<double>()));
-      row.push_back(std::to_string(evaluations));
+      row.push_back(std::to_string(f.evaluations()));
       row.push_back(std::to_string(failed));
       row.push_back(good.size() == f.runs.size()
                         ? std::string(best["status"].get<std::string>())
@@ -382,6 +491,7 @@ Table table4(const std::vector<SampleFits>& fits) {
     } else {
       row.insert(row.end(), 4, "");
     }
+    if (cpu_column) row.push_back(good.empty() ? "" : cell(f.cpu_seconds(), 4));
     t.rows.push_back(row);
   }
   return t;
@@ -413,11 +523,21 @@ long paper_drape_estimate() {
 json options_json(const ReproOptions& o) {
   json sets = json::array();
   for (SyntheticSet s : o.sets) sets.push_back(to_string(s));
+  json optimizer_names = json::array();
+  for (ReproOptimizer m : o.optimizers) optimizer_names.push_back(to_string(m));
   return {{"preset", o.preset},
           {"task", to_string(o.task)},
           {"samples", o.samples},
           {"sets", sets},
+          {"optimizers", optimizer_names},
           {"runs", o.runs},
+          {"lm",
+           {{"starts_per_bracket", o.lm.starts_per_bracket},
+            {"refine", o.lm.refine},
+            {"max_evaluations", o.lm.lm.max_evaluations},
+            {"initial_lambda", o.lm.lm.initial_lambda},
+            {"step_tol", o.lm.lm.step_tol},
+            {"cost_tol", o.lm.lm.cost_tol}}},
           {"ica",
            {{"decades", o.ica.decades},
             {"countries", o.ica.countries},
@@ -497,6 +617,256 @@ std::string table4_markdown(const Table& t4, SyntheticSet set) {
   return m.markdown();
 }
 
+template <class T>
+bool contains(const std::vector<T>& v, const T& x) {
+  return std::find(v.begin(), v.end(), x) != v.end();
+}
+
+// The fits of optimizer m that Tables 4 and 6 show (not a Fig. 13-only sample).
+std::vector<SampleFits> table_fits(const std::vector<SampleFits>& fits, const ReproOptions& o,
+                                   ReproOptimizer m) {
+  std::vector<SampleFits> out;
+  for (const SampleFits& f : fits)
+    if (f.optimizer == m && contains(o.sets, f.set) && contains(o.samples, f.sample))
+      out.push_back(f);
+  return out;
+}
+
+// File-name suffix of an optimizer's outputs: "" for the ICA (the paper's), "_lm" for LM.
+std::string suffix(ReproOptimizer m) { return m == ReproOptimizer::Ica ? "" : "_lm"; }
+
+// Table 6 of `fits` (src/repro.hpp): the best parameters re-run on two_corner, with the
+// pictures under dir/pictures when o.pictures. LM adds evaluations and cpu_seconds of the
+// four_corner fit.
+Table make_table6(const std::vector<SampleFits>& fits, const ReproOptions& o,
+                  const ReproTargets& targets, const fs::path& dir, ReproOptimizer m) {
+  const bool cost_columns = m == ReproOptimizer::Lm;
+  Table t6;
+  t6.columns = {"set", "sample"};
+  for (const char* p : kParamColumns) t6.columns.push_back(p);
+  t6.columns.insert(t6.columns.end(), {"topology", "table4_error", "error", "drape_status",
+                                       "paper_table4_error", "paper_error"});
+  if (cost_columns) t6.columns.insert(t6.columns.end(), {"evaluations", "cpu_seconds"});
+  for (const SampleFits& f : fits) {
+    const PaperSample& paper = paper_sample(f.sample);
+    std::vector<std::string> row = {to_string(f.set), std::to_string(f.sample)};
+    if (f.best < 0) {
+      row.insert(row.end(), 8, "");
+      row[9] = "no fit: " + f.error;
+    } else {
+      const std::vector<double> x = f.best_x();
+      const DrapeFitProblem two(sample_scene("two_corner", f.sample, o),
+                                targets.get(f.set, f.sample), fit_options(o, o.ica));
+      const DrapeEvaluation ev = two.evaluate(x);
+      for (int g = 0; g < 4; ++g) row.push_back(cell(x[g], 17));
+      row.push_back(fitted_topology(x));
+      row.push_back(cell(f.runs[f.best]["objective"].get<double>(), 17));
+      row.push_back(ev.failed ? "" : cell(ev.objective, 17));
+      row.push_back(ev.failed ? std::string(to_string(ev.status)) + ": " + ev.message
+                              : to_string(ev.status));
+      if (o.pictures) {
+        const Scene scene = two.scene_of(x);
+        const fs::path pic = dir / "pictures" /
+                             (std::string(to_string(f.set)) + "_s" + std::to_string(f.sample) +
+                              "_two_corner" + suffix(m));
+        fs::create_directories(pic);
+        write_drape_outputs(pic, scene, run_drape(scene, two.integrator()), &two.measured());
+      }
+    }
+    row.push_back(cell(paper.table4_error));
+    row.push_back(cell(paper.table6_error));
+    if (cost_columns) {
+      row.push_back(f.best < 0 ? "" : std::to_string(f.evaluations()));
+      row.push_back(f.best < 0 ? "" : cell(f.cpu_seconds(), 4));
+    }
+    t6.rows.push_back(row);
+  }
+  return t6;
+}
+
+// The row of (set, sample) in a table whose first columns are set, sample; null if none.
+const std::vector<std::string>* find_row(const Table& t, SyntheticSet set, int sample) {
+  for (const auto& row : t.rows)
+    if (row[0] == to_string(set) && row[1] == std::to_string(sample)) return &row;
+  return nullptr;
+}
+
+// (k / L0 fitted) / (k / L0 true) - 1.
+double ratio_error(const std::vector<double>& x, const PaperSample& p) {
+  return (x[kGeneStiffness] / x[kGeneNaturalLength]) / (p.stiffness / p.natural_length) - 1.0;
+}
+
+// LM next to the ICA (when it ran) and the paper, per (set, sample): lm_vs_ica.csv
+// (src/repro.hpp). t6: the two_corner errors per optimizer (empty tables when not run).
+Table lm_vs_ica(const std::vector<SampleFits>& lm, const std::vector<SampleFits>& ica,
+                const Table& lm_t6, const Table& ica_t6) {
+  Table t;
+  t.columns = {"set",
+               "sample",
+               "lm_error",
+               "ica_error",
+               "paper_error",
+               "lm_two_corner_error",
+               "ica_two_corner_error",
+               "paper_two_corner_error",
+               "lm_evaluations",
+               "ica_runs",
+               "ica_evaluations",
+               "evaluation_ratio",
+               "lm_not_worse",
+               "lm_cpu_seconds",
+               "ica_cpu_seconds",
+               "lm_topology",
+               "ica_topology",
+               "paper_topology",
+               "lm_k_over_L0_rel_error",
+               "ica_k_over_L0_rel_error",
+               "lm_stiffness_rel_error",
+               "lm_natural_length_rel_error",
+               "k_at_true_L0",
+               "k_at_true_L0_rel_error",
+               "k_at_true_L0_error",
+               "k_at_true_L0_evaluations"};
+  auto two_corner = [](const Table& t6, const SampleFits& f) {
+    const std::vector<std::string>* row = find_row(t6, f.set, f.sample);
+    return row ? (*row)[8] : std::string();
+  };
+  for (const SampleFits& l : lm) {
+    const PaperSample& paper = paper_sample(l.sample);
+    const auto i = std::find_if(ica.begin(), ica.end(), [&](const SampleFits& f) {
+      return f.set == l.set && f.sample == l.sample;
+    });
+    const bool has_lm = l.best >= 0, has_ica = i != ica.end() && i->best >= 0;
+    const bool twin = l.set == SyntheticSet::Twin;
+    auto objective = [](const SampleFits& f) { return f.runs[f.best]["objective"].get<double>(); };
+    std::vector<std::string> row = {to_string(l.set), std::to_string(l.sample)};
+    row.push_back(has_lm ? cell(objective(l), 17) : "");
+    row.push_back(has_ica ? cell(objective(*i), 17) : "");
+    row.push_back(cell(paper.table4_error));
+    row.push_back(two_corner(lm_t6, l));
+    row.push_back(i != ica.end() ? two_corner(ica_t6, *i) : "");
+    row.push_back(cell(paper.table6_error));
+    row.push_back(has_lm ? std::to_string(l.evaluations()) : "");
+    row.push_back(has_ica ? std::to_string(i->runs.size()) : "");
+    row.push_back(has_ica ? std::to_string(i->evaluations()) : "");
+    const bool both = has_lm && has_ica;
+    row.push_back(both ? cell(static_cast<double>(i->evaluations()) / l.evaluations(), 4) : "");
+    row.push_back(both ? (objective(l) <= objective(*i) ? "1" : "0") : "");
+    row.push_back(has_lm ? cell(l.cpu_seconds(), 4) : "");
+    row.push_back(has_ica ? cell(i->cpu_seconds(), 4) : "");
+    row.push_back(has_lm ? fitted_topology(l.best_x()) : "");
+    row.push_back(has_ica ? fitted_topology(i->best_x()) : "");
+    row.push_back(std::string(1, paper.topology));
+    row.push_back(twin && has_lm ? cell(ratio_error(l.best_x(), paper)) : "");
+    row.push_back(twin && has_ica ? cell(ratio_error(i->best_x(), paper)) : "");
+    if (twin && has_lm) {
+      const std::vector<double> x = l.best_x();
+      row.push_back(cell((x[kGeneStiffness] - paper.stiffness) / paper.stiffness));
+      row.push_back(cell((x[kGeneNaturalLength] - paper.natural_length) / paper.natural_length));
+      const json& known = l.runs[l.best]["known_length"];
+      const bool known_ok = !known["stiffness"].is_null();
+      const double k = known_ok ? known["stiffness"].get<double>() : 0.0;
+      row.push_back(known_ok ? cell(k, 17) : "");
+      row.push_back(known_ok ? cell((k - paper.stiffness) / paper.stiffness) : "");
+      row.push_back(known_ok ? cell(known["objective"].get<double>(), 17) : "");
+      row.push_back(std::to_string(known["evaluations"].get<long>()));
+    } else {
+      row.insert(row.end(), 6, "");
+    }
+    t.rows.push_back(row);
+  }
+  return t;
+}
+
+// lm_vs_ica of one set as a compact markdown table, and the target's tally on twin.
+std::string lm_vs_ica_markdown(const Table& t, SyntheticSet set) {
+  auto num = [&](const std::vector<std::string>& row, const std::string& c, double scale,
+                 int digits) {
+    const std::string& v = row[column(t, c)];
+    return v.empty() ? std::string("-") : format_number(std::stod(v) * scale, digits);
+  };
+  const bool twin = set == SyntheticSet::Twin;
+  Table m;
+  m.columns = {"sample",
+               "4-corner error % LM / ICA / paper",
+               "2-corner error % LM / ICA / paper",
+               "drapes LM / ICA (ratio)",
+               "CPU s LM / ICA",
+               "topology LM / ICA / paper"};
+  if (twin)
+    m.columns.insert(m.columns.end(),
+                     {"k/L0 error % LM / ICA", "k, L0 error % LM", "k at true L0: error %"});
+  int rows = 0, not_worse = 0, ratio20 = 0, ratio_ok = 0, k_ok = 0;
+  double ratio_min = std::numeric_limits<double>::infinity(), ratio_max = 0.0;
+  for (const auto& row : t.rows) {
+    if (row[0] != to_string(set)) continue;
+    std::vector<std::string> r = {
+        row[1],
+        num(row, "lm_error", 1, 4) + " / " + num(row, "ica_error", 1, 4) + " / " +
+            num(row, "paper_error", 1, 3),
+        num(row, "lm_two_corner_error", 1, 4) + " / " + num(row, "ica_two_corner_error", 1, 4) +
+            " / " + num(row, "paper_two_corner_error", 1, 3),
+        num(row, "lm_evaluations", 1, 6) + " / " + num(row, "ica_evaluations", 1, 6) + " (" +
+            num(row, "evaluation_ratio", 1, 3) + ")",
+        num(row, "lm_cpu_seconds", 1, 3) + " / " + num(row, "ica_cpu_seconds", 1, 3),
+        row[column(t, "lm_topology")] + " / " + row[column(t, "ica_topology")] + " / " +
+            row[column(t, "paper_topology")]};
+    if (twin)
+      r.insert(r.end(), {num(row, "lm_k_over_L0_rel_error", 100, 3) + " / " +
+                             num(row, "ica_k_over_L0_rel_error", 100, 3),
+                         num(row, "lm_stiffness_rel_error", 100, 3) + ", " +
+                             num(row, "lm_natural_length_rel_error", 100, 3),
+                         num(row, "k_at_true_L0_rel_error", 100, 3)});
+    m.rows.push_back(r);
+    ++rows;
+    if (row[column(t, "lm_not_worse")] == "1") ++not_worse;
+    const std::string& ratio = row[column(t, "evaluation_ratio")];
+    if (!ratio.empty()) {
+      ++ratio_ok;
+      ratio_min = std::min(ratio_min, std::stod(ratio));
+      ratio_max = std::max(ratio_max, std::stod(ratio));
+      if (std::stod(ratio) >= 20.0) ++ratio20;
+    }
+    const std::string& k = row[column(t, "k_at_true_L0_rel_error")];
+    if (!k.empty() && std::abs(std::stod(k)) <= 0.01) ++k_ok;
+  }
+  std::ostringstream out;
+  out << m.markdown() << "\n";
+  if (ratio_ok > 0)
+    out << "LM error <= the ICA's best on " << not_worse << " of " << rows
+        << " samples; ICA / LM drape evaluations " << format_number(ratio_min, 3) << "-"
+        << format_number(ratio_max, 3) << " (>= 20 on " << ratio20 << " of " << rows << ").";
+  if (twin)
+    out << (ratio_ok > 0 ? " " : "") << "k at the true L0 within 1 % on " << k_ok << " of " << rows
+        << ".";
+  out << "\n\n";
+  return out.str();
+}
+
+// Markdown rows of the four_corner pictures of `fits` (re-run; written under dir/pictures).
+std::string four_corner_pictures(const std::vector<SampleFits>& fits, const ReproOptions& o,
+                                 const ReproTargets& targets, const fs::path& dir, ReproOptimizer m,
+                                 bool two_corner) {
+  std::ostringstream rows;
+  for (const SampleFits& f : fits) {
+    if (f.best < 0) continue;
+    const std::vector<double> x = f.best_x();
+    const DrapeFitProblem four(sample_scene("four_corner", f.sample, o),
+                               targets.get(f.set, f.sample), fit_options(o, o.ica));
+    const Scene scene = four.scene_of(x);
+    const std::string stem = std::string(to_string(f.set)) + "_s" + std::to_string(f.sample);
+    const fs::path pic = dir / "pictures" / (stem + "_four_corner" + suffix(m));
+    fs::create_directories(pic);
+    write_drape_outputs(pic, scene, run_drape(scene, four.integrator()), &four.measured());
+    rows << "| " << to_string(m) << " | " << to_string(f.set) << " | " << f.sample
+         << " | ![](pictures/" << stem << "_four_corner" << suffix(m) << "/drape.png) | "
+         << (two_corner ? "![](pictures/" + stem + "_two_corner" + suffix(m) + "/drape.png)"
+                        : std::string("-"))
+         << " |\n";
+  }
+  return rows.str();
+}
+
 }  // namespace
 
 ReproSummary run_repro(const ReproOptions& o, ReproTargets& targets, const fs::path& dir,
@@ -517,23 +887,36 @@ ReproSummary run_repro(const ReproOptions& o, ReproTargets& targets, const fs::p
         targets.provenance(set, sample);
   config["targets"] = provenance;
 
-  // ---- fits (Tables 4, 6, Fig. 13) ----
-  std::vector<std::pair<SyntheticSet, int>> fit_samples;
+  // ---- fits (Tables 4, 6, Fig. 13): per (optimizer, set, sample) its runs ----
+  struct FitJob {
+    ReproOptimizer optimizer;
+    SyntheticSet set;
+    int sample;
+    int runs;  // ICA: o.runs; LM: 1 (deterministic)
+  };
+  std::vector<FitJob> jobs;
+  const auto has_job = [&](ReproOptimizer m, SyntheticSet set, int sample) {
+    return std::any_of(jobs.begin(), jobs.end(), [&](const FitJob& j) {
+      return j.optimizer == m && j.set == set && j.sample == sample;
+    });
+  };
   if (tables)
-    for (SyntheticSet set : o.sets)
-      for (int s : o.samples) fit_samples.push_back({set, s});
-  if (fig13 && std::find(fit_samples.begin(), fit_samples.end(),
-                         std::make_pair(o.fig13_set, o.fig13_sample)) == fit_samples.end())
-    fit_samples.push_back({o.fig13_set, o.fig13_sample});
+    for (ReproOptimizer m : o.optimizers)
+      for (SyntheticSet set : o.sets)
+        for (int s : o.samples) jobs.push_back({m, set, s, m == ReproOptimizer::Ica ? o.runs : 1});
+  if (fig13 && !has_job(ReproOptimizer::Ica, o.fig13_set, o.fig13_sample))
+    jobs.push_back({ReproOptimizer::Ica, o.fig13_set, o.fig13_sample, o.runs});
   std::vector<WorkUnit> units;
-  for (const auto& [set, sample] : fit_samples)
-    for (int r = 0; r < o.runs && targets.available(set, sample); ++r) {
-      const std::string key = fit_key(set, sample, r);
-      IcaOptions ica = o.ica;
-      ica.seed = unit_seed(o.seed, key);
-      const Target* target = &targets.get(set, sample);
-      const int s = sample;
-      units.push_back({key, [&o, target, s, ica] { return fit_unit(o, *target, s, ica); }});
+  int ica_runs = 0, lm_fits = 0;
+  for (const FitJob& j : jobs)
+    for (int r = 0; r < j.runs && targets.available(j.set, j.sample); ++r) {
+      const std::string key = fit_key(j.optimizer, j.set, j.sample, r);
+      FitMethod m{j.optimizer, o.ica, o.lm};
+      m.ica.seed = m.lm.seed = unit_seed(o.seed, key);
+      (j.optimizer == ReproOptimizer::Ica ? ica_runs : lm_fits) += 1;
+      const Target* target = &targets.get(j.set, j.sample);
+      units.push_back(
+          {key, [&o, target, j, m] { return fit_unit(o, *target, j.set, j.sample, m); }});
     }
   // Checkpoint <name>.jsonl in the output folder, shared settings (src/work_units.hpp).
   const auto unit_options = [&](const std::string& name) {
@@ -548,10 +931,9 @@ ReproSummary run_repro(const ReproOptions& o, ReproTargets& targets, const fs::p
   std::vector<json> fit_results;
   if (!units.empty()) {
     if (root)
-      print_stage(o, "fits: " + std::to_string(units.size()) + " ICA runs (" +
-                         std::to_string(fit_samples.size()) + " set x sample, " +
-                         std::to_string(o.runs) + " runs each), ~" +
-                         std::to_string(ica_evaluation_estimate(o.ica)) + " drapes per run");
+      print_stage(o, "fits: " + std::to_string(ica_runs) + " ICA runs (" + std::to_string(o.runs) +
+                         " per set x sample, ~" + std::to_string(ica_evaluation_estimate(o.ica)) +
+                         " drapes per run), " + std::to_string(lm_fits) + " LM fits");
     fit_results = run_work_units(units, unit_options("fits"));
   }
 
@@ -568,7 +950,9 @@ ReproSummary run_repro(const ReproOptions& o, ReproTargets& targets, const fs::p
         ica.seed = unit_seed(o.seed, key);
         drapes += ica_evaluation_estimate(ica);
         const int s = o.taguchi_sample;
-        tunits.push_back({key, [&o, target, s, ica] { return fit_unit(o, *target, s, ica); }});
+        const FitMethod m{ReproOptimizer::Ica, ica, o.lm};
+        tunits.push_back(
+            {key, [&o, target, s, m] { return fit_unit(o, *target, o.taguchi_set, s, m); }});
       }
     if (root)
       print_stage(o, "taguchi: L27 x " + std::to_string(o.taguchi_replicates) + " ICA runs on " +
@@ -579,16 +963,17 @@ ReproSummary run_repro(const ReproOptions& o, ReproTargets& targets, const fs::p
   ReproSummary summary;
   if (!root) return summary;
 
-  // Group the fits per (set, sample).
+  // Group the fits per (optimizer, set, sample).
   std::vector<SampleFits> fits;
   size_t next = 0;  // the next result in fit_results
-  for (size_t i = 0; i < fit_samples.size(); ++i) {
+  for (const FitJob& j : jobs) {
     SampleFits f;
-    f.set = fit_samples[i].first;
-    f.sample = fit_samples[i].second;
+    f.optimizer = j.optimizer;
+    f.set = j.set;
+    f.sample = j.sample;
     if (!targets.available(f.set, f.sample))
       f.error = "target " + targets.provenance(f.set, f.sample);
-    for (int r = 0; r < o.runs && targets.available(f.set, f.sample); ++r) {
+    for (int r = 0; r < j.runs && targets.available(f.set, f.sample); ++r) {
       const json& u = fit_results[next++];
       f.runs.push_back(u);
       if (!ok(u) && f.error.empty()) f.error = u["error"].get<std::string>();
@@ -627,17 +1012,16 @@ ReproSummary run_repro(const ReproOptions& o, ReproTargets& targets, const fs::p
 
   const auto keep = [&](const std::string& name) { summary.files.push_back(name); };
 
-  // ---- Table 4 and the four_corner pictures ----
-  Table t4;
-  if (tables) {
-    std::vector<SampleFits> table_fits;
-    for (const SampleFits& f : fits)
-      if (std::find(o.sets.begin(), o.sets.end(), f.set) != o.sets.end() &&
-          std::find(o.samples.begin(), o.samples.end(), f.sample) != o.samples.end())
-        table_fits.push_back(f);
-    t4 = table4(table_fits);
-    write_file_atomic(dir / "table4.csv", t4.csv());
-    keep("table4.csv");
+  // ---- Tables 4 and 6 per optimizer, the LM comparison, the pictures ----
+  std::map<ReproOptimizer, std::vector<SampleFits>> shown;
+  std::map<ReproOptimizer, Table> t6s;  // empty tables without table6
+  if (tables)
+    for (ReproOptimizer m : o.optimizers) shown[m] = table_fits(fits, o, m);
+  for (const auto& [m, f] : shown) {
+    const Table t4 = table4(f, m == ReproOptimizer::Lm);
+    write_file_atomic(dir / ("table4" + suffix(m) + ".csv"), t4.csv());
+    keep("table4" + suffix(m) + ".csv");
+    if (m != ReproOptimizer::Ica) continue;
     report << "## Table 4: four_corner fits\n\nOurs next to the paper's Table 4 (values in "
               "parentheses). Spread = min-max over the "
            << o.runs
@@ -663,89 +1047,59 @@ ReproSummary run_repro(const ReproOptions& o, ReproTargets& targets, const fs::p
               "ICA is also far from converged.\n\n";
   }
 
-  // ---- Table 6 ----
   if (table6) {
-    Table t6;
-    t6.columns = {"set", "sample"};
-    for (const char* p : kParamColumns) t6.columns.push_back(p);
-    t6.columns.insert(t6.columns.end(), {"topology", "table4_error", "error", "drape_status",
-                                         "paper_table4_error", "paper_error"});
     print_stage(o, "table6: applying the four_corner fits to two_corner");
-    for (const SampleFits& f : fits) {
-      if (std::find(o.sets.begin(), o.sets.end(), f.set) == o.sets.end() ||
-          std::find(o.samples.begin(), o.samples.end(), f.sample) == o.samples.end())
-        continue;
-      const PaperSample& paper = paper_sample(f.sample);
-      std::vector<std::string> row = {to_string(f.set), std::to_string(f.sample)};
-      if (f.best < 0) {
-        row.insert(row.end(), 8, "");
-        row[9] = "no fit: " + f.error;
-      } else {
-        const std::vector<double> x = f.runs[f.best]["best_x"].get<std::vector<double>>();
-        const DrapeFitProblem two(sample_scene("two_corner", f.sample, o),
-                                  targets.get(f.set, f.sample), fit_options(o, o.ica));
-        const DrapeEvaluation ev = two.evaluate(x);
-        for (int g = 0; g < 4; ++g) row.push_back(cell(x[g], 17));
-        row.push_back(fitted_topology(x));
-        row.push_back(cell(f.runs[f.best]["objective"].get<double>(), 17));
-        row.push_back(ev.failed ? "" : cell(ev.objective, 17));
-        row.push_back(ev.failed ? std::string(to_string(ev.status)) + ": " + ev.message
-                                : to_string(ev.status));
-        if (o.pictures) {
-          const Scene scene = two.scene_of(x);
-          const fs::path pic =
-              dir / "pictures" /
-              (std::string(to_string(f.set)) + "_s" + std::to_string(f.sample) + "_two_corner");
-          fs::create_directories(pic);
-          write_drape_outputs(pic, scene, run_drape(scene, two.integrator()), &two.measured());
-        }
-      }
-      row.push_back(cell(paper.table4_error));
-      row.push_back(cell(paper.table6_error));
-      t6.rows.push_back(row);
+    for (const auto& [m, f] : shown) {
+      const Table t6 = make_table6(f, o, targets, dir, m);
+      t6s[m] = t6;
+      write_file_atomic(dir / ("table6" + suffix(m) + ".csv"), t6.csv());
+      keep("table6" + suffix(m) + ".csv");
+      if (m != ReproOptimizer::Ica) continue;
+      Table md;
+      md.columns = {"set", "sample", "4-corner error % ours (paper)",
+                    "2-corner error % ours (paper)", "status"};
+      for (const auto& r : t6.rows)
+        md.rows.push_back(
+            {r[0], r[1],
+             (r[7].empty() ? "-" : format_number(std::stod(r[7]), 3)) + " (" + r[10] + ")",
+             (r[8].empty() ? "-" : format_number(std::stod(r[8]), 3)) + " (" + r[11] + ")", r[9]});
+      report << "## Table 6: the four_corner parameters applied unchanged to two_corner\n\n"
+             << md.markdown()
+             << "\nReading: the two_corner scene loads the fabric differently (hanging from two "
+                "pins, large in-plane strains), so it also tests what the four_corner fit could "
+                "not see. On twin the true parameters reproduce both scenes up to the noise, so a "
+                "two_corner error well above the four_corner one points at a parameter the "
+                "four_corner edges left undetermined.\n\n";
     }
-    write_file_atomic(dir / "table6.csv", t6.csv());
-    keep("table6.csv");
-    Table m;
-    m.columns = {"set", "sample", "4-corner error % ours (paper)", "2-corner error % ours (paper)",
-                 "status"};
-    for (const auto& r : t6.rows)
-      m.rows.push_back(
-          {r[0], r[1],
-           (r[7].empty() ? "-" : format_number(std::stod(r[7]), 3)) + " (" + r[10] + ")",
-           (r[8].empty() ? "-" : format_number(std::stod(r[8]), 3)) + " (" + r[11] + ")", r[9]});
-    report << "## Table 6: the four_corner parameters applied unchanged to two_corner\n\n"
-           << m.markdown()
-           << "\nReading: the two_corner scene loads the fabric differently (hanging from two "
-              "pins, large in-plane strains), so it also tests what the four_corner fit could "
-              "not see. On twin the true parameters reproduce both scenes up to the noise, so a "
-              "two_corner error well above the four_corner one points at a parameter the "
-              "four_corner edges left undetermined.\n\n";
   }
 
-  // Pictures of the fitted four_corner drapes (paper Table 5).
-  if (tables && o.pictures) {
+  if (shown.count(ReproOptimizer::Lm)) {
+    const Table cmp = lm_vs_ica(shown[ReproOptimizer::Lm], shown[ReproOptimizer::Ica],
+                                t6s[ReproOptimizer::Lm], t6s[ReproOptimizer::Ica]);
+    write_file_atomic(dir / "lm_vs_ica.csv", cmp.csv());
+    keep("lm_vs_ica.csv");
+    report << "## Tables 4 and 6 with Levenberg-Marquardt, next to the ICA and the paper\n\n"
+           << "One LM fit per sample (src/lm_fit.hpp: every topology x grid-size bracket "
+              "screened once, the "
+           << o.lm.refine << " best refined with <= " << o.lm.lm.max_evaluations
+           << " evaluations each); ICA: the best of " << o.runs
+           << " runs, its drapes counted over all runs (table4_lm.csv, table6_lm.csv, "
+              "lm_vs_ica.csv). k at true L0: k fitted by LM with L0 and the topology held at "
+              "the twin's true values.\n\n";
+    for (SyntheticSet set : o.sets)
+      report << "### " << to_string(set) << "\n\n" << lm_vs_ica_markdown(cmp, set);
+    report << "Reading: the edges determine k / L0, the grid size n and the topology, not k and "
+              "L0 separately (experiments/identifiability/README.md), so the twin's k and L0 "
+              "errors measure where on the valley of equal error the fit stopped; k at the true "
+              "L0 shows how well k / L0 is pinned by these noisy edges.\n\n";
+  }
+
+  // Pictures of the fitted drapes (paper Tables 5 and 7).
+  if (o.pictures && !shown.empty()) {
     print_stage(o, "pictures: re-running the fitted four_corner drapes");
-    report << "## Pictures (paper Tables 5 and 7)\n\n| set | sample | four_corner | two_corner "
-              "|\n|---|---|---|---|\n";
-    for (const SampleFits& f : fits) {
-      if (f.best < 0 ||
-          std::find(o.samples.begin(), o.samples.end(), f.sample) == o.samples.end() ||
-          std::find(o.sets.begin(), o.sets.end(), f.set) == o.sets.end())
-        continue;
-      const std::vector<double> x = f.runs[f.best]["best_x"].get<std::vector<double>>();
-      const DrapeFitProblem four(sample_scene("four_corner", f.sample, o),
-                                 targets.get(f.set, f.sample), fit_options(o, o.ica));
-      const Scene scene = four.scene_of(x);
-      const std::string stem = std::string(to_string(f.set)) + "_s" + std::to_string(f.sample);
-      fs::create_directories(dir / "pictures" / (stem + "_four_corner"));
-      write_drape_outputs(dir / "pictures" / (stem + "_four_corner"), scene,
-                          run_drape(scene, four.integrator()), &four.measured());
-      report << "| " << to_string(f.set) << " | " << f.sample << " | ![](pictures/" << stem
-             << "_four_corner/drape.png) | "
-             << (table6 ? "![](pictures/" + stem + "_two_corner/drape.png)" : std::string("-"))
-             << " |\n";
-    }
+    report << "## Pictures (paper Tables 5 and 7)\n\n| optimizer | set | sample | four_corner | "
+              "two_corner |\n|---|---|---|---|---|\n";
+    for (const auto& [m, f] : shown) report << four_corner_pictures(f, o, targets, dir, m, table6);
     report << "\n";
     keep("pictures/");
   }
@@ -753,7 +1107,8 @@ ReproSummary run_repro(const ReproOptions& o, ReproTargets& targets, const fs::p
   // ---- Fig. 13 ----
   if (fig13) {
     const auto it = std::find_if(fits.begin(), fits.end(), [&](const SampleFits& f) {
-      return f.set == o.fig13_set && f.sample == o.fig13_sample;
+      return f.optimizer == ReproOptimizer::Ica && f.set == o.fig13_set &&
+             f.sample == o.fig13_sample;
     });
     const std::vector<int> order = it->by_objective();
     Table csv;

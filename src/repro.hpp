@@ -7,15 +7,22 @@
 // --resume, MPI):
 //   fit unit "fit/<set>/s<sample>/run<r>": one ICA fit (src/drape_fit.hpp) of the four_corner
 //     scene of that sample (Table 2 areal density, rtol 1e-8) to the target <set>_sample<s>.
+//   lm unit "lm/<set>/s<sample>" (with --optimizer lm): one multi-start Levenberg-Marquardt fit
+//     (src/lm_fit.hpp, fit_drape_lm) of the same scene to the same target; on twin it adds a
+//     fit of k alone with L0 and the topology held at the true values ("k at the true L0": the
+//     edges determine k only through k / L0, experiments/identifiability/README.md).
+//   Both write the same result fields (best_x, objective, evaluations, failed_evaluations,
+//   status, seed, wall_seconds, cpu_seconds); the units differ only in the optimizer call.
 //   taguchi unit "taguchi/<set>/s<sample>/e<NN>/r<k>": one ICA fit of the Taguchi sample with the
 //     options of L27 experiment NN (levels of paper Table 1 on the columns of
 //     default_l27_columns(), ica_table1_options), replicate k.
 // Seeds: unit_seed(seed, key) -- a hash of the base seed and the unit's key (which names set,
 // sample and run), so a result depends neither on the order of the units, nor on the number of
 // ranks or threads, nor on a resume. The ICA itself is bit-identical for any number of jobs.
-// After the units (rank 0 only): per (set, sample) the best run (lowest error; ties: lowest run
-// index) gives Table 4; its parameters, applied unchanged to the sample's two_corner scene, give
-// Table 6; the fitted drapes are re-run for the pictures.
+// After the units (rank 0 only), per optimizer: per (set, sample) the best run (lowest error;
+// ties: lowest run index) gives Table 4; its parameters, applied unchanged to the sample's
+// two_corner scene, give Table 6; the fitted drapes are re-run for the pictures. Taguchi and
+// Fig. 13 are studies of the ICA and always use it.
 //
 // Outputs in the output folder:
 //   table4.csv   set, sample, runs, best_run, fitted stiffness (N/m), damping (N s/m),
@@ -27,10 +34,17 @@
 //                ((fit - true) / true); empty cells where a column does not apply.
 //   table6.csv   set, sample, the applied parameters, table4_error, error (two_corner, %),
 //                drape_status, paper_table4_error, paper_error (Table 6).
+//   table4_lm.csv, table6_lm.csv (--optimizer lm): the same columns for the LM fits (runs = 1)
+//                plus cpu_seconds (of the fit; CPU time differs between runs, so the ICA
+//                tables, which must compare byte for byte across ranks, leave it out).
+//   lm_vs_ica.csv (both optimizers): per set and sample the LM and ICA errors, drape
+//                evaluations (ICA: all its runs) and CPU seconds, evaluations ratio ICA / LM,
+//                lm_not_worse (LM error <= ICA's best); on twin the LM recovery of k / L0, k
+//                and L0, and of k at the true L0 ((fit - true) / true).
 //   taguchi_responses.csv (run, A..G levels, y1..yr: final ICA cost, %),
 //   taguchi_sn.csv, taguchi_effects.csv, taguchi_anova.csv (src/taguchi.hpp tables).
 //   fig13.csv    run (best|median), decade, best, mean (imperialist costs, %); fig13.png.
-//   pictures/<set>_s<sample>_<scene>/  write_drape_outputs of each fitted drape (drape.png ...).
+//   pictures/<set>_s<sample>_<scene>[_lm]/  write_drape_outputs of each fitted drape.
 //   report.md, manifest.json, checkpoint files fits.jsonl / taguchi.jsonl.
 //
 // Failure modes: bad options throw std::invalid_argument naming the field (validate); a
@@ -48,6 +62,7 @@
 #include <vector>
 
 #include "src/ica.hpp"
+#include "src/lm_fit.hpp"
 #include "src/synthetic_targets.hpp"
 #include "src/targets.hpp"
 
@@ -58,6 +73,12 @@ const char* to_string(ReproTask task);
 // "table4" | "table6" | "taguchi" | "fig13" | "all"; std::invalid_argument otherwise.
 ReproTask repro_task_from_name(const std::string& name);
 
+// The optimizer of the Table 4 fits: the paper's ICA, or Levenberg-Marquardt (src/lm_fit.hpp).
+enum class ReproOptimizer { Ica, Lm };
+const char* to_string(ReproOptimizer optimizer);
+// "ica" | "lm"; std::invalid_argument "optimizers = X: accepted ica|lm" otherwise.
+ReproOptimizer repro_optimizer_from_name(const std::string& name);
+
 // CPU seconds of one four_corner drape with the paper's explicit Euler at its stability limit
 // (experiments/benchmark/README.md, `run.sh --quick`, 2026-11-22: 1.23e8 steps x 4.94 us).
 constexpr double kEulerCpuSecondsPerFourCornerDrape = 607.0;
@@ -67,9 +88,12 @@ struct ReproOptions {
   ReproTask task = ReproTask::All;
   std::vector<int> samples = {1, 2, 3, 4, 5, 6, 7, 8, 9};  // Tables 4 and 6, each 1..9
   std::vector<SyntheticSet> sets = {SyntheticSet::Twin, SyntheticSet::Cross};
-  int runs = 10;   // ICA runs per (set, sample), the best kept (paper: 10); >= 1
-  IcaOptions ica;  // each fit's budget (default: Taguchi-best A3 B3 C1 D2 E1 F2 G2);
-                   // ica.seed is replaced per unit, ica.jobs = threads per fit
+  // Optimizers of Tables 4 and 6, each at most once; lm only for the tasks table4|table6|all.
+  std::vector<ReproOptimizer> optimizers = {ReproOptimizer::Ica};
+  int runs = 10;      // ICA runs per (set, sample), the best kept (paper: 10); >= 1
+  IcaOptions ica;     // each fit's budget (default: Taguchi-best A3 B3 C1 D2 E1 F2 G2);
+                      // ica.seed is replaced per unit, ica.jobs = threads per fit
+  DrapeLmOptions lm;  // each LM fit (one per (set, sample)); lm.seed is replaced per unit
   // Fig. 13: the runs of this (set, sample) (the same units as Table 4's when it is included).
   SyntheticSet fig13_set = SyntheticSet::Cross;
   int fig13_sample = 1;
@@ -90,8 +114,9 @@ struct ReproOptions {
   bool progress = true;  // progress lines (stderr on a terminal; stage lines on stdout)
 
   // Throws std::invalid_argument "<field> = <value>: accepted range" (samples in 1..9, each
-  // once; sets non-empty and distinct; runs, taguchi_replicates >= 1; taguchi_decades >= 1;
-  // rtol in (0, 0.1]; DrapeFitOptions::validate of ica and integrator; synthetic).
+  // once; sets non-empty and distinct; optimizers non-empty and distinct, lm only with
+  // table4|table6|all; runs, taguchi_replicates >= 1; taguchi_decades >= 1; rtol in (0, 0.1];
+  // DrapeFitOptions::validate of ica and integrator; lm; synthetic).
   void validate() const;
 };
 
@@ -102,6 +127,7 @@ struct ReproOptions {
 //   quick: a few minutes on 2 cores: the same 9 samples and 2 sets, but 2 runs per sample of
 //          10 countries x 6 decades (~58 drapes per run instead of ~945); Taguchi with 1
 //          replicate and factor A's decades 1/2/4 instead of 10/20/40 (other factors as Table 1).
+// Both: the ICA only (optimizers); LM, when chosen, at the DrapeLmOptions defaults.
 ReproOptions repro_preset(const std::string& name);
 
 // The seed of a unit: splitmix64 of the base seed mixed with the FNV-1a hash of its key.

@@ -257,3 +257,64 @@ TEST_CASE("drape --target: edges.csv always, Eq. 5 objective against a target") 
   CHECK(bad.err.find("--target") != std::string::npos);
   CHECK_FALSE(fs::exists(none));
 }
+
+TEST_CASE("fit --optimizer lm: a noise-free target of the model itself, end to end") {
+  TempDir tmp("fit-lm");
+  // A 30 cm sheet (n = round(0.3 / L0) = 5..8 over Table 3's L0 box: few, small drapes) at
+  // k = 852 N/m, L0 = 0.05 m (n = 6), topology a; its own edges as a coefficient target.
+  const std::string sheet = "--scene four_corner --set fabric.width=0.3 ";
+  const fs::path made = tmp.path / "made";
+  REQUIRE(run_knitsim("drape " + sheet +
+                          "--set model.stiffness=852 --set model.natural_length=0.05 "
+                          "--set model.topology=a --rtol 1e-8 --out '" +
+                          made.string() + "'",
+                      tmp)
+              .status == 0);
+  const auto made_summary = nlohmann::json::parse(slurp(made / "summary.json"));
+  const fs::path target = tmp.path / "target.csv";
+  {
+    std::ofstream f(target);
+    f.precision(17);
+    f << "scene,edge,kind,a,b\n";
+    for (const auto& [edge, c] : made_summary["edge_coefficients"].items())
+      for (int k = 0; k < 5; ++k)
+        f << "four_corner," << edge << ",coeff," << k << "," << c[k].get<double>() << "\n";
+  }
+  const std::string fit = "fit " + sheet + "--target '" + target.string() + "' ";
+  const fs::path out = tmp.path / "fit";
+  const Run r = run_knitsim(fit + "--optimizer lm --quiet --out '" + out.string() + "'", tmp);
+  INFO(r.err);
+  REQUIRE(r.status == 0);
+  const auto s = nlohmann::json::parse(slurp(out / "summary.json"));
+  // The data are the model's own at a point of the box, so the minimum is 0; the synthetic
+  // targets' noise floor is 1-3 %, so 1e-3 % means the fit found the truth's valley, not a
+  // neighbouring n bracket or topology (which leave > 0.1 %).
+  const double objective = s["objective"].get<double>();
+  CHECK(std::isfinite(objective));
+  CHECK(objective < 1e-3);
+  CHECK(s["params"]["topology"] == "a");
+  // Only k / L0 is determined (k and L0 slide together): it is recovered.
+  const double ratio =
+      s["params"]["stiffness"].get<double>() / s["params"]["natural_length"].get<double>();
+  CHECK(std::abs(ratio / (852.0 / 0.05) - 1.0) < 1e-3);
+  // Budget: one screening drape per topology (3) x n bracket (<= 4: n = 5..8), then the 2
+  // refined starts with <= 15 evaluations each (src/lm_fit.hpp defaults).
+  const long evaluations = s["evaluations"].get<long>();
+  CHECK(evaluations >= 3 * 3);
+  CHECK(evaluations <= 3 * 4 + 2 * 15);
+  CHECK(fs::exists(out / "starts.csv"));
+  CHECK(fs::exists(out / "drape" / "summary.json"));
+
+  // Bad options: one line, exit 2, nothing written.
+  const fs::path none = tmp.path / "none";
+  for (const auto& [args, names] : std::vector<std::pair<std::string, std::string>>{
+           {"--optimizer xyz", "--optimizer = xyz"},
+           {"--optimizer lm --resume", "--resume: only with --optimizer ica"}}) {
+    CAPTURE(args);
+    const Run bad = run_knitsim(fit + args + " --out '" + none.string() + "'", tmp);
+    CHECK(bad.status == 2);
+    REQUIRE(lines(bad.err).size() == 1);
+    CHECK(bad.err.find(names) != std::string::npos);
+    CHECK_FALSE(fs::exists(none));
+  }
+}

@@ -176,6 +176,16 @@ TEST_CASE("presets and validation", "[repro]") {
   o.runs = 0;
   CHECK_THROWS_WITH(o.validate(), Catch::Contains("runs = 0"));
   CHECK_THROWS_WITH(repro_task_from_name("table5"), Catch::Contains("task = table5"));
+  o = repro_preset("quick");
+  CHECK(o.optimizers == std::vector<ReproOptimizer>{ReproOptimizer::Ica});  // the paper's
+  o.optimizers = {ReproOptimizer::Lm, ReproOptimizer::Lm};
+  CHECK_THROWS_WITH(o.validate(), Catch::Contains("optimizers = 2 optimizers"));
+  o.optimizers = {ReproOptimizer::Lm};
+  o.task = ReproTask::Taguchi;  // a study of the ICA
+  CHECK_THROWS_WITH(o.validate(), Catch::Contains("optimizers = lm"));
+  o.task = ReproTask::All;
+  CHECK_NOTHROW(o.validate());
+  CHECK_THROWS_WITH(repro_optimizer_from_name("pso"), Catch::Contains("optimizers = pso"));
 }
 
 TEST_CASE(
@@ -293,7 +303,9 @@ TEST_CASE("knitsim repro: bad input is one line, exit 2, nothing written", "[rep
   for (const std::string& args :
        {std::string("table5"), std::string("table4 --samples 0"),
         std::string("table4 --preset fast"), std::string("table4 --jobs 0"),
-        std::string("all --sets twin,wool"), std::string("table4 --targets /nonexistent")}) {
+        std::string("all --sets twin,wool"), std::string("table4 --targets /nonexistent"),
+        std::string("table4 --optimizer xyz"), std::string("fig13 --optimizer lm"),
+        std::string("table4 --optimizer lm,lm")}) {
     const fs::path out = tmp.path / "out";
     const knitsim::test::Run run =
         knitsim::test::run_knitsim("repro " + args + " --out '" + out.string() + "'", tmp);
@@ -345,4 +357,85 @@ TEST_CASE("knitsim repro killed after a unit and resumed writes the uninterrupte
   CHECK(after.size() == 1 + 4);
   REQUIRE(after.size() >= before.size());
   CHECK(std::equal(before.begin(), before.end(), after.begin()));
+}
+
+TEST_CASE("repro table6 --optimizer ica,lm: LM tables, errors recomputed, the comparison",
+          "[repro][lm]") {
+  TempDir tmp("repro-lm");
+  ReproOptions o = tiny_options(1);
+  o.runs = 1;
+  o.optimizers = {ReproOptimizer::Ica, ReproOptimizer::Lm};
+  ReproTargets targets(o);
+  run_repro(o, targets, tmp.path, false);
+  const Target& target = targets.get(SyntheticSet::Twin, 1);
+  const PaperSample& paper = paper_sample(1);
+
+  // table4_lm.csv: Table 4's columns, then cpu_seconds; one run.
+  const auto ica = read_csv(tmp.path / "table4.csv");
+  const auto t4 = read_csv(tmp.path / "table4_lm.csv");
+  REQUIRE(t4.size() == 2);
+  const std::vector<std::string>& h = t4[0];
+  std::vector<std::string> expected = ica[0];
+  expected.push_back("cpu_seconds");
+  CHECK(h == expected);
+  const std::vector<std::string>& r = t4[1];
+  REQUIRE(r.size() == h.size());
+  CHECK(r[col(h, "runs")] == "1");
+  CHECK(std::stod(r[col(h, "cpu_seconds")]) > 0.0);
+  // The error is objective() of the written parameters (LM scores the Newton-polished
+  // equilibrium, objective() the integrator's, settled to equilibrium_tol: ~1e-9 apart).
+  const std::vector<double> x = country(h, r);
+  DrapeFitOptions fo;
+  const DrapeFitProblem four(sample_scene("four_corner", 1), target, fo);
+  CHECK(std::stod(r[col(h, "error")]) == Approx(four.evaluate(x).objective).epsilon(1e-7));
+
+  // table6_lm.csv: Table 6's columns plus evaluations and cpu_seconds of the fit.
+  const auto t6 = read_csv(tmp.path / "table6_lm.csv");
+  const auto ica6 = read_csv(tmp.path / "table6.csv");
+  REQUIRE(t6.size() == 2);
+  expected = ica6[0];
+  expected.insert(expected.end(), {"evaluations", "cpu_seconds"});
+  CHECK(t6[0] == expected);
+  CHECK(country(t6[0], t6[1]) == x);
+  CHECK(t6[1][col(t6[0], "evaluations")] == r[col(h, "evaluations")]);
+
+  // lm_vs_ica.csv: the two tables side by side, ratios and recovery errors consistent.
+  const auto c = read_csv(tmp.path / "lm_vs_ica.csv");
+  REQUIRE(c.size() == 2);
+  const std::vector<std::string>& hc = c[0];
+  const std::vector<std::string>& rc = c[1];
+  REQUIRE(rc.size() == hc.size());
+  CHECK(rc[col(hc, "lm_error")] == r[col(h, "error")]);
+  CHECK(rc[col(hc, "ica_error")] == ica[1][col(ica[0], "error")]);
+  CHECK(rc[col(hc, "lm_two_corner_error")] == t6[1][col(t6[0], "error")]);
+  const double lm_evals = std::stod(rc[col(hc, "lm_evaluations")]);
+  const double ica_evals = std::stod(rc[col(hc, "ica_evaluations")]);
+  CHECK(ica_evals == std::stod(ica[1][col(ica[0], "evaluations")]));
+  CHECK(std::stod(rc[col(hc, "evaluation_ratio")]) == Approx(ica_evals / lm_evals).epsilon(1e-3));
+  CHECK(rc[col(hc, "lm_not_worse")] ==
+        (std::stod(rc[col(hc, "lm_error")]) <= std::stod(rc[col(hc, "ica_error")]) ? "1" : "0"));
+  CHECK(std::stod(rc[col(hc, "lm_k_over_L0_rel_error")]) ==
+        Approx((x[0] / x[3]) / (paper.stiffness / paper.natural_length) - 1.0).margin(1e-5));
+
+  // k at the true L0: a minimum of the objective along k (with L0, topology at the truth and
+  // the blind damping and elongation limit at the box centre), its error recomputed.
+  const double k = std::stod(rc[col(hc, "k_at_true_L0")]);
+  CHECK(std::stod(rc[col(hc, "k_at_true_L0_rel_error")]) ==
+        Approx((k - paper.stiffness) / paper.stiffness).margin(1e-5));
+  const DrapeFitBounds box;
+  auto at = [&](double stiffness) {
+    return four
+        .evaluate({stiffness, 0.5 * (box.lower[1] + box.upper[1]),
+                   0.5 * (box.lower[2] + box.upper[2]), paper.natural_length,
+                   paper.topology - 'a' + 0.5})
+        .objective;
+  };
+  const double e = at(k);
+  CHECK(std::stod(rc[col(hc, "k_at_true_L0_error")]) == Approx(e).epsilon(1e-7));
+  if (k > box.lower[0] * 1.01) CHECK(at(k * 0.99) >= e - 1e-9);
+  if (k < box.upper[0] * 0.99) CHECK(at(k * 1.01) >= e - 1e-9);
+  // The checkpoint holds the ICA run and the LM unit under their keys.
+  const std::string checkpoint = knitsim::test::slurp(tmp.path / "fits.jsonl");
+  CHECK(checkpoint.find("\"fit/twin/s1/run00\"") != std::string::npos);
+  CHECK(checkpoint.find("\"lm/twin/s1\"") != std::string::npos);
 }
