@@ -14,7 +14,7 @@ JOBS=${JOBS:-$(nproc)}
 PACKAGES=(cmake g++ make pkg-config
   libsundials-dev libsuitesparse-dev libeigen3-dev catch2
   libcairo2-dev libtomlplusplus-dev nlohmann-json3-dev libcli11-dev
-  python3-scipy python3-matplotlib libopenmpi-dev openmpi-bin
+  python3-scipy python3-matplotlib libopenmpi-dev openmpi-bin libpagmo-dev
   ${KNITSIM_EXTRA_PACKAGES:-})  # test.sh --fuzz adds clang and libclang-rt-14-dev (libFuzzer)
 
 install_missing_packages() {

@@ -11,6 +11,7 @@
 #include <map>
 #include <stdexcept>
 
+#include "src/cli_options.hpp"
 #include "src/commands.hpp"
 #include "src/output.hpp"
 #include "src/scene.hpp"
@@ -37,7 +38,10 @@ std::string human_summary(const Scene& scene, const DrapeResult& r, const std::s
   t.columns = {"drape", scene.name + " (" + scene.source + ")"};
   t.rows = {{"grid", std::to_string(side) + " x " + std::to_string(side) + " particles, " +
                          std::to_string(r.grid.network.spec().springs.size()) + " springs, " +
-                         std::to_string(r.grid.network.dof()) + " dof"},
+                         std::to_string(r.grid.network.dof()) + " dof" +
+                         (r.integrated_dof != r.grid.network.dof()
+                              ? " (" + std::to_string(r.integrated_dof) + " integrated: quarter)"
+                              : std::string())},
             {"integrator", s.integrator},
             {"status", std::string(to_string(s.status)) + " (" + s.message + ")"},
             {"t_final", format_number(s.t_final, 6) + " s"},
@@ -58,6 +62,7 @@ void run(const DrapeArgs& args) {
   const IntegratorOptions& o = args.options;
   scene.options.rtol = o.rtol;
   scene.options.atol = o.atol;
+  scene.options.velocity_atol = o.velocity_atol;
   scene.options.dt = o.dt;
   scene.options.max_order = o.max_order;
   scene.options.max_steps = o.max_steps;
@@ -115,8 +120,7 @@ void register_drape_command(CLI::App& app) {
                   "implicit-euler");
   cmd->add_option("--rtol", args->options.rtol, "Relative tolerance (adaptive methods)")
       ->capture_default_str();
-  cmd->add_option("--atol", args->options.atol, "Absolute tolerance, m and m/s")
-      ->capture_default_str();
+  add_atol_options(cmd, args->options.atol, args->options.velocity_atol);
   cmd->add_option("--dt", args->options.dt, "Fixed step, s (fixed-step methods; 0 = automatic)")
       ->capture_default_str();
   cmd->add_option("--max-order", args->options.max_order, "Cap on the method order (0 = default)")

@@ -328,6 +328,7 @@ DrapeLmResult fit_drape_lm(const DrapeFitProblem& problem, const DrapeLmOptions&
     DrapeResiduals e = drape_residuals(problem, c, options.polish);
     ++out.evaluations;
     if (e.failed) ++out.failed_evaluations;
+    if (options.on_evaluation) options.on_evaluation(c, e);
     return e;
   };
 

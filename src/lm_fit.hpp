@@ -135,6 +135,10 @@ struct DrapeLmOptions {
   int refine = 2;              // >= 1: screened starts refined by LM
   std::uint64_t seed = 1;
   PolishOptions polish;
+  // Optional: called on the calling thread after every drape evaluation, in order, with the
+  // country and its residuals (experiments/optimizers logs the search with it). An exception
+  // it throws ends the fit and propagates.
+  std::function<void(const std::vector<double>& x, const DrapeResiduals& e)> on_evaluation;
   void validate() const;
 };
 

@@ -237,12 +237,14 @@ nlohmann::json to_json(const DrapeParams& p) {
           {"pin_span", p.pin_span},
           {"pin_move_time", p.pin_move_time},
           {"perturbation", p.perturbation},
-          {"seed", p.seed}};
+          {"seed", p.seed},
+          {"symmetry", to_string(p.symmetry)}};
 }
 
 nlohmann::json to_json(const IntegratorOptions& o) {
   return {{"rtol", o.rtol},
           {"atol", o.atol},
+          {"velocity_atol", o.velocity_atol},
           {"dt", o.dt},
           {"dt_safety", o.dt_safety},
           {"max_order", o.max_order},
@@ -342,7 +344,8 @@ nlohmann::json drape_summary(const Scene& scene, const DrapeResult& r) {
                {"particles", net.particle_count()},
                {"pinned", net.spec().pinned.size()},
                {"springs", net.spec().springs.size()},
-               {"dof", net.dof()}};
+               {"dof", net.dof()},
+               {"integrated_dof", r.integrated_dof}};
   j["max_strain"] = r.max_strain;
   j["centre_sag_m"] = r.centre_sag;
   j["params"] = to_json(scene.params);
