@@ -14,6 +14,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "src/lm_fit.hpp"
 #include "src/render.hpp"
 
 // Set by CMakeLists.txt on this file only (configure-time facts).
@@ -256,6 +257,16 @@ nlohmann::json to_json(const IntegratorOptions& o) {
           {"runaway_position", o.runaway_position},
           {"krylov_dim", o.krylov_dim},
           {"gmres_preconditioner", o.gmres_preconditioner}};
+}
+
+nlohmann::json to_json(const DrapeLmOptions& o) {
+  return {{"starts_per_bracket", o.starts_per_bracket},
+          {"refine", o.refine},
+          {"seed", o.seed},
+          {"max_evaluations", o.lm.max_evaluations},
+          {"initial_lambda", o.lm.initial_lambda},
+          {"step_tol", o.lm.step_tol},
+          {"cost_tol", o.lm.cost_tol}};
 }
 
 nlohmann::json to_json(const RunStats& s) {

@@ -23,6 +23,8 @@
 
 namespace knitsim {
 
+struct DrapeLmOptions;  // src/lm_fit.hpp (Eigen stays out of this header)
+
 // ---- files and folders -----------------------------------------------------------------------
 
 void write_file_atomic(const std::filesystem::path& path, const std::string& content);
@@ -71,6 +73,7 @@ std::string to_vtk(const VtkPolyData& data);
 nlohmann::json to_json(const DrapeParams& p);        // field names as in DrapeParams
 nlohmann::json to_json(const IntegratorOptions& o);  // field names as in IntegratorOptions
 nlohmann::json to_json(const RunStats& s);           // status as to_string(RunStatus)
+nlohmann::json to_json(const DrapeLmOptions& o);     // field names as in DrapeLmOptions, lm
 
 // ---- provenance --------------------------------------------------------------------------------
 
