@@ -7,6 +7,11 @@
 # nproc).
 set -euo pipefail
 cd "$(dirname "$0")"
+case "${1:-}" in
+  "" | --build-only) ;;
+  -h | --help) sed -n '2,7p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+  *) echo "run.sh: unknown argument '$1' (accepted: --build-only, --help)" >&2; exit 2 ;;
+esac
 BUILD_DIR=${BUILD_DIR:-build}
 JOBS=${JOBS:-$(nproc)}
 
