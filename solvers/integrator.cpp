@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <chrono>
-#include <ctime>
 #include <cmath>
+#include <ctime>
 #include <functional>
 #include <limits>
 #include <sstream>
@@ -15,8 +15,9 @@ namespace knitsim {
 
 namespace {
 
-// The round-off floor (residual_roundoff, one pass over the springs) is only worth evaluating
-// when the residual is within this factor of equilibrium_tol.
+// The round-off floor may stand in for equilibrium_tol up to this factor above it: a tolerance
+// is never loosened by more (equilibrium_tol = 1e-300 still means "run to t_max"). It also
+// bounds when the floor (one pass over the springs) is worth evaluating.
 constexpr double kFloorCheckFactor = 1e3;
 
 [[noreturn]] void bad_option(const std::string& field, double value, const std::string& range) {
@@ -81,12 +82,18 @@ void IntegratorOptions::validate() const {
 
 const char* to_string(RunStatus s) {
   switch (s) {
-    case RunStatus::Equilibrium: return "equilibrium";
-    case RunStatus::TimeLimit: return "time_limit";
-    case RunStatus::StepLimit: return "step_limit";
-    case RunStatus::WallLimit: return "wall_limit";
-    case RunStatus::SolverFailure: return "solver_failure";
-    case RunStatus::Diverged: return "diverged";
+    case RunStatus::Equilibrium:
+      return "equilibrium";
+    case RunStatus::TimeLimit:
+      return "time_limit";
+    case RunStatus::StepLimit:
+      return "step_limit";
+    case RunStatus::WallLimit:
+      return "wall_limit";
+    case RunStatus::SolverFailure:
+      return "solver_failure";
+    case RunStatus::Diverged:
+      return "diverged";
   }
   return "unknown";
 }
@@ -184,8 +191,8 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
         os << "non-finite or runaway state at t = " << t << " s";
         integ.fill_stats(stats);
         if (stats.dt_predicted > 0.0)
-          os << " (dt = " << stats.dt << " s, predicted stability limit "
-             << stats.dt_predicted << " s)";
+          os << " (dt = " << stats.dt << " s, predicted stability limit " << stats.dt_predicted
+             << " s)";
         return finish(RunStatus::Diverged, os.str());
       }
       const double r = sys.static_residual(t, integ.positions());
@@ -193,10 +200,11 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
       if (t >= t_start_eq && r <= opt.equilibrium_tol)
         return finish(RunStatus::Equilibrium, "static residual below equilibrium_tol");
       if (t >= t_start_eq && r <= kFloorCheckFactor * opt.equilibrium_tol) {
-        const double floor = sys.residual_roundoff(t, integ.positions());
-        if (r <= floor) {
+        const double threshold =
+            equilibrium_threshold(sys, t, integ.positions(), opt.equilibrium_tol);
+        if (r <= threshold) {
           std::ostringstream os;
-          os << "static residual " << r << " at its round-off floor " << floor
+          os << "static residual " << r << " at its round-off floor " << threshold
              << " (above equilibrium_tol " << opt.equilibrium_tol << ")";
           return finish(RunStatus::Equilibrium, os.str());
         }
@@ -210,6 +218,12 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
   }
 }
 
+double equilibrium_threshold(const MechanicalSystem& sys, double t, const double* x,
+                             double equilibrium_tol) {
+  return std::max(equilibrium_tol,
+                  std::min(sys.residual_roundoff(t, x), kFloorCheckFactor * equilibrium_tol));
+}
+
 // ---- stability prediction -----------------------------------------------------------------
 
 namespace {
@@ -218,7 +232,7 @@ double euler_limit(double w2, double g) {
   if (w2 <= 0.0) return g > 0.0 ? 2.0 / g : std::numeric_limits<double>::infinity();
   const double disc = 0.25 * g * g - w2;
   if (disc >= 0.0) return 2.0 / (0.5 * g + std::sqrt(disc));  // overdamped: real eigenvalues
-  return g / w2;                                               // underdamped
+  return g / w2;                                              // underdamped
 }
 
 double verlet_limit(double w2, double g) {
@@ -253,8 +267,8 @@ double predict_stable_dt(const std::string& method, const MechanicalSystem& sys,
   const auto& gamma = sys.damping_rate();
   double best = std::numeric_limits<double>::infinity();
   for (int i = 0; i < sys.dof(); ++i) {
-    const double h = method == "euler" ? euler_limit(row_sum[i], gamma[i])
-                                       : verlet_limit(row_sum[i], gamma[i]);
+    const double h =
+        method == "euler" ? euler_limit(row_sum[i], gamma[i]) : verlet_limit(row_sum[i], gamma[i]);
     best = std::min(best, h);
   }
   return best;

@@ -26,8 +26,9 @@ namespace knitsim {
 struct IntegratorOptions {
   // Relative tolerance of adaptive methods. Known limitation: at 1e-6 the BDF corrector leaves
   // a static-residual floor of ~4e-8 on some drapes (e.g. topology b, k 1200, c 10, L0 6 cm:
-  // t_max with residual 3.65e-8, see README); 1e-8 removes it (+5 % CPU on four_corner, +17 % on two_corner) but
-  // makes arkode-imex fail its error test unless atol <= 1e-11. `knitsim fit` uses 1e-8.
+  // t_max with residual 3.65e-8, see README); 1e-8 removes it (+5 % CPU on four_corner, +17 % on
+  // two_corner) but makes arkode-imex fail its error test unless atol <= 1e-11. `knitsim fit` uses
+  // 1e-8.
   double rtol = 1e-6;
   double atol = 1e-9;  // absolute tolerance (m for positions, m/s for velocities)
   // Absolute tolerance of the velocities (m/s) of the adaptive SUNDIALS methods; 0 = atol
@@ -46,8 +47,8 @@ struct IntegratorOptions {
   double dt = 0.0;
   double dt_safety = 0.5;  // fraction of the predicted stability limit used when dt = 0
   int max_order = 0;       // cap on the method order (CVODE BDF <= 5, Adams <= 12); 0 = default
-  long max_steps = 500'000'000;  // step cap per run
-  double t_max = 1e7;            // s, physical end time if no equilibrium is reached
+  long max_steps = 500'000'000;   // step cap per run
+  double t_max = 1e7;             // s, physical end time if no equilibrium is reached
   double equilibrium_tol = 1e-8;  // static residual at which the run stops (dimensionless)
   double max_wall_seconds = 0.0;  // wall-clock cap per run, s; 0 = none
   // Residual check interval in steps; 0 = automatic: 1000 for the fixed-step explicit
@@ -81,8 +82,8 @@ const char* to_string(RunStatus s);
 struct RunStats {
   std::string integrator;
   RunStatus status = RunStatus::SolverFailure;
-  std::string message;        // why it stopped, with the SUNDIALS flag name where relevant
-  double t_final = 0.0;       // s
+  std::string message;    // why it stopped, with the SUNDIALS flag name where relevant
+  double t_final = 0.0;   // s
   double residual = 0.0;  // static residual at the end
   // Round-off floor of that residual (MechanicalSystem::residual_roundoff) at the end.
   double residual_floor = 0.0;
@@ -150,6 +151,14 @@ class RunObserver {
 RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
                             const IntegratorOptions& opt, std::vector<double>& x,
                             std::vector<double>& v, RunObserver* observer = nullptr);
+
+// The static residual run_to_equilibrium accepts as equilibrium at state (t, x): equilibrium_tol,
+// or the residual's round-off floor there (MechanicalSystem::residual_roundoff) where that is
+// larger, but never more than 1e3 x equilibrium_tol (a tolerance is not loosened further: a
+// run asked for the impossible ends at t_max). Costs one pass over the model's springs. Integrators that solve for the equilibrium
+// themselves (static) aim at this, so that they stop where the driver does.
+double equilibrium_threshold(const MechanicalSystem& sys, double t, const double* x,
+                             double equilibrium_tol);
 
 // Convenience: make_integrator(name) + run_to_equilibrium.
 RunStats run_to_equilibrium(const MechanicalSystem& sys, const std::string& integrator,

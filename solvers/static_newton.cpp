@@ -14,16 +14,18 @@
 //      iteration) on the static residual in newtons,
 //          F(x) = M a_c(t, x) = F_spring(x) + M g = 0,   dF/dx = K = M Ax
 //      (symmetric; sparse KLU on the model's stiffness pattern), from the relaxed x.
-//      KINSOL stops at ||F||_inf / F_ref <= equilibrium_tol / 2, where F_ref is
-//      inferred from r(x) at the relaxed state (F_ref = max_i |F_i| / r), so that the
-//      per-particle residual r is <= equilibrium_tol at the solution. The Newton solution is
-//      accepted only if r(x*) <= equilibrium_tol AND max_i |x*_i - x_i| <=
+//      KINSOL stops at ||F||_inf / F_ref <= target / 2, where F_ref is inferred from r(x) at
+//      the relaxed state (F_ref = max_i |F_i| / r) and target = equilibrium_threshold(), the
+//      residual the driver accepts: equilibrium_tol, or the round-off floor where that is
+//      larger -- aiming below the floor would reject every attempt (a 101 x 101 quarter sheet
+//      at L0 = 5 mm ran to t_max that way). The Newton solution is
+//      accepted only if r(x*) <= target AND max_i |x*_i - x_i| <=
 //      kMaxNewtonCorrection (1e-3 m): a larger correction means Newton left the basin of
 //      the state the dynamics are heading to (another branch), whatever its residual.
 //      Accepted: the state becomes (x*, v = 0) at the same t, so run_to_equilibrium sees an
 //      equilibrium at once (further steps, if any, continue the relaxation from there).
 //      Failed or rejected: the relaxation goes on from where it was and the threshold drops
-//      x 0.1, so the next attempt starts closer; once it is below equilibrium_tol no further
+//      x 0.1, so the next attempt starts closer; once it is below the target no further
 //      attempt is made and the dynamics alone finish the run. How a run ended shows in its
 //      final state: velocities are exactly zero only if a polish was accepted (and the run
 //      stopped there); RunStats.nonlin_fails includes the rejected attempts.
@@ -142,9 +144,12 @@ class StaticRelaxNewton final : public Integrator {
     const double t = relax_->time();
     if (!polished_ && threshold_ > opt_.equilibrium_tol && t >= sys_->equilibrium_start_time()) {
       const double r = sys_->static_residual(t, relax_->positions());
-      if (r <= threshold_ && r > opt_.equilibrium_tol) {
+      const double target = r <= threshold_ ? equilibrium_threshold(*sys_, t, relax_->positions(),
+                                                                    opt_.equilibrium_tol)
+                                            : 0.0;
+      if (r <= threshold_ && r > target && threshold_ > target) {
         try {
-          return polish(t, r);
+          return polish(t, r, target);
         } catch (const std::exception& e) {  // a broken SUNDIALS invariant, reported as a status
           return {false, std::string("static polish: ") + e.what()};
         }
@@ -171,8 +176,9 @@ class StaticRelaxNewton final : public Integrator {
   }
 
  private:
-  // One Newton polish from the relaxed state at time t (residual r0 > equilibrium_tol).
-  Step polish(double t, double r0) {
+  // One Newton polish from the relaxed state at time t (residual r0 > target, the residual the
+  // driver accepts: equilibrium_tol, or the round-off floor where that is larger).
+  Step polish(double t, double r0, double target) {
     ++attempts_;
     const int n = sys_->dof();
     void* mem = k_->mem.get();
@@ -190,7 +196,7 @@ class StaticRelaxNewton final : public Integrator {
     if (f_max > 0.0) {
       N_VConst(r0 / f_max, k_->f_scale.get());
       k_->log.clear();
-      check(KINSetFuncNormTol(mem, 0.5 * opt_.equilibrium_tol), "KINSetFuncNormTol", kName);
+      check(KINSetFuncNormTol(mem, 0.5 * target), "KINSetFuncNormTol", kName);
       // KINSOL counters restart with every KINSol call.
       const int flag =
           KINSol(mem, k_->x.get(), KIN_LINESEARCH, k_->x_scale.get(), k_->f_scale.get());
@@ -205,8 +211,7 @@ class StaticRelaxNewton final : public Integrator {
         double correction = 0.0;
         for (int i = 0; i < n; ++i)
           correction = std::max(correction, std::abs(x[i] - x_relaxed[i]));
-        accepted = correction <= kMaxNewtonCorrection &&
-                   sys_->static_residual(t, x) <= opt_.equilibrium_tol;
+        accepted = correction <= kMaxNewtonCorrection && sys_->static_residual(t, x) <= target;
       }
     }
     if (!accepted) {

@@ -109,6 +109,30 @@ TEST_CASE("static polishes with Newton: exact rest state, same four_corner equil
   CHECK(d.stats.steps < relaxed.stats.steps);  // the polish ends the run early
 }
 
+TEST_CASE("static and cvode-bdf stop at the round-off floor when it is above equilibrium_tol") {
+  // At k = 1e5 N/m the four_corner floor (~3.6e-7) is above the default tolerance 1e-8 and the
+  // residual at rest is ~2.5e-8: both must stop where the driver's rule (equilibrium_threshold)
+  // says, static by an accepted polish (aiming at 1e-8 it would reject every attempt).
+  DrapeParams p;
+  p.stiffness = 1e5;
+  const DrapeGrid grid = build_drape_grid(p);
+  const IntegratorOptions opt;
+  const Drape bdf = drape(grid.network, "cvode-bdf", opt);
+  const Drape st = drape(grid.network, "static", opt);
+  for (const Drape* d : {&bdf, &st}) {
+    INFO(d->stats.integrator << ": " << d->stats.message);
+    REQUIRE(d->stats.status == RunStatus::Equilibrium);
+    CHECK(d->stats.residual > opt.equilibrium_tol);
+    CHECK(d->stats.residual <= d->stats.residual_floor);
+    CHECK(equilibrium_threshold(grid.network, d->stats.t_final, d->x.data(), opt.equilibrium_tol) ==
+          d->stats.residual_floor);
+  }
+  CHECK(max_abs_difference(st.v, std::vector<double>(st.v.size(), 0.0)) == 0.0);
+  CHECK(max_abs_difference(st.x, bdf.x) <= kAgreement);
+  // The floor never loosens a tolerance by more than 1e3: 1e-14 stays below it.
+  CHECK(equilibrium_threshold(grid.network, bdf.stats.t_final, bdf.x.data(), 1e-14) == 1e-11);
+}
+
 TEST_CASE("static lands on the two_corner equilibrium of the dynamics") {
   DrapeParams p;
   p.layout = PinLayout::TwoCorner;
