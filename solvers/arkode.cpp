@@ -226,11 +226,7 @@ class Arkode final : public Integrator {
       check(ERKStepGetNumSteps(mem, &st.steps), "ERKStepGetNumSteps", kErk);
       check(ERKStepGetNumRhsEvals(mem, &st.rhs_evals), "ERKStepGetNumRhsEvals", kErk);
       check(ERKStepGetNumErrTestFails(mem, &st.err_test_fails), "ERKStepGetNumErrTestFails", kErk);
-      if (st.steps > 0) {
-        ARKodeButcherTable B = nullptr;
-        check(ERKStepGetCurrentButcherTable(mem, &B), "ERKStepGetCurrentButcherTable", kErk);
-        st.max_order_used = B ? B->q : 0;
-      }
+      if (st.steps > 0) st.max_order_used = last_order();
       return;
     }
     void* mem = s_->ark.get();
@@ -245,11 +241,22 @@ class Arkode final : public Integrator {
     check(ARKStepGetNumLinIters(mem, &st.lin_iters), "ARKStepGetNumLinIters", kArkLs);
     check(ARKStepGetNumLinRhsEvals(mem, &nfe_ls), "ARKStepGetNumLinRhsEvals", kArkLs);
     st.rhs_evals = nfe + nfi + nfe_ls;
-    if (st.steps > 0) {
-      ARKodeButcherTable Bi = nullptr, Be = nullptr;
-      check(ARKStepGetCurrentButcherTables(mem, &Bi, &Be), "ARKStepGetCurrentButcherTables", kArk);
-      st.max_order_used = Bi ? Bi->q : (Be ? Be->q : 0);
+    if (st.steps > 0) st.max_order_used = last_order();
+  }
+
+  // The order of the Butcher table in use (implicit table for ARK IMEX).
+  int last_order() const override {
+    if (!s_) return 0;
+    if (method_ == ArkMethod::Erk) {
+      ARKodeButcherTable B = nullptr;
+      check(ERKStepGetCurrentButcherTable(s_->erk.get(), &B), "ERKStepGetCurrentButcherTable",
+            kErk);
+      return B ? B->q : 0;
     }
+    ARKodeButcherTable Bi = nullptr, Be = nullptr;
+    check(ARKStepGetCurrentButcherTables(s_->ark.get(), &Bi, &Be), "ARKStepGetCurrentButcherTables",
+          kArk);
+    return Bi ? Bi->q : (Be ? Be->q : 0);
   }
 
  private:
@@ -298,10 +305,11 @@ std::unique_ptr<Integrator> make_arkode_dirk() {
 std::unique_ptr<Integrator> make_arkode_imex() {
   return std::make_unique<Arkode>(
       ArkMethod::Imex,
-      IntegratorInfo{"arkode-imex",
-                     "ARKODE ARKStep IMEX (ARK 4 default): springs + damping implicit (sparse direct), "
-                     "gravity explicit",
-                     4, true, false});
+      IntegratorInfo{
+          "arkode-imex",
+          "ARKODE ARKStep IMEX (ARK 4 default): springs + damping implicit (sparse direct), "
+          "gravity explicit",
+          4, true, false});
 }
 
 }  // namespace knitsim::detail

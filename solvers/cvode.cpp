@@ -314,7 +314,7 @@ class Cvode final : public Integrator {
     s_ = std::move(s);
     t_ = t0;
     stop_time_ = std::numeric_limits<double>::quiet_NaN();
-    max_order_used_ = 0;
+    max_order_used_ = last_order_ = 0;
   }
 
   Step step(double t_stop) override {
@@ -335,10 +335,12 @@ class Cvode final : public Integrator {
     int order = 0;
     const int got = CVodeGetLastOrder(mem, &order);
     if (got < 0) return {false, step_failure("CVodeGetLastOrder", got, kName, t_, s_->log)};
+    last_order_ = order;
     max_order_used_ = std::max(max_order_used_, order);
     return {};
   }
 
+  int last_order() const override { return last_order_; }
   double time() const override { return t_; }
   const double* positions() const override { return vec_data(s_->y.get()); }
   const double* velocities() const override {
@@ -400,6 +402,7 @@ class Cvode final : public Integrator {
   double t_ = 0.0;
   double stop_time_ = 0.0;
   int max_order_used_ = 0;
+  int last_order_ = 0;  // order of the last step (CVodeGetLastOrder)
 };
 
 }  // namespace

@@ -177,6 +177,7 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
   }
 
   long steps = 0;
+  double t_prev = integ.time();
   while (true) {
     const Integrator::Step st = integ.step(opt.t_max);
     ++steps;
@@ -185,6 +186,8 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
       return finish(diverged ? RunStatus::Diverged : RunStatus::SolverFailure, st.message);
     }
     const double t = integ.time();
+    if (observer) observer->on_step(t, t - t_prev, integ.last_order());
+    t_prev = t;
     if (steps % check_every == 0 || t >= opt.t_max) {
       if (!state_ok()) {
         std::ostringstream os;

@@ -128,6 +128,10 @@ class Integrator {
   // Advance by one (internal) step, never beyond t_stop.
   virtual Step step(double t_stop) = 0;
 
+  // Method order of the step just taken: the controller's choice for variable-order methods
+  // (cvode-bdf, cvode-adams), else info().order.
+  virtual int last_order() const { return info().order; }
+
   virtual double time() const = 0;
   virtual const double* positions() const = 0;
   virtual const double* velocities() const = 0;
@@ -139,10 +143,13 @@ class Integrator {
 const std::vector<IntegratorInfo>& integrator_catalog();
 std::unique_ptr<Integrator> make_integrator(const std::string& name);  // throws invalid_argument
 
-// Observer of a run, called at every residual check (for progress lines and time series).
+// Observer of a run: on_step after every step (t after it, h = its size -- 0 for a step that did
+// not advance time, e.g. a static polish attempt -- and the method order used), on_check at every
+// residual check (for progress lines and time series); a check follows the step at the same t.
 class RunObserver {
  public:
   virtual ~RunObserver() = default;
+  virtual void on_step(double /*t*/, double /*h*/, int /*order*/) {}
   virtual void on_check(double t, const double* x, const double* v, double residual) = 0;
 };
 
@@ -155,8 +162,9 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
 // The static residual run_to_equilibrium accepts as equilibrium at state (t, x): equilibrium_tol,
 // or the residual's round-off floor there (MechanicalSystem::residual_roundoff) where that is
 // larger, but never more than 1e3 x equilibrium_tol (a tolerance is not loosened further: a
-// run asked for the impossible ends at t_max). Costs one pass over the model's springs. Integrators that solve for the equilibrium
-// themselves (static) aim at this, so that they stop where the driver does.
+// run asked for the impossible ends at t_max). Costs one pass over the model's springs. Integrators
+// that solve for the equilibrium themselves (static) aim at this, so that they stop where the
+// driver does.
 double equilibrium_threshold(const MechanicalSystem& sys, double t, const double* x,
                              double equilibrium_tol);
 

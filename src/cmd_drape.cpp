@@ -7,14 +7,15 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <iostream>
-#include <memory>
 #include <map>
+#include <memory>
 #include <stdexcept>
 
 #include "src/cli_options.hpp"
 #include "src/commands.hpp"
 #include "src/output.hpp"
 #include "src/scene.hpp"
+#include "src/step_log.hpp"
 #include "src/targets.hpp"
 
 namespace knitsim {
@@ -28,6 +29,7 @@ struct DrapeArgs {
   IntegratorOptions options;  // only the fields bound to flags below are taken from here
   std::string out;
   std::string target;
+  bool step_history = false;
   bool quiet = false;
 };
 
@@ -89,12 +91,18 @@ void run(const DrapeArgs& args) {
   }
 
   const std::filesystem::path dir = make_output_dir(args.out, "drape-" + scene.name);
+  std::string steps_csv;
   DrapeResult result = [&] {
     ProgressLine progress(scene.name + " " + integrator, scene.options.equilibrium_tol,
                           !args.quiet);
-    return run_drape(scene, integrator, &progress);
+    StepLog steps(&progress);
+    RunObserver* observer = args.step_history ? static_cast<RunObserver*>(&steps) : &progress;
+    DrapeResult r = run_drape(scene, integrator, observer);
+    steps_csv = steps.csv();
+    return r;
   }();
   write_drape_outputs(dir, scene, result, args.target.empty() ? nullptr : &target_edges);
+  if (args.step_history) write_file_atomic(dir / "steps.csv", steps_csv);
   if (!args.quiet) std::cout << human_summary(scene, result, dir.string()) << std::flush;
   if (result.stats.status != RunStatus::Equilibrium) throw CLI::RuntimeError(3);
 }
@@ -142,6 +150,9 @@ void register_drape_command(CLI::App& app) {
   cmd->add_option("--target", args->target,
                   "Target edges (CSV, src/targets.hpp): adds the Eq. 5 objective and both sets of "
                   "edge coefficients to summary.json and writes target_edges.csv");
+  cmd->add_flag("--step-history", args->step_history,
+                "Also write steps.csv: t, step size, order and residual of every step (thinned "
+                "evenly beyond 2e5 rows)");
   cmd->add_flag("--quiet", args->quiet, "No progress line and no summary on stdout");
   cmd->callback([args] { run(*args); });
 }
