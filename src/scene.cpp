@@ -13,6 +13,7 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include "models/mirror_quarter.hpp"
 #include "src/cli_options.hpp"
@@ -51,6 +52,20 @@ const std::vector<Key>& keys() {
                       std::function<bool(Scene&, const std::string&)> set, const char* accepted) {
       k.push_back({name, kind, nullptr, std::move(set), accepted});
     };
+    // A text key naming one of a few values of the DrapeParams member `field`: (name, value).
+    auto choice = [&other](const char* name, auto field, auto values) {
+      std::string accepted = "one of ";
+      for (std::size_t i = 0; i < values.size(); ++i)
+        accepted += (i > 0 ? ", " : "") + values[i].first;
+      other(
+          name, Kind::Text,
+          [field, values](Scene& s, const std::string& v) {
+            for (const auto& [text, value] : values)
+              if (v == text) return (s.params.*field = value, true);
+            return false;
+          },
+          accepted.c_str());
+    };
     other(
         "scene.name", Kind::Text,
         [](Scene& s, const std::string& v) { return is_name(v) ? (s.name = v, true) : false; },
@@ -61,14 +76,8 @@ const std::vector<Key>& keys() {
     number("model.damping", [](Scene& s) -> double& { return s.params.damping; });
     number("model.elongation_limit", [](Scene& s) -> double& { return s.params.elongation_limit; });
     number("model.natural_length", [](Scene& s) -> double& { return s.params.natural_length; });
-    other(
-        "model.topology", Kind::Text,
-        [](Scene& s, const std::string& v) {
-          if (v != "a" && v != "b" && v != "c") return false;
-          s.params.topology = v[0];
-          return true;
-        },
-        "one of a, b, c");
+    choice("model.topology", &DrapeParams::topology,
+           std::vector<std::pair<std::string, char>>{{"a", 'a'}, {"b", 'b'}, {"c", 'c'}});
     number("model.perturbation", [](Scene& s) -> double& { return s.params.perturbation; });
     other(
         "model.seed", Kind::Integer,
@@ -82,30 +91,12 @@ const std::vector<Key>& keys() {
           return true;
         },
         "an integer in 0..4294967295");
-    other(
-        "model.symmetry", Kind::Text,
-        [](Scene& s, const std::string& v) {
-          if (v == "none")
-            s.params.symmetry = DrapeSymmetry::None;
-          else if (v == "quarter")
-            s.params.symmetry = DrapeSymmetry::Quarter;
-          else
-            return false;
-          return true;
-        },
-        "one of none, quarter");
-    other(
-        "pins.layout", Kind::Text,
-        [](Scene& s, const std::string& v) {
-          if (v == "four_corner")
-            s.params.layout = PinLayout::FourCorner;
-          else if (v == "two_corner")
-            s.params.layout = PinLayout::TwoCorner;
-          else
-            return false;
-          return true;
-        },
-        "one of four_corner, two_corner");
+    choice("model.symmetry", &DrapeParams::symmetry,
+           std::vector<std::pair<std::string, DrapeSymmetry>>{{"none", DrapeSymmetry::None},
+                                                              {"quarter", DrapeSymmetry::Quarter}});
+    choice("pins.layout", &DrapeParams::layout,
+           std::vector<std::pair<std::string, PinLayout>>{{"four_corner", PinLayout::FourCorner},
+                                                          {"two_corner", PinLayout::TwoCorner}});
     number("pins.span", [](Scene& s) -> double& { return s.params.pin_span; });
     number("pins.move_time", [](Scene& s) -> double& { return s.params.pin_move_time; });
     number("run.t_max", [](Scene& s) -> double& { return s.options.t_max; });
