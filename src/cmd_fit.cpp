@@ -76,17 +76,10 @@ nlohmann::json params_json(const DrapeParams& p) {
 }
 
 nlohmann::json ica_json(const IcaOptions& o) {
-  return {{"decades", o.decades},
-          {"countries", o.countries},
-          {"imperialists", o.imperialists},
-          {"beta", o.beta},
-          {"gamma", o.gamma},
-          {"revolution_rate", o.revolution_rate},
-          {"xi", o.xi},
-          {"seed", o.seed},
-          {"jobs", o.jobs},
-          {"failure_cost", o.failure_cost},
-          {"stop_when_one_empire", o.stop_when_one_empire}};
+  nlohmann::json j = to_json(o);
+  j["seed"] = o.seed;
+  j["jobs"] = o.jobs;
+  return j;
 }
 
 nlohmann::json bounds_json(const DrapeFitBounds& b) {

@@ -584,6 +584,18 @@ IcaResult run_ica(const Problem& problem, const IcaOptions& options) {
 // ---------------------------------------------------------------------------------------
 // Checkpoint state as JSON
 
+nlohmann::json to_json(const IcaOptions& o) {
+  return {{"decades", o.decades},
+          {"countries", o.countries},
+          {"imperialists", o.imperialists},
+          {"beta", o.beta},
+          {"gamma", o.gamma},
+          {"revolution_rate", o.revolution_rate},
+          {"xi", o.xi},
+          {"failure_cost", o.failure_cost},
+          {"stop_when_one_empire", o.stop_when_one_empire}};
+}
+
 nlohmann::json to_json(const IcaState& s) {
   nlohmann::json empires = nlohmann::json::array();
   for (const IcaEmpireState& e : s.empires)

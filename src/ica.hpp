@@ -243,6 +243,10 @@ std::vector<int> allocate_colonies(const std::vector<double>& imperialist_costs,
 // Runs the ICA. Validates options and problem (std::invalid_argument).
 IcaResult run_ica(const Problem& problem, const IcaOptions& options);
 
+// The options that determine an ICA run's result, as JSON: every field but seed, jobs and the
+// checkpoint hooks (callers add the seed where it identifies the run).
+nlohmann::json to_json(const IcaOptions& options);
+
 // IcaState as JSON (doubles written with max_digits10 digits, so they read back bit for bit)
 // and back; ica_state_from_json throws std::invalid_argument naming a missing or mistyped field.
 nlohmann::json to_json(const IcaState& state);

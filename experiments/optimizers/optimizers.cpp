@@ -242,22 +242,8 @@ pagmo::algorithm pagmo_algorithm(const std::string& name, long budget, unsigned 
 
 // The settings of optimizer `name` for this budget (for the manifest).
 nlohmann::json optimizer_settings(const std::string& name, long budget) {
-  if (name == "ica") {
-    const IcaOptions o = ica_plan(budget, 1);
-    return {{"countries", o.countries},
-            {"imperialists", o.imperialists},
-            {"decades", o.decades},
-            {"beta", o.beta},
-            {"gamma", o.gamma},
-            {"revolution_rate", o.revolution_rate},
-            {"xi", o.xi}};
-  }
-  if (name == "lm") {
-    const DrapeLmOptions o;
-    return {{"starts_per_bracket", o.starts_per_bracket},
-            {"refine", o.refine},
-            {"max_evaluations_per_start", o.lm.max_evaluations}};
-  }
+  if (name == "ica") return to_json(ica_plan(budget, 1));
+  if (name == "lm") return to_json(DrapeLmOptions{});
   PopulationPlan plan;
   const pagmo::algorithm algo = pagmo_algorithm(name, budget, 1, plan);
   return {{"population", plan.population},
