@@ -30,11 +30,139 @@ double clamp_to_domain(const NurbsCurve& c, double u) {
   return std::clamp(u, c.u_min(), c.u_max());
 }
 
-// Speed |C'(u)|.
-double speed(const NurbsCurve& c, double u) { return norm(evaluate(c, u).first); }
+void check_degree(int p) {
+  if (p < 1 || p > kMaxNurbsDegree)
+    bad("NURBS degree = " + std::to_string(p) + ": must be in [1, " +
+        std::to_string(kMaxNurbsDegree) + "]");
+}
 
-// 5-point Gauss-Legendre quadrature of |C'| over [a, b].
-double speed_integral(const NurbsCurve& c, double a, double b) {
+// basis_derivatives without allocating: out[k * (p + 1) + j] for k = 0..order, order <= p <=
+// kMaxNurbsDegree (entries of higher orders are left alone).
+void basis_derivatives_into(int span, double u, int p, const std::vector<double>& knots, int order,
+                            double* out) {
+  // Basis functions of every degree q <= p on this span: ndu[q][a] = N_{span-q+a, q}(u),
+  // a = 0..q, raised one degree at a time with the Cox-de Boor recursion.
+  double ndu[kMaxNurbsDegree + 1][kMaxNurbsDegree + 1];
+  ndu[0][0] = 1.0;
+  for (int q = 1; q <= p; ++q)
+    for (int a = 0; a <= q; ++a) {
+      const int i = span - q + a;
+      const double left = a >= 1 ? ndu[q - 1][a - 1] : 0.0;  // N_{i,q-1}
+      const double right = a < q ? ndu[q - 1][a] : 0.0;      // N_{i+1,q-1}
+      ndu[q][a] = ratio(u - knots[i], knots[i + q] - knots[i]) * left +
+                  ratio(knots[i + q + 1] - u, knots[i + q + 1] - knots[i + 1]) * right;
+    }
+  // Derivative k of N_{i,p}: start from N_{.,p-k} and apply k times
+  //   D N_{i,q} = q [ N_{i,q-1}/(u_{i+q} - u_i) - N_{i+1,q-1}/(u_{i+q+1} - u_{i+1}) ].
+  for (int k = 0; k <= order; ++k) {
+    const int q0 = p - k;
+    // cur[a] = derivative-level values of N_{span-q+a, q}, a = 0..q, starting at q = q0.
+    double cur[kMaxNurbsDegree + 1], next[kMaxNurbsDegree + 1];
+    std::copy(ndu[q0], ndu[q0] + q0 + 1, cur);
+    for (int q = q0 + 1; q <= p; ++q) {
+      for (int a = 0; a <= q; ++a) {
+        const int i = span - q + a;
+        const double left = a >= 1 ? cur[a - 1] : 0.0;
+        const double right = a < q ? cur[a] : 0.0;
+        next[a] = q * (ratio(left, knots[i + q] - knots[i]) -
+                       ratio(right, knots[i + q + 1] - knots[i + 1]));
+      }
+      std::copy(next, next + q + 1, cur);
+    }
+    std::copy(cur, cur + p + 1, out + static_cast<size_t>(k) * (p + 1));
+  }
+}
+
+// The derivatives 0..order (order <= p) of the homogeneous numerator A(u) = sum N_{i,p} w_i P_i
+// and denominator W(u) = sum N_{i,p} w_i at u in knot span `span`.
+struct Homogeneous {
+  Vec3 A[kMaxNurbsDegree + 1];
+  double W[kMaxNurbsDegree + 1] = {};
+};
+Homogeneous homogeneous_derivatives(const NurbsCurve& c, int span, double u, int order) {
+  const int p = c.degree;
+  double d[(kMaxNurbsDegree + 1) * (kMaxNurbsDegree + 1)] = {};
+  basis_derivatives_into(span, u, p, c.knots, order, d);
+  Homogeneous h;
+  for (int k = 0; k <= order; ++k)
+    for (int j = 0; j <= p; ++j) {
+      const int i = span - p + j;
+      const double nw = d[k * (p + 1) + j] * c.weights[i];
+      h.A[k] = h.A[k] + nw * c.control[i];
+      h.W[k] += nw;
+    }
+  return h;
+}
+
+// What arc-length computations need, built once per curve. The quadrature pieces are 8 equal
+// parts of every non-empty knot span; `cumulative` holds the length up to each piece's start.
+// The speed |C'| comes from each span's power form in t = u - u_s,
+//   A(u) = sum_k a_k t^k,  W(u) = sum_k w_k t^k,  a_k = A^(k)(u_s)/k!, w_k = W^(k)(u_s)/k!
+// (exact: A and W are polynomials of degree p on a span), C' = (A' - W' A/W)/W by Horner's
+// rule: a few dozen flops per speed instead of the basis recursion with its divisions.
+struct ArcLengthTable {
+  explicit ArcLengthTable(const NurbsCurve& c);
+  // |C'(u)| for u in piece k.
+  double speed(size_t k, double u) const;
+  // 5-point Gauss-Legendre quadrature of |C'| over [a, b] inside piece k.
+  double integral(size_t k, double a, double b) const;
+
+  std::vector<double> breaks;      // piece k is [breaks[k], breaks[k + 1]]; first u_min
+  std::vector<double> cumulative;  // arc length from u_min to breaks[k]; last = total
+
+ private:
+  struct SpanPolynomial {
+    double u0 = 0.0;  // u_s
+    Vec3 a[kMaxNurbsDegree + 1];
+    double w[kMaxNurbsDegree + 1] = {};
+  };
+  int degree_;
+  std::vector<SpanPolynomial> spans_;
+  std::vector<size_t> piece_span_;  // piece -> index into spans_
+};
+
+ArcLengthTable::ArcLengthTable(const NurbsCurve& c) : degree_(c.degree) {
+  constexpr int kPiecesPerSpan = 8;
+  check_degree(c.degree);
+  breaks.push_back(c.u_min());
+  for (size_t s = c.degree; s < c.control.size(); ++s) {
+    const double a = c.knots[s], b = c.knots[s + 1];
+    if (!(b > a)) continue;
+    const Homogeneous h = homogeneous_derivatives(c, static_cast<int>(s), a, degree_);
+    SpanPolynomial poly;
+    poly.u0 = a;
+    double factorial = 1.0;
+    for (int k = 0; k <= degree_; ++k) {
+      if (k > 0) factorial *= k;
+      poly.a[k] = (1.0 / factorial) * h.A[k];
+      poly.w[k] = h.W[k] / factorial;
+    }
+    spans_.push_back(poly);
+    for (int k = 1; k <= kPiecesPerSpan; ++k) {
+      breaks.push_back(a + (b - a) * k / kPiecesPerSpan);
+      piece_span_.push_back(spans_.size() - 1);
+    }
+  }
+  cumulative.assign(breaks.size(), 0.0);
+  for (size_t k = 0; k + 1 < breaks.size(); ++k)
+    cumulative[k + 1] = cumulative[k] + integral(k, breaks[k], breaks[k + 1]);
+}
+
+double ArcLengthTable::speed(size_t k, double u) const {
+  const SpanPolynomial& s = spans_[piece_span_[k]];
+  const double t = u - s.u0;
+  Vec3 A = s.a[degree_], dA;
+  double W = s.w[degree_], dW = 0.0;
+  for (int i = degree_ - 1; i >= 0; --i) {
+    dA = t * dA + A;
+    dW = dW * t + W;
+    A = t * A + s.a[i];
+    W = W * t + s.w[i];
+  }
+  return norm((1.0 / W) * (dA - (dW / W) * A));
+}
+
+double ArcLengthTable::integral(size_t k, double a, double b) const {
   static constexpr std::array<double, 5> x{0.0, -0.5384693101056831, 0.5384693101056831,
                                            -0.9061798459386640, 0.9061798459386640};
   static constexpr std::array<double, 5> w{0.5688888888888889, 0.4786286704993665,
@@ -42,27 +170,15 @@ double speed_integral(const NurbsCurve& c, double a, double b) {
                                            0.2369268850561891};
   const double mid = 0.5 * (a + b), half = 0.5 * (b - a);
   double s = 0.0;
-  for (int k = 0; k < 5; ++k) s += w[k] * speed(c, mid + half * x[k]);
+  for (int i = 0; i < 5; ++i) s += w[i] * speed(k, mid + half * x[i]);
   return half * s;
-}
-
-// Quadrature pieces: 8 equal parts of every non-empty knot span, as ascending breakpoints.
-std::vector<double> quadrature_breaks(const NurbsCurve& c) {
-  constexpr int kPiecesPerSpan = 8;
-  std::vector<double> breaks{c.u_min()};
-  for (size_t s = c.degree; s < c.control.size(); ++s) {
-    const double a = c.knots[s], b = c.knots[s + 1];
-    if (!(b > a)) continue;
-    for (int k = 1; k <= kPiecesPerSpan; ++k) breaks.push_back(a + (b - a) * k / kPiecesPerSpan);
-  }
-  return breaks;
 }
 
 }  // namespace
 
 void NurbsCurve::validate() const {
   const size_t n = control.size();
-  if (degree < 1) bad("NURBS degree = " + std::to_string(degree) + ": must be >= 1");
+  check_degree(degree);
   if (n < static_cast<size_t>(degree) + 1)
     bad("NURBS control points = " + std::to_string(n) +
         ": need at least degree + 1 = " + std::to_string(degree + 1));
@@ -119,64 +235,20 @@ int find_span(int control_count, int p, const std::vector<double>& knots, double
 
 void basis_derivatives(int span, double u, int p, const std::vector<double>& knots, int order,
                        std::vector<double>& out) {
-  // Basis functions of every degree q <= p on this span: ndu[q][a] = N_{span-q+a, q}(u),
-  // a = 0..q, raised one degree at a time with the Cox-de Boor recursion.
-  std::vector<std::vector<double>> ndu(p + 1);
-  ndu[0] = {1.0};
-  for (int q = 1; q <= p; ++q) {
-    ndu[q].assign(q + 1, 0.0);
-    for (int a = 0; a <= q; ++a) {
-      const int i = span - q + a;
-      const double left = a >= 1 ? ndu[q - 1][a - 1] : 0.0;  // N_{i,q-1}
-      const double right = a < q ? ndu[q - 1][a] : 0.0;      // N_{i+1,q-1}
-      ndu[q][a] = ratio(u - knots[i], knots[i + q] - knots[i]) * left +
-                  ratio(knots[i + q + 1] - u, knots[i + q + 1] - knots[i + 1]) * right;
-    }
-  }
-  // Derivative k of N_{i,p}: start from N_{.,p-k} and apply k times
-  //   D N_{i,q} = q [ N_{i,q-1}/(u_{i+q} - u_i) - N_{i+1,q-1}/(u_{i+q+1} - u_{i+1}) ].
+  check_degree(p);
   out.assign(static_cast<size_t>(order + 1) * (p + 1), 0.0);
-  std::vector<double> cur, next;
-  for (int k = 0; k <= order; ++k) {
-    if (k > p) break;  // derivatives beyond the degree vanish
-    const int q0 = p - k;
-    // cur[a] = derivative-level values of N_{span-q+a, q}, a = 0..q, starting at q = q0.
-    cur = ndu[q0];
-    for (int q = q0 + 1; q <= p; ++q) {
-      next.assign(q + 1, 0.0);
-      for (int a = 0; a <= q; ++a) {
-        const int i = span - q + a;
-        const double left = a >= 1 ? cur[a - 1] : 0.0;
-        const double right = a < q ? cur[a] : 0.0;
-        next[a] = q * (ratio(left, knots[i + q] - knots[i]) -
-                       ratio(right, knots[i + q + 1] - knots[i + 1]));
-      }
-      cur.swap(next);
-    }
-    std::copy(cur.begin(), cur.end(), out.begin() + static_cast<size_t>(k) * (p + 1));
-  }
+  basis_derivatives_into(span, u, p, knots, std::min(order, p), out.data());
 }
 
 CurvePoint evaluate(const NurbsCurve& c, double u) {
   u = clamp_to_domain(c, u);
-  const int p = c.degree;
-  const int span = find_span(static_cast<int>(c.control.size()), p, c.knots, u);
-  std::vector<double> d;
-  basis_derivatives(span, u, p, c.knots, 2, d);
-  // Derivatives of the homogeneous numerator A and denominator W.
-  Vec3 A[3];
-  double W[3] = {0.0, 0.0, 0.0};
-  for (int k = 0; k < 3; ++k)
-    for (int j = 0; j <= p; ++j) {
-      const int i = span - p + j;
-      const double nw = d[k * (p + 1) + j] * c.weights[i];
-      A[k] = A[k] + nw * c.control[i];
-      W[k] += nw;
-    }
+  check_degree(c.degree);
+  const int span = find_span(static_cast<int>(c.control.size()), c.degree, c.knots, u);
+  const Homogeneous h = homogeneous_derivatives(c, span, u, std::min(2, c.degree));
   CurvePoint r;
-  r.point = (1.0 / W[0]) * A[0];
-  r.first = (1.0 / W[0]) * (A[1] - W[1] * r.point);
-  r.second = (1.0 / W[0]) * (A[2] - 2.0 * W[1] * r.first - W[2] * r.point);
+  r.point = (1.0 / h.W[0]) * h.A[0];
+  r.first = (1.0 / h.W[0]) * (h.A[1] - h.W[1] * r.point);
+  r.second = (1.0 / h.W[0]) * (h.A[2] - 2.0 * h.W[1] * r.first - h.W[2] * r.point);
   return r;
 }
 
@@ -277,11 +349,11 @@ NurbsCurve interpolate_cubic(const std::vector<Vec3>& points, Parametrization pa
 double arc_length(const NurbsCurve& c, double u0, double u1) {
   u0 = clamp_to_domain(c, u0);
   u1 = clamp_to_domain(c, u1);
+  const ArcLengthTable table(c);
   double length = 0.0;
-  const std::vector<double> breaks = quadrature_breaks(c);
-  for (size_t k = 1; k < breaks.size(); ++k) {
-    const double a = std::max(u0, breaks[k - 1]), b = std::min(u1, breaks[k]);
-    if (b > a) length += speed_integral(c, a, b);
+  for (size_t k = 0; k + 1 < table.breaks.size(); ++k) {
+    const double a = std::max(u0, table.breaks[k]), b = std::min(u1, table.breaks[k + 1]);
+    if (b > a) length += table.integral(k, a, b);
   }
   return length;
 }
@@ -294,23 +366,21 @@ CurveSamples sample_curve(const NurbsCurve& c, int count, Spacing spacing) {
   if (spacing == Spacing::Parameter) {
     for (int k = 0; k < count; ++k) s.u[k] = u0 + (u1 - u0) * k / (count - 1);
   } else {
-    // Cumulative length at the quadrature breakpoints, then Newton on
-    // S(u) = S(a) + int_a^u |C'| - target inside the bracketing piece [a, b].
-    const std::vector<double> breaks = quadrature_breaks(c);
-    std::vector<double> cum(breaks.size(), 0.0);
-    for (size_t k = 1; k < breaks.size(); ++k)
-      cum[k] = cum[k - 1] + speed_integral(c, breaks[k - 1], breaks[k]);
+    // Newton on S(u) = S(a) + int_a^u |C'| - target inside the bracketing piece [a, b].
+    const ArcLengthTable table(c);
+    const std::vector<double>& cum = table.cumulative;
     const double total = cum.back();
+    const size_t pieces = cum.size() - 1;
     for (int k = 0; k < count; ++k) {
       const double target = total * k / (count - 1);
       size_t piece = std::upper_bound(cum.begin(), cum.end(), target) - cum.begin();
-      piece = std::clamp<size_t>(piece, 1, breaks.size() - 1);
-      const double a = breaks[piece - 1], b = breaks[piece];
-      const double la = cum[piece - 1], lb = cum[piece];
+      piece = std::clamp<size_t>(piece, 1, pieces) - 1;
+      const double a = table.breaks[piece], b = table.breaks[piece + 1];
+      const double la = cum[piece], lb = cum[piece + 1];
       double u = lb > la ? a + (b - a) * (target - la) / (lb - la) : a;
       for (int it = 0; it < 30; ++it) {
-        const double f = la + speed_integral(c, a, u) - target;
-        const double df = speed(c, u);
+        const double f = la + table.integral(piece, a, u) - target;
+        const double df = table.speed(piece, u);
         if (std::abs(f) <= 1e-13 * total || !(df > 0.0)) break;
         u = std::clamp(u - f / df, a, b);
       }

@@ -6,6 +6,7 @@
 #include <CLI/Version.hpp>
 #include <algorithm>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -143,6 +144,16 @@ std::string format_number(double value, int digits) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.*g", digits, value);
   return buf;
+}
+
+void append_number(std::string& out, double value) {
+  char buf[32];  // the longest shortest form, e.g. -2.2250738585072014e-308, has 24 characters
+  out.append(buf, std::to_chars(buf, buf + sizeof buf, value).ptr);
+}
+
+void append_integer(std::string& out, long long value) {
+  char buf[24];
+  out.append(buf, std::to_chars(buf, buf + sizeof buf, value).ptr);
 }
 
 std::string Table::text() const {

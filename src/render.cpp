@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <sstream>
@@ -406,103 +407,154 @@ std::vector<Vec3> stroke_fit_points(const std::vector<Stroke>& strokes,
   return pts;
 }
 
-// A half disc of `radius` px at c bulging along (dx, dy) (a full disc if that is zero), added
-// to the current path.
-void add_cap(cairo_t* cr, ScreenPoint c, double dx, double dy, double radius) {
-  cairo_new_sub_path(cr);
-  if (dx == 0.0 && dy == 0.0) {
-    cairo_arc(cr, c.x, c.y, radius, 0, 2 * kPi);
-  } else {
-    const double angle = std::atan2(dy, dx);
-    cairo_arc(cr, c.x, c.y, radius, angle - 0.5 * kPi, angle + 0.5 * kPi);
-  }
-  cairo_close_path(cr);
+// Samples per pixel along each axis of the tube layer (anti-aliasing by supersampling).
+constexpr int kTubeSamples = 2;
+
+// 8-bit channels of a colour, packed as 0x00RRGGBB.
+uint32_t packed(Rgb c) {
+  auto byte = [](double x) { return static_cast<uint32_t>(255.0 * std::clamp(x, 0.0, 1.0) + 0.5); };
+  return byte(c.r) << 16 | byte(c.g) << 8 | byte(c.b);
 }
 
-void draw_tubes(cairo_t* cr, const std::vector<Stroke>& strokes, const PixelProjection& p,
-                double u) {
-  struct Segment {
-    double depth;
-    size_t stroke, k;  // points k and k+1 (k alone for a one-point stroke)
-  };
-  std::vector<Segment> segs;
-  double d0 = std::numeric_limits<double>::infinity(), d1 = -d0;
-  for (size_t i = 0; i < strokes.size(); ++i) {
-    const auto& pts = strokes[i].points;
-    if (pts.size() == 1 && finite(pts[0])) segs.push_back({p(pts[0]).depth, i, 0});
-    for (size_t k = 0; k + 1 < pts.size(); ++k)
-      if (finite(pts[k]) && finite(pts[k + 1]))
-        segs.push_back({0.5 * (p(pts[k]).depth + p(pts[k + 1]).depth), i, k});
-  }
-  for (const Segment& s : segs) d0 = std::min(d0, s.depth), d1 = std::max(d1, s.depth);
-  std::stable_sort(segs.begin(), segs.end(),
-                   [](const Segment& a, const Segment& b) { return a.depth < b.depth; });
+// One polyline segment as a capsule, in sample units (see draw_tubes).
+struct Capsule {
+  double ax = 0, ay = 0, za = 0;    // first end (sample x, y) and its depth
+  double ex = 0, ey = 0, ez = 0;    // second end minus the first
+  double len2 = 0, nx = 0, ny = 0;  // |e|^2 on screen, unit screen normal (0 if |e| = 0)
+  double R = 0, rb = 0;             // outer (body + outline) and body radius
+  double shift = 0, band = 0;       // highlight centre offset along n, half width
+  uint32_t body = 0, rim = 0, shine = 0;
+  int i0 = 0, i1 = -1, j0 = 0, j1 = -1;  // sample bounding box, clipped to the layer
+};
+
+// The tubes of all strokes, z-buffered on a layer of ss x ss samples per pixel (ss = kTubeSamples),
+// then averaged into the canvas (samples no tube covers keep the canvas pixel). Every polyline
+// segment is a capsule of radius R = r + outline around its centreline; a sample at distance d from
+// the segment lies on the capsule's surface at depth  centre depth + sqrt(R^2 - d^2)  (px units),
+// so where yarns cross or touch the nearer surface wins sample by sample, and consecutive segments
+// of a yarn join seamlessly. Colours: the outline ring (d > r) dark; the body shaded by the
+// segment's angle to the light and dimmed with distance; a lighter highlight band of width r/2
+// beside the centreline, shifted toward the light across the tube. The layer is processed in
+// bands of rows small enough to stay in cache.
+void draw_tubes(const Canvas& c, const std::vector<Stroke>& strokes, const PixelProjection& p,
+                const RenderView& v) {
+  const double u = ui_scale(v);
+  const int ss = kTubeSamples;
+  const int W = v.width * ss, H = v.height * ss;
+
+  double d0 = std::numeric_limits<double>::infinity(), d1 = -d0;  // depth range, m
+  for (const Stroke& s : strokes)
+    for (const Vec3& q : s.points)
+      if (finite(q)) d0 = std::min(d0, p(q).depth), d1 = std::max(d1, p(q).depth);
   const Vec3 light = light_direction(p);
   // The light's direction on screen.
   const double lx = dot(light, p.right), ly = -dot(light, p.up), ln = std::hypot(lx, ly);
-  for (const Segment& s : segs) {
-    const std::vector<Vec3>& pts = strokes[s.stroke].points;
-    const Rgb color = strokes[s.stroke].color;
-    const double radius = strokes[s.stroke].radius;
-    const size_t k = s.k, n = pts.size();
-    const Vec3 a = pts[k], b = n > 1 ? pts[k + 1] : a;
-    // The piece runs from the middle of the previous segment to the middle of the next (butt
-    // caps, round joins), so neighbouring pieces overlap on the same tube whichever is drawn
-    // first; the ends of a stroke get half-disc caps facing outward.
-    ScreenPoint path[4];
-    int count = 0;
-    if (k > 0 && finite(pts[k - 1])) path[count++] = p(0.5 * (pts[k - 1] + a));
-    path[count++] = p(a);
-    path[count++] = p(b);
-    if (k + 2 < n && finite(pts[k + 2])) path[count++] = p(0.5 * (b + pts[k + 2]));
+
+  auto capsule = [&](const Stroke& stroke, Vec3 a, Vec3 b) {
     const ScreenPoint sa = p(a), sb = p(b);
-    const bool start_cap = k == 0, end_cap = k + 2 >= n;
-    const double r = radius > 0.0 && std::isfinite(radius) ? radius * p.scale : 2.0 * u;
+    const double r = stroke.radius > 0.0 && std::isfinite(stroke.radius) ? stroke.radius * p.scale
+                                                                         : 2.0 * u;  // px
+    const double outline = std::clamp(0.16 * r, 0.6 * u, 2.5 * u);
     // A cylinder along t lit from `light` is brightest at sqrt(1 - (t.l)^2); the far side of
     // the scene is dimmed by up to 25 % (depth cue).
     const double tl = dot(unit(b - a), light);
-    const double near = d1 > d0 ? (s.depth - d0) / (d1 - d0) : 1.0;
+    const double near = d1 > d0 ? (0.5 * (sa.depth + sb.depth) - d0) / (d1 - d0) : 1.0;
     const double lit = 0.55 + 0.45 * std::sqrt(std::max(0.0, 1.0 - tl * tl));
-    const Rgb body = scaled(color, lit * (0.75 + 0.25 * near));
-    const double outline = std::clamp(0.16 * r, 0.6 * u, 2.5 * u);
-    // The path, shifted by (ox, oy) px and with its interior ends pushed on by up to `extra`
-    // px (the body passes the outline's end so no anti-aliased dark seam shows there).
-    auto trace = [&](double ox, double oy, double extra) {
-      ScreenPoint q[4];
-      std::copy(path, path + count, q);
-      auto push_on = [&](ScreenPoint& end, ScreenPoint from) {
-        const double dx = end.x - from.x, dy = end.y - from.y, len = std::hypot(dx, dy);
-        if (len > 0.0)
-          end.x += std::min(extra, len) * dx / len, end.y += std::min(extra, len) * dy / len;
-      };
-      if (!start_cap) push_on(q[0], q[1]);
-      if (!end_cap) push_on(q[count - 1], q[count - 2]);
-      cairo_move_to(cr, q[0].x + ox, q[0].y + oy);
-      for (int i = 1; i < count; ++i) cairo_line_to(cr, q[i].x + ox, q[i].y + oy);
-    };
-    auto tube = [&](double width, Rgb c, double extra) {
-      set_color(cr, c);
-      cairo_new_path(cr);
-      if (start_cap) add_cap(cr, sa, sa.x - sb.x, sa.y - sb.y, 0.5 * width);
-      if (end_cap) add_cap(cr, sb, sb.x - sa.x, sb.y - sa.y, 0.5 * width);
-      cairo_fill(cr);
-      trace(0, 0, extra);
-      cairo_set_line_width(cr, width);
-      cairo_stroke(cr);
-    };
-    cairo_set_line_cap(cr, CAIRO_LINE_CAP_BUTT);
-    tube(2.0 * (r + outline), scaled(color, 0.35), 0.0);
-    tube(2.0 * r, body, 1.5);
-    // The highlight runs beside the centreline, shifted toward the light across the tube only
-    // (a shift along it would open gaps between pieces).
-    const double tx = sb.x - sa.x, ty = sb.y - sa.y, tn = std::hypot(tx, ty);
-    const double along = tn > 0.0 ? (lx * tx + ly * ty) / (tn * tn) : 0.0;
-    const double off = ln > 0.0 ? 0.4 * r / ln : 0.0;
-    trace(off * (lx - along * tx), off * (ly - along * ty), 1.5);
-    cairo_set_line_width(cr, 0.5 * r);
-    set_color(cr, mixed(body, {1, 1, 1}, 0.45));
-    cairo_stroke(cr);
+    const Rgb body = scaled(stroke.color, lit * (0.75 + 0.25 * near));
+    Capsule k;
+    k.body = packed(body);
+    k.rim = packed(scaled(stroke.color, 0.35));
+    k.shine = packed(mixed(body, {1, 1, 1}, 0.45));
+    k.ax = ss * sa.x;
+    k.ay = ss * sa.y;
+    k.za = ss * p.scale * sa.depth;
+    k.ex = ss * (sb.x - sa.x);
+    k.ey = ss * (sb.y - sa.y);
+    k.ez = ss * p.scale * (sb.depth - sa.depth);
+    k.len2 = k.ex * k.ex + k.ey * k.ey;
+    const double len = std::sqrt(k.len2);
+    if (len > 0.0) k.nx = -k.ey / len, k.ny = k.ex / len;
+    k.R = ss * (r + outline), k.rb = ss * r;
+    k.shift = ln > 0.0 ? 0.4 * k.rb * (lx * k.nx + ly * k.ny) / ln : 0.0;
+    k.band = len > 0.0 ? 0.25 * k.rb : -1.0;  // no highlight on a dot
+    const double bx = k.ax + k.ex, by = k.ay + k.ey;
+    k.i0 = std::max(0, static_cast<int>(std::floor(std::min(k.ax, bx) - k.R)));
+    k.i1 = std::min(W - 1, static_cast<int>(std::ceil(std::max(k.ax, bx) + k.R)));
+    k.j0 = std::max(0, static_cast<int>(std::floor(std::min(k.ay, by) - k.R)));
+    k.j1 = std::min(H - 1, static_cast<int>(std::ceil(std::max(k.ay, by) + k.R)));
+    return k;
+  };
+  size_t segments = 0;
+  for (const Stroke& s : strokes) segments += std::max<size_t>(s.points.size(), 2) - 1;
+  std::vector<Capsule> capsules;
+  capsules.reserve(segments);
+  for (const Stroke& s : strokes) {
+    const auto& pts = s.points;
+    if (pts.size() == 1 && finite(pts[0])) capsules.push_back(capsule(s, pts[0], pts[0]));
+    for (size_t k = 0; k + 1 < pts.size(); ++k)
+      if (finite(pts[k]) && finite(pts[k + 1])) capsules.push_back(capsule(s, pts[k], pts[k + 1]));
   }
+
+  // Bands of kBandPixels pixel rows; each capsule listed in every band it touches.
+  constexpr int kBandPixels = 8;
+  const int rows = kBandPixels * ss, bands = (v.height + kBandPixels - 1) / kBandPixels;
+  std::vector<std::vector<uint32_t>> in_band(bands);
+  for (size_t k = 0; k < capsules.size(); ++k)
+    for (int b = capsules[k].j0 / rows; b <= capsules[k].j1 / rows && b < bands; ++b)
+      in_band[b].push_back(static_cast<uint32_t>(k));
+
+  constexpr float kEmpty = -std::numeric_limits<float>::infinity();
+  std::vector<float> depth(static_cast<size_t>(rows) * W);
+  std::vector<uint32_t> colour(depth.size());
+  cairo_surface_t* surface = c.surface.get();
+  cairo_surface_flush(surface);
+  unsigned char* data = cairo_image_surface_get_data(surface);
+  const int stride = cairo_image_surface_get_stride(surface);
+  for (int b = 0; b < bands; ++b) {
+    if (in_band[b].empty()) continue;
+    const int top = b * rows, bottom = std::min(H, top + rows);  // sample rows [top, bottom)
+    std::fill(depth.begin(), depth.end(), kEmpty);
+    for (uint32_t index : in_band[b]) {
+      const Capsule& k = capsules[index];
+      for (int j = std::max(k.j0, top); j <= std::min(k.j1, bottom - 1); ++j)
+        for (int i = k.i0; i <= k.i1; ++i) {
+          const double px = i + 0.5 - k.ax, py = j + 0.5 - k.ay;
+          const double t =
+              k.len2 > 0.0 ? std::clamp((px * k.ex + py * k.ey) / k.len2, 0.0, 1.0) : 0.0;
+          const double dx = px - t * k.ex, dy = py - t * k.ey, d2 = dx * dx + dy * dy;
+          if (d2 > k.R * k.R) continue;
+          const size_t at = static_cast<size_t>(j - top) * W + i;
+          const float z = static_cast<float>(k.za + t * k.ez + std::sqrt(k.R * k.R - d2));
+          if (!(z > depth[at])) continue;
+          depth[at] = z;
+          colour[at] = d2 > k.rb * k.rb                                      ? k.rim
+                       : std::abs(dx * k.nx + dy * k.ny - k.shift) <= k.band ? k.shine
+                                                                             : k.body;
+        }
+    }
+    // Average the band's samples into the canvas (ARGB32, opaque).
+    for (int y = top / ss; y < bottom / ss; ++y) {
+      uint32_t* row = reinterpret_cast<uint32_t*>(data + static_cast<size_t>(y) * stride);
+      for (int x = 0; x < v.width; ++x) {
+        uint32_t sum[3] = {0, 0, 0}, covered = 0;
+        for (int j = y * ss - top; j < (y + 1) * ss - top; ++j)
+          for (int i = x * ss; i < (x + 1) * ss; ++i) {
+            const size_t at = static_cast<size_t>(j) * W + i;
+            if (depth[at] == kEmpty) continue;
+            ++covered;
+            sum[0] += colour[at] >> 16 & 0xff, sum[1] += colour[at] >> 8 & 0xff;
+            sum[2] += colour[at] & 0xff;
+          }
+        if (covered == 0) continue;
+        const uint32_t n = ss * ss, rest = n - covered, old = row[x];
+        sum[0] += rest * (old >> 16 & 0xff), sum[1] += rest * (old >> 8 & 0xff);
+        sum[2] += rest * (old & 0xff);
+        row[x] = 0xff000000u | (sum[0] + n / 2) / n << 16 | (sum[1] + n / 2) / n << 8 |
+                 (sum[2] + n / 2) / n;
+      }
+    }
+  }
+  cairo_surface_mark_dirty(surface);
 }
 
 }  // namespace
@@ -552,7 +604,7 @@ void render_strokes_png(const std::string& path, const std::vector<Stroke>& stro
   const PixelProjection p = strokes_projection(strokes, markers, view);
   const double u = ui_scale(view);
   Canvas c = blank_canvas(path, view);
-  draw_tubes(c.cr.get(), strokes, p, u);
+  draw_tubes(c, strokes, p, view);
   for (const Vec3& m : markers)
     if (finite(m)) draw_marker(c.cr.get(), p(m), 3.5 * u);
   finish_and_write(c, path, p, view);

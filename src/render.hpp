@@ -10,8 +10,9 @@
 // elevation in (-90, 90)); depth = p . toward_viewer, larger = nearer. The drawing area is the
 // picture minus a title band (top), a caption/axis-triad band (bottom) and a margin; the view
 // is centred there and scaled to fit the projected extent (all points equal: 1 m spans it).
-// Painter's algorithm: quads (mean corner depth) and stroke segments (mean end depth) are
-// drawn far to near. Points with a non-finite coordinate are skipped.
+// Hidden surfaces: quads by the painter's algorithm (mean corner depth, drawn far to near);
+// stroke tubes by a z-buffer on a supersampled layer (render_strokes_png). Points with a
+// non-finite coordinate are skipped.
 // Failure modes: std::invalid_argument for a bad RenderView (see validate) or a quad/marker
 // index outside the points; std::runtime_error("cannot write PNG <path>: <cairo status>") if
 // the picture cannot be created or written.
@@ -82,9 +83,14 @@ PixelProjection strokes_projection(const std::vector<Stroke>& strokes,
 // thinly; the light grey floor grid and the sheet's shadow straight below it (elevations >= 5
 // deg); markers as red dots on top; the title, the caption and an x-y-z axis triad.
 void render_mesh_png(const std::string& path, const MeshScene& mesh, const RenderView& view);
-// Yarn centrelines: every polyline segment of every stroke is one depth-sorted piece of tube
-// (dark outline, body shaded by the segment's angle to the light and dimmed with distance, a
-// lighter highlight line), so where yarns cross the nearer one is on top; markers as small dots.
+// Yarn centrelines: every polyline segment of every stroke is a capsule (a piece of tube with
+// round ends: dark outline, body shaded by the segment's angle to the light and dimmed with
+// distance, a lighter highlight band), rasterised with a z-buffer on the capsule's surface
+// (depth = centreline depth + sqrt(R^2 - d^2) at distance d from it) with 2 x 2 samples per
+// pixel: where yarns cross the nearer one is on top sample by
+// sample, and the pieces of a yarn join without seams. The cost is linear in segments times
+// their area in pixels (~0.1 s for 100k segments on 1000 x 760), with no per-segment drawing
+// calls. Markers as small dots on top.
 void render_strokes_png(const std::string& path, const std::vector<Stroke>& strokes,
                         const std::vector<Vec3>& markers, const RenderView& view);
 

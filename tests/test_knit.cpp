@@ -1,8 +1,10 @@
 // Knit model (paper 2, SPEC 2.9): chart parsing and its errors, hand-counted topology, the
-// rest geometry of the type-value points, intermeshing, Jacobian, relaxation and integrators.
+// rest geometry of the type-value points, intermeshing, Jacobian, relaxation and integrators,
+// and the number text of `knitsim knit`'s CSV/VTK files.
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -10,6 +12,7 @@
 #include "models/knit_loops.hpp"
 #include "solvers/integrator.hpp"
 #include "src/jacobian_check.hpp"
+#include "src/output.hpp"
 
 using namespace knitsim;
 
@@ -563,4 +566,34 @@ TEST_CASE("stabilised tuck: a loose velocity_atol skips the ringing, not the ste
   CHECK(s_loose.steps < s_atol.steps / 2);
   CHECK(d_atol < 1e-5);
   CHECK(d_loose < 1e-5);
+}
+
+TEST_CASE("knit CSV/VTK numbers read back as the same doubles, integers stay integers") {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> mantissa(-1.0, 1.0);
+  std::uniform_int_distribution<int> exponent(-320, 300);
+  std::vector<double> values = {0.0,
+                                -0.0,
+                                0.1,
+                                1.0 / 3.0,
+                                8.9285714285714299e-05,
+                                5e-324,
+                                1.7976931348623157e308,
+                                -2.2250738585072014e-308};
+  for (int k = 0; k < 20000; ++k) values.push_back(std::ldexp(mantissa(rng), exponent(rng)));
+  for (double v : values) {
+    std::string text;
+    append_number(text, v);
+    INFO(text);
+    REQUIRE(std::strtod(text.c_str(), nullptr) == v);
+    CHECK(std::signbit(std::strtod(text.c_str(), nullptr)) == std::signbit(v));
+    CHECK(text.size() <= 24);
+  }
+  std::string text;
+  append_number(text, 0.1);
+  CHECK(text == "0.1");  // shortest, not 0.10000000000000001
+  text.clear();
+  append_integer(text, 1000000);
+  append_integer(text, -42);
+  CHECK(text == "1000000-42");  // not 1e+06
 }

@@ -1,5 +1,6 @@
 // NURBS: Cox-de Boor vs de Boor, partition of unity, derivatives vs finite differences,
-// exact interpolation, C^2 continuity, the rational quarter circle, arc-length sampling.
+// exact interpolation, C^2 continuity, the rational quarter circle, arc-length sampling (the
+// span-polynomial speed against quadrature of evaluate()'s C'), the degree limit.
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <random>
@@ -160,6 +161,72 @@ TEST_CASE("rational quadratic with weights (1, sqrt2/2, 1) is an exact quarter c
     const double angle = std::atan2(s.points[k].y, s.points[k].x);
     CHECK(angle == Approx(kPi / 2 * k / 6).margin(1e-11));
   }
+}
+
+// int_a^b |C'(u)| du by composite 5-point Gauss-Legendre on `pieces` equal parts of every knot
+// span, with C' from evaluate() (the basis-function path): independent of arc_length's span
+// polynomials.
+double slow_length(const NurbsCurve& c, double a, double b, int pieces) {
+  const double x[5] = {0.0, -0.5384693101056831, 0.5384693101056831, -0.9061798459386640,
+                       0.9061798459386640};
+  const double w[5] = {0.5688888888888889, 0.4786286704993665, 0.4786286704993665,
+                       0.2369268850561891, 0.2369268850561891};
+  double length = 0.0;
+  for (size_t s = c.degree; s < c.control.size(); ++s)
+    for (int k = 0; k < pieces; ++k) {
+      const double span = c.knots[s + 1] - c.knots[s];
+      const double lo = std::max(a, c.knots[s] + span * k / pieces);
+      const double hi = std::min(b, c.knots[s] + span * (k + 1) / pieces);
+      if (!(hi > lo)) continue;
+      const double mid = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
+      for (int i = 0; i < 5; ++i)
+        length += half * w[i] * norm(evaluate(c, mid + half * x[i]).first);
+    }
+  return length;
+}
+
+TEST_CASE("arc length and arc-length samples agree with quadrature of evaluate()'s C'") {
+  // Rational cubics with a repeated interior knot, a degree-5 curve and an interpolant.
+  std::vector<NurbsCurve> curves = {random_curve(1), random_curve(2)};
+  NurbsCurve quintic;
+  quintic.degree = 5;
+  quintic.knots = {0, 0, 0, 0, 0, 0, 0.3, 0.55, 1, 1, 1, 1, 1, 1};
+  for (int i = 0; i < 8; ++i) {
+    quintic.control.push_back({std::cos(0.9 * i), std::sin(1.7 * i), 0.1 * i * i});
+    quintic.weights.push_back(1.0 + 0.25 * (i % 3));
+  }
+  quintic.validate();
+  curves.push_back(quintic);
+  curves.push_back(interpolate_cubic(wiggly_points(30, 9)));
+  for (const NurbsCurve& c : curves) {
+    const double total = slow_length(c, c.u_min(), c.u_max(), 8);
+    CHECK(arc_length(c, c.u_min(), c.u_max()) == Approx(total).epsilon(1e-14));
+    CHECK(arc_length(c, 0.13, 0.71) == Approx(slow_length(c, 0.13, 0.71, 8)).epsilon(1e-14));
+    // Equal spacing in arc length: S(u_k) = k total / (count - 1), S measured with the
+    // independent quadrature on the same pieces (whole pieces, then [piece start, u_k]).
+    const int count = 41;
+    const CurveSamples s = sample_curve(c, count, Spacing::ArcLength);
+    double worst = 0.0;
+    for (int k = 0; k < count; ++k)
+      worst =
+          std::max(worst, std::abs(slow_length(c, c.u_min(), s.u[k], 8) - total * k / (count - 1)));
+    CHECK(worst < 1e-12 * total);
+    for (int k = 0; k < count; ++k) CHECK(dist(s.points[k], evaluate(c, s.u[k]).point) == 0.0);
+  }
+}
+
+TEST_CASE("degrees outside [1, kMaxNurbsDegree] are refused, not evaluated") {
+  NurbsCurve c;
+  c.degree = kMaxNurbsDegree + 1;
+  c.knots.assign(2 * (c.degree + 1), 0.0);
+  std::fill(c.knots.begin() + c.degree + 1, c.knots.end(), 1.0);
+  c.control.assign(c.degree + 1, Vec3{});
+  c.weights.assign(c.degree + 1, 1.0);
+  CHECK_THROWS_WITH(c.validate(), Catch::Contains("NURBS degree = 8: must be in [1, 7]"));
+  CHECK_THROWS_AS(evaluate(c, 0.5), std::invalid_argument);
+  CHECK_THROWS_AS(arc_length(c, 0.0, 1.0), std::invalid_argument);
+  std::vector<double> d;
+  CHECK_THROWS_AS(basis_derivatives(c.degree, 0.5, c.degree, c.knots, 1, d), std::invalid_argument);
 }
 
 TEST_CASE("global cubic interpolation passes through every point and is C2") {

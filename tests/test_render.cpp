@@ -1,5 +1,6 @@
 // Renderer: pictures are read back with cairo and checked pixel by pixel at the projected
-// positions of known points (sheet colour, red pins, the nearer of two crossing yarns on top).
+// positions of known points (sheet colour, red pins, the nearer of two crossing yarns on top,
+// seamless joints of a yarn's pieces).
 #include <cairo.h>
 #include <unistd.h>
 
@@ -229,6 +230,58 @@ TEST_CASE("strokes picture: the nearer of two crossing yarns is on top", "[rende
   CHECK(red_on_top.r > red_on_top.b + 0.2);
   const Rgb blue_on_top = cross_at(-0.1, 0.1);
   CHECK(blue_on_top.b > blue_on_top.r + 0.2);
+}
+
+TEST_CASE("strokes picture: joints are seamless, a tube's rim shows, markers on top", "[render]") {
+  TempDir dir("joints");
+  RenderView v;
+  v.width = 240;
+  v.height = 200;
+  v.front_xy = true;
+  // A slanted straight yarn as 2 points and as 61 points: the capsules of the 60 pieces join
+  // into the same tube, so the pictures agree pixel for pixel (up to sample rounding).
+  Stroke two, many;
+  two.radius = many.radius = 0.06;
+  two.points = {{-1, -0.4, 0.2}, {1, 0.4, 0.2}};
+  for (int k = 0; k <= 60; ++k) many.points.push_back({-1 + k / 30.0, -0.4 + k / 75.0, 0.2});
+  const std::vector<Vec3> marker = {{0.5, 0.2, -1.0}};  // on the yarn's axis, far behind it
+  render_strokes_png(dir.file("two.png"), {two}, marker, v);
+  render_strokes_png(dir.file("many.png"), {many}, marker, v);
+  const Image a = read_png(dir.file("two.png")), b = read_png(dir.file("many.png"));
+  REQUIRE(a.pixels.size() == b.pixels.size());
+  double worst = 0.0;
+  int differing = 0, tube = 0;
+  for (size_t k = 0; k < a.pixels.size(); ++k) {
+    const double d =
+        std::max({std::abs(a.pixels[k].r - b.pixels[k].r), std::abs(a.pixels[k].g - b.pixels[k].g),
+                  std::abs(a.pixels[k].b - b.pixels[k].b)});
+    worst = std::max(worst, d);
+    differing += d > 0.02;
+    tube += !is_white(a.pixels[k]);
+  }
+  INFO("worst channel difference " << worst << ", " << differing << " of " << tube
+                                   << " tube pixels differ by > 0.02");
+  CHECK(tube > 500);
+  CHECK(differing <= tube / 100);
+  // Across the tube at its middle: dark rim, body, lighter highlight, body, dark rim.
+  const PixelProjection p = strokes_projection({two}, marker, v);
+  const ScreenPoint mid = p({0, 0, 0.2});
+  const double r_px = 0.06 * p.scale;
+  auto brightness = [&](double offset) {  // along the screen normal of the yarn, px
+    const double nx = -0.4 / std::hypot(2.0, 0.8), ny = -2.0 / std::hypot(2.0, 0.8);
+    const Rgb c = a.at(mid.x + offset * nx, mid.y + offset * ny);
+    return c.r + c.g + c.b;
+  };
+  double rim_left = 1e9, rim_right = 1e9;  // the darkest pixel near each edge
+  for (double o = r_px - 1.5; o <= r_px + 2.0; o += 0.5)
+    rim_left = std::min(rim_left, brightness(-o)), rim_right = std::min(rim_right, brightness(o));
+  const double rim = std::max(rim_left, rim_right);
+  double body_max = 0.0;
+  for (double o = -0.8 * r_px; o <= 0.8 * r_px; o += 0.5)
+    body_max = std::max(body_max, brightness(o));
+  CHECK(rim < 0.6 * body_max);
+  // The marker is drawn on top although the yarn is nearer.
+  CHECK(any_near(a, p(marker[0]), 1, is_red));
 }
 
 TEST_CASE("empty and degenerate scenes render framed pictures", "[render]") {
