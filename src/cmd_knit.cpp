@@ -20,6 +20,7 @@
 //   before.png, after.png   front views at rest and at the end (yarns as z-buffered tubes,
 //                    render_strokes_png; interlacing points as dots)
 //   summary.json, manifest.json
+//   steps.csv        with --step-history: step,t,h,order,residual (src/step_log.hpp)
 // Numbers in the CSV and VTK files are the shortest decimal text that reads back as the same
 // double (std::to_chars). Cost: the centrelines of each distinct state are computed once (the
 // first frame is the rest state, the last usually the end state); on tucks40 (40 x 40, 102k
@@ -56,6 +57,7 @@
 #include "src/output.hpp"
 #include "src/render.hpp"
 #include "src/scene.hpp"
+#include "src/step_log.hpp"
 
 namespace knitsim {
 
@@ -76,6 +78,7 @@ struct KnitArgs {
   double dt = IntegratorOptions{}.dt;
   int frames = 4;
   std::string out;
+  bool step_history = false;
   bool quiet = false;
 };
 
@@ -411,8 +414,11 @@ void run(const KnitArgs& args) {
     recorder.set_dof(model.network.dof());
     recorder.record(0.0, x.data(), model.network.dof(),
                     model.network.static_residual(0.0, x.data()));
-    stats = run_to_equilibrium(model.network, *integ, opt, x, v, &recorder);
+    StepLog steps(&recorder);
+    RunObserver* observer = args.step_history ? static_cast<RunObserver*>(&steps) : &recorder;
+    stats = run_to_equilibrium(model.network, *integ, opt, x, v, observer);
     frames = recorder.frames();
+    if (args.step_history) write_file_atomic(dir / "steps.csv", steps.csv());
   }
   write_outputs(dir, args, model, opt, stats, x, frames);
   if (!args.quiet) {
@@ -470,6 +476,9 @@ void register_knit_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--out", args->out,
                   "Output folder (default: a fresh out/knit-<chart>-<YYYYmmdd-HHMMSS>)");
+  cmd->add_flag("--step-history", args->step_history,
+                "Also write steps.csv: t, step size, order and residual of every step (thinned "
+                "evenly beyond 2e5 rows)");
   cmd->add_flag("--quiet", args->quiet, "No progress line and no summary on stdout");
   cmd->callback([args, velocity_atol] {
     args->velocity_atol_given = velocity_atol->count() > 0;

@@ -42,7 +42,8 @@ TEST_CASE("knitsim knit: a small tuck chart settles and its outputs agree with t
   std::string err;
   const int status =
       run_knit("--chart '" + (tmp / "small.chart").string() +
-                   "' --set knit.stabiliser=0.1 --frames 3 --quiet --out '" + out.string() + "'",
+                   "' --set knit.stabiliser=0.1 --frames 3 --step-history --quiet --out '" +
+                   out.string() + "'",
                err);
   INFO(err);
   REQUIRE(status == 0);
@@ -67,6 +68,10 @@ TEST_CASE("knitsim knit: a small tuck chart settles and its outputs agree with t
   CHECK(count_lines(slurp(out / "points.csv")) == 1 + static_cast<int>(m.points.size()));
   CHECK(count_lines(slurp(out / "typevalue.csv")) == 1 + 9 * 14 + 7 * 1);
   CHECK(slurp(out / "centerlines.vtk").find("LINES 3 ") != std::string::npos);
+  // --step-history: one row per step; the last one at t_final with the final residual.
+  const std::string steps = slurp(out / "steps.csv");
+  CHECK(steps.rfind("step,t,h,order,residual\n", 0) == 0);
+  CHECK(count_lines(steps) == 1 + summary["stats"]["steps"].get<int>());
   fs::remove_all(tmp);
 }
 
