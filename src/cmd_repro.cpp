@@ -32,6 +32,7 @@
 #include "src/cli_options.hpp"
 #include "src/commands.hpp"
 #include "src/output.hpp"
+#include "src/paper_data.hpp"
 #include "src/repro.hpp"
 #include "src/work_units.hpp"
 
@@ -50,7 +51,7 @@ struct ReproArgs {
   std::string out;
   bool resume = false;
   std::string targets;
-  std::vector<int> samples;
+  std::string samples;
   std::vector<std::string> sets;
   std::vector<std::string> optimizers;
   int runs = 0, decades = 0, countries = 0, imperialists = 0, replicates = 0;
@@ -63,7 +64,7 @@ void run(const ReproArgs& a, const CLI::App& cmd) {
   ReproOptions o = repro_preset(a.preset);
   o.task = repro_task_from_name(a.task);
   o.ica.jobs = a.jobs;
-  if (cmd.count("--samples")) o.samples = a.samples;
+  if (cmd.count("--samples")) o.samples = parse_sample_list(a.samples);
   if (cmd.count("--sets")) {
     o.sets.clear();
     for (const std::string& s : a.sets) o.sets.push_back(synthetic_set_from_name(s));
@@ -145,7 +146,7 @@ void register_repro_command(CLI::App& app) {
   cmd->add_option("--targets", args->targets,
                   "Folder of committed targets <set>_sample<s>.csv (default: the source tree's "
                   "paper_repro/data/targets; missing files are generated)");
-  cmd->add_option("--samples", args->samples, "Override: samples of Tables 4/6, e.g. 1,2,3")
+  cmd->add_option("--samples", args->samples, "Override: samples of Tables 4/6, e.g. 1-9 or 2,5-7")
       ->delimiter(',');
   cmd->add_option("--sets", args->sets, "Override: target sets, twin,cross")->delimiter(',');
   cmd->add_option("--optimizer", args->optimizers,

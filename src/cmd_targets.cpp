@@ -18,7 +18,6 @@
 #include <ctime>
 #include <iostream>
 #include <memory>
-#include <set>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -47,37 +46,6 @@ std::string shortest(double value) {
     if (std::strtod(text.c_str(), nullptr) == value) return text;
   }
   return format_number(value, 17);
-}
-
-[[noreturn]] void bad_samples(const std::string& text) {
-  throw std::invalid_argument("--samples = " + text +
-                              ": accepted a comma-separated list of samples or ranges within "
-                              "1..9, e.g. 1-9 or 2,5-7");
-}
-
-// "1-9", "2,5-7", ...: the samples in increasing order, each once.
-std::vector<int> parse_samples(const std::string& text) {
-  const int count = static_cast<int>(paper_samples().size());
-  const auto number = [&](const std::string& s) {
-    if (s.empty() || s.size() > 2 || s.find_first_not_of("0123456789") != std::string::npos)
-      bad_samples(text);
-    const int v = std::stoi(s);
-    if (v < 1 || v > count) bad_samples(text);
-    return v;
-  };
-  std::set<int> samples;
-  size_t start = 0;
-  while (start <= text.size()) {
-    const size_t comma = std::min(text.find(',', start), text.size());
-    const std::string item = text.substr(start, comma - start);
-    const size_t dash = item.find('-');
-    const int lo = number(item.substr(0, dash));
-    const int hi = dash == std::string::npos ? lo : number(item.substr(dash + 1));
-    if (hi < lo) bad_samples(text);
-    for (int s = lo; s <= hi; ++s) samples.insert(s);
-    start = comma + 1;
-  }
-  return {samples.begin(), samples.end()};
 }
 
 std::vector<SyntheticSet> parse_sets(const std::string& text) {
@@ -135,7 +103,7 @@ std::vector<std::string> provenance(SyntheticSet set, const PaperSample& sample,
 
 void run(const TargetsArgs& args) {
   const std::vector<SyntheticSet> sets = parse_sets(args.set);
-  const std::vector<int> samples = parse_samples(args.samples);
+  const std::vector<int> samples = parse_sample_list(args.samples);
   try {
     args.options.validate();
   } catch (const std::invalid_argument& e) {

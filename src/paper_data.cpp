@@ -3,6 +3,8 @@
 // compares every field with those files.
 #include "src/paper_data.hpp"
 
+#include <algorithm>
+#include <set>
 #include <stdexcept>
 #include <string>
 
@@ -29,6 +31,40 @@ const PaperSample& paper_sample(int sample) {
   if (sample < 1 || sample > static_cast<int>(all.size()))
     throw std::invalid_argument("sample = " + std::to_string(sample) + ": must be 1..9");
   return all[sample - 1];
+}
+
+namespace {
+
+[[noreturn]] void bad_samples(const std::string& text) {
+  throw std::invalid_argument("--samples = " + text +
+                              ": accepted a comma-separated list of samples or ranges within "
+                              "1..9, e.g. 1-9 or 2,5-7");
+}
+
+}  // namespace
+
+std::vector<int> parse_sample_list(const std::string& text) {
+  const int count = static_cast<int>(paper_samples().size());
+  const auto number = [&](const std::string& s) {
+    if (s.empty() || s.size() > 2 || s.find_first_not_of("0123456789") != std::string::npos)
+      bad_samples(text);
+    const int v = std::stoi(s);
+    if (v < 1 || v > count) bad_samples(text);
+    return v;
+  };
+  std::set<int> samples;
+  size_t start = 0;
+  while (start <= text.size()) {
+    const size_t comma = std::min(text.find(',', start), text.size());
+    const std::string item = text.substr(start, comma - start);
+    const size_t dash = item.find('-');
+    const int lo = number(item.substr(0, dash));
+    const int hi = dash == std::string::npos ? lo : number(item.substr(dash + 1));
+    if (hi < lo) bad_samples(text);
+    for (int s = lo; s <= hi; ++s) samples.insert(s);
+    start = comma + 1;
+  }
+  return {samples.begin(), samples.end()};
 }
 
 }  // namespace knitsim

@@ -4,6 +4,7 @@
 // Natural lengths are in metres (Table 4 prints millimetres, see paper_repro/data/README.md).
 #pragma once
 
+#include <string>
 #include <vector>
 
 namespace knitsim {
@@ -24,5 +25,9 @@ struct PaperSample {
 const std::vector<PaperSample>& paper_samples();
 // Sample s (1..9); throws std::invalid_argument "sample = s: must be 1..9".
 const PaperSample& paper_sample(int sample);
+
+// A --samples list: comma-separated samples or ranges, e.g. "1-9", "2,5-7" -> the samples in
+// increasing order, each once. Throws std::invalid_argument "--samples = <text>: accepted ...".
+std::vector<int> parse_sample_list(const std::string& text);
 
 }  // namespace knitsim

@@ -302,10 +302,10 @@ TEST_CASE("knitsim repro: bad input is one line, exit 2, nothing written", "[rep
   TempDir tmp("repro-cli");
   for (const std::string& args :
        {std::string("table5"), std::string("table4 --samples 0"),
-        std::string("table4 --preset fast"), std::string("table4 --jobs 0"),
-        std::string("all --sets twin,wool"), std::string("table4 --targets /nonexistent"),
-        std::string("table4 --optimizer xyz"), std::string("fig13 --optimizer lm"),
-        std::string("table4 --optimizer lm,lm")}) {
+        std::string("table4 --samples 3-1"), std::string("table4 --preset fast"),
+        std::string("table4 --jobs 0"), std::string("all --sets twin,wool"),
+        std::string("table4 --targets /nonexistent"), std::string("table4 --optimizer xyz"),
+        std::string("fig13 --optimizer lm"), std::string("table4 --optimizer lm,lm")}) {
     const fs::path out = tmp.path / "out";
     const knitsim::test::Run run =
         knitsim::test::run_knitsim("repro " + args + " --out '" + out.string() + "'", tmp);

@@ -97,6 +97,15 @@ std::vector<double> differences(const Target& a, const Target& b) {
 
 }  // namespace
 
+TEST_CASE("parse_sample_list: lists and ranges, sorted, each once; bad lists name the flag") {
+  CHECK(parse_sample_list("1-9") == std::vector<int>{1, 2, 3, 4, 5, 6, 7, 8, 9});
+  CHECK(parse_sample_list("7,2,5-6,5") == std::vector<int>{2, 5, 6, 7});
+  CHECK(parse_sample_list("4") == std::vector<int>{4});
+  for (const char* bad : {"", "0", "10", "1,,2", "3-1", "1-", "a", "1.5", "-2"})
+    CHECK_THROWS_WITH(parse_sample_list(bad),
+                      Catch::StartsWith(std::string("--samples = ") + bad + ": accepted"));
+}
+
 TEST_CASE("paper_samples() equals the committed Tables 2, 4 and 6 field by field") {
   const auto t2 = read_table(kData + "/table2_samples.csv");
   const auto t4 = read_table(kData + "/table4_four_corner.csv");

@@ -84,8 +84,7 @@ int main(int argc, char** argv) {
     } else if (flag == "--targets") {
       targets_dir = value;
     } else if (flag == "--samples") {
-      std::stringstream ss(value);
-      for (std::string item; std::getline(ss, item, ',');) samples.push_back(std::stoi(item));
+      samples = parse_sample_list(value);
     } else if (flag == "--sets") {
       std::stringstream ss(value);
       for (std::string item; std::getline(ss, item, ',');)
