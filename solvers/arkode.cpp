@@ -241,6 +241,7 @@ class Arkode final : public Integrator {
     check(ARKStepGetNumLinIters(mem, &st.lin_iters), "ARKStepGetNumLinIters", kArkLs);
     check(ARKStepGetNumLinRhsEvals(mem, &nfe_ls), "ARKStepGetNumLinRhsEvals", kArkLs);
     st.rhs_evals = nfe + nfi + nfe_ls;
+    add_newton_solver_counts(s_->ls.get(), st);
     if (st.steps > 0) st.max_order_used = last_order();
   }
 

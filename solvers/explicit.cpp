@@ -8,7 +8,8 @@
 //     X(t+h) = X + V h + a h^2/2,   V(t+h) = V + (a(t) + a(t+h)) h/2,
 //   written as kick-drift-kick. The linear damping -Gamma v is integrated exactly over each
 //   half kick: with e = exp(-gamma h/2) and phi = (1 - e)/gamma (-> h/2 as gamma -> 0),
-//     v_{1/2} = e v + phi a_c(x),  x' = x + h v_{1/2},  [project x'],  v' = e v_{1/2} + phi a_c(x').
+//     v_{1/2} = e v + phi a_c(x),  x' = x + h v_{1/2},  [project x'],  v' = e v_{1/2} + phi
+//     a_c(x').
 //   For gamma = 0 this is exactly paper 2's formula. The exact damping removes the explicit
 //   damping limit h < 2/gamma, which dominates on the overdamped drape (gamma = c/m ~ 1e5 /s);
 //   predict_stable_dt("verlet") gives the resulting limit.
@@ -83,8 +84,8 @@ class FixedStepExplicit : public Integrator {
 class Euler final : public FixedStepExplicit {
  public:
   Euler()
-      : FixedStepExplicit({"euler", "explicit Euler, fixed dt, Provot correction (paper 1)", 1,
-                           false, true}) {}
+      : FixedStepExplicit(
+            {"euler", "explicit Euler, fixed dt, Provot correction (paper 1)", 1, false, true}) {}
 
   Step step(double t_stop) override {
     const double h = std::min(dt_, t_stop - t_);

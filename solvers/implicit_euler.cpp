@@ -71,8 +71,7 @@ class ImplicitEuler final : public Integrator {
     for (int j = 0; j < n_; ++j) s[diag_[j]] += m[j] * (1.0 + h * gamma[j]);
     // right side: h M (a_c - Gamma v + h Ax v)
     csc_multiply(p, ax_.data(), v_.data(), tmp_.data());
-    for (int i = 0; i < n_; ++i)
-      rhs_vec_[i] = h * m[i] * (a_[i] - gamma[i] * v_[i] + h * tmp_[i]);
+    for (int i = 0; i < n_; ++i) rhs_vec_[i] = h * m[i] * (a_[i] - gamma[i] * v_[i] + h * tmp_[i]);
     solver_.factorize(S_);
     ++setups_;
     if (solver_.info() != Eigen::Success) {
@@ -99,6 +98,7 @@ class ImplicitEuler final : public Integrator {
     s.rhs_evals = rhs_;
     s.jac_evals = jac_;
     s.lin_setups = setups_;
+    s.factorisations = setups_;
     s.dt = dt_;
     s.max_order_used = 1;
   }

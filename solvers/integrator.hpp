@@ -58,11 +58,16 @@ struct IntegratorOptions {
   int krylov_dim = 0;             // GMRES Krylov dimension; 0 = SUNDIALS default (5)
   // Linear solver for the Newton systems of cvode-bdf, arkode-dirk and arkode-imex:
   //   Klu        sparse LU of the 2n x 2n matrix I - gamma J (SUNDIALS' KLU);
-  //   SchurLdl   velocity block eliminated, symmetric 3n x 3n LDL^T (schur_ldl_solver.hpp).
-  // Both solve the same Newton systems exactly, so the steps taken are the same; SchurLdl
-  // measured 1.3x faster on both drape scenes (README, "Performance"), hence the default.
-  enum class NewtonSolver { Klu, SchurLdl };
-  NewtonSolver newton_solver = NewtonSolver::SchurLdl;
+  //   SchurLdl   velocity block eliminated, symmetric 3n x 3n LDL^T (schur_ldl_solver.hpp);
+  //   SchurCgLdl the same, but a setup whose reduced matrix is close to its diagonal (small
+  //              steps) is solved by Jacobi-preconditioned CG to 1e-8 and factorised only if
+  //              CG does not converge (schur_ldl_solver.hpp).
+  // All three solve the same Newton systems (CG to a relative residual of 1e-8), so the steps
+  // taken are the same; SchurLdl measured 1.3x faster than KLU on both drape scenes, and
+  // SchurCgLdl ~1.9x faster than SchurLdl on the knit model's microsecond steps (README,
+  // "Performance"), hence the default.
+  enum class NewtonSolver { Klu, SchurLdl, SchurCgLdl };
+  NewtonSolver newton_solver = NewtonSolver::SchurCgLdl;
   bool gmres_preconditioner = true;  // cvode-bdf-gmres: block-Jacobi preconditioner
 
   // Throws std::invalid_argument naming the bad field and its accepted range.
@@ -93,7 +98,8 @@ struct RunStats {
   long rhs_evals = 0;
   long jac_evals = 0;
   long lin_setups = 0;
-  long lin_iters = 0;
+  long factorisations = 0;  // numeric factorisations of the Newton matrix (<= lin_setups)
+  long lin_iters = 0;       // Krylov iterations (GMRES, or CG inside SchurCgLdl)
   long nonlin_iters = 0;
   long nonlin_fails = 0;
   long err_test_fails = 0;

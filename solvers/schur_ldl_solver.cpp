@@ -1,10 +1,11 @@
 #include "solvers/schur_ldl_solver.hpp"
 
-#include <sunmatrix/sunmatrix_sparse.h>
 #include <nvector/nvector_serial.h>
+#include <sunmatrix/sunmatrix_sparse.h>
 
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
+#include <cmath>
 #include <vector>
 
 namespace knitsim::detail {
@@ -20,7 +21,11 @@ struct SchurLdl {
   Eigen::SparseMatrix<double> S;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> ldlt;
   double gamma = 0.0;
-  long setups = 0;
+  SchurOptions options;
+  bool factorised = false;               // this setup's S has been factorised
+  bool try_cg = false;                   // this setup's S passed the radius test
+  Eigen::VectorXd inv_diag, r, z, p, q;  // CG: 1 / S_jj and work vectors (length n)
+  SchurCounts counts;
   int last_flag = SUNLS_SUCCESS;
 };
 
@@ -29,6 +34,58 @@ SchurLdl* content(SUNLinearSolver LS) { return static_cast<SchurLdl*>(LS->conten
 SUNLinearSolver_Type get_type(SUNLinearSolver) { return SUNLINEARSOLVER_DIRECT; }
 SUNLinearSolver_ID get_id(SUNLinearSolver) { return SUNLINEARSOLVER_CUSTOM; }
 int initialize(SUNLinearSolver) { return SUNLS_SUCCESS; }
+
+int factorise(SchurLdl& c) {
+  c.ldlt.factorize(c.S);
+  ++c.counts.factorisations;
+  c.factorised = c.ldlt.info() == Eigen::Success;
+  return c.factorised ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_REC;
+}
+
+// Whether every S_jj > 0 and max_j sum_{i != j} |S_ij| / S_jj <= bound (S is symmetric, so
+// column sums are row sums); fills inv_diag on the way.
+bool jacobi_radius_within(SchurLdl& c, double bound) {
+  if (!(bound > 0.0)) return false;
+  const double* s = c.S.valuePtr();
+  const int* colptr = c.S.outerIndexPtr();
+  for (int j = 0; j < c.n; ++j) {
+    const double d = s[c.diag[j]];
+    if (!(d > 0.0)) return false;
+    double off = -d;
+    for (int k = colptr[j]; k < colptr[j + 1]; ++k) off += std::abs(s[k]);
+    if (!(off <= bound * d)) return false;
+    c.inv_diag[j] = 1.0 / d;
+  }
+  return true;
+}
+
+// Jacobi-preconditioned CG on S x = b from x = 0; false if it breaks down or has not reached
+// cg_rel_tol within cg_max_iterations.
+bool cg_solve(SchurLdl& c, const Eigen::Ref<const Eigen::VectorXd>& b,
+              Eigen::Ref<Eigen::VectorXd> x) {
+  const double target = c.options.cg_rel_tol * b.norm();
+  x.setZero();
+  c.r = b;
+  if (c.r.norm() <= target) return true;
+  c.z = c.inv_diag.cwiseProduct(c.r);
+  c.p = c.z;
+  double rz = c.r.dot(c.z);
+  for (int it = 0; it < c.options.cg_max_iterations; ++it) {
+    c.q.noalias() = c.S * c.p;
+    const double pq = c.p.dot(c.q);
+    ++c.counts.cg_iterations;
+    if (!(pq > 0.0)) return false;
+    const double alpha = rz / pq;
+    x += alpha * c.p;
+    c.r -= alpha * c.q;
+    if (c.r.norm() <= target) return true;
+    c.z = c.inv_diag.cwiseProduct(c.r);
+    const double rz_next = c.r.dot(c.z);
+    c.p = c.z + (rz_next / rz) * c.p;
+    rz = rz_next;
+  }
+  return false;
+}
 
 int setup(SUNLinearSolver LS, SUNMatrix A) {
   SchurLdl& c = *content(LS);
@@ -45,9 +102,10 @@ int setup(SUNLinearSolver LS, SUNMatrix A) {
       s[k] = m[kp.rowind[k]] * c.gamma * a[begin + (k - kp.colptr[j])];
   }
   for (int j = 0; j < n; ++j) s[c.diag[j]] += m[j] * a[colptr[n + j] + 1];  // M A_vv
-  c.ldlt.factorize(c.S);
-  ++c.setups;
-  c.last_flag = c.ldlt.info() == Eigen::Success ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_REC;
+  ++c.counts.setups;
+  c.factorised = false;
+  c.try_cg = jacobi_radius_within(c, c.options.cg_max_radius);
+  c.last_flag = c.try_cg ? SUNLS_SUCCESS : factorise(c);
   return c.last_flag;
 }
 
@@ -68,7 +126,12 @@ int solve(SUNLinearSolver LS, SUNMatrix A, N_Vector x, N_Vector b, realtype /*to
   }
   for (int i = 0; i < n; ++i) c.rhs[i] *= m[i];
   Eigen::Map<Eigen::VectorXd> r(c.rhs.data(), n), x2(c.x2.data(), n);
-  x2 = c.ldlt.solve(r);
+  if (!c.factorised && c.try_cg && cg_solve(c, r, x2)) {
+    ++c.counts.cg_solves;
+  } else {
+    if (!c.factorised && factorise(c) != SUNLS_SUCCESS) return c.last_flag = SUNLS_PACKAGE_FAIL_REC;
+    x2 = c.ldlt.solve(r);
+  }
   for (int i = 0; i < n; ++i) {
     xx[n + i] = c.x2[i];
     xx[i] = bb[i] + c.gamma * c.x2[i];
@@ -89,7 +152,10 @@ int free_solver(SUNLinearSolver LS) {
 
 }  // namespace
 
-SUNLinearSolver make_schur_ldl_solver(SUNContext ctx, const FirstOrderSystem& sys) {
+SchurCounts schur_counts(SUNLinearSolver LS) { return content(LS)->counts; }
+
+SUNLinearSolver make_schur_ldl_solver(SUNContext ctx, const FirstOrderSystem& sys,
+                                      const SchurOptions& options) {
   SUNLinearSolver LS = SUNLinSolNewEmpty(ctx);
   if (!LS) return nullptr;
   auto* c = new SchurLdl;
@@ -100,8 +166,10 @@ SUNLinearSolver make_schur_ldl_solver(SUNContext ctx, const FirstOrderSystem& sy
   const CscPattern& kp = sys.mechanical().stiffness_pattern();
   c->ax_begin.resize(n);
   for (int j = 0; j < n; ++j) c->ax_begin[j] = jp.colptr[j] + 1;  // after the zero diagonal
+  c->options = options;
   c->rhs.resize(n);
   c->x2.resize(n);
+  for (Eigen::VectorXd* v : {&c->inv_diag, &c->r, &c->z, &c->p, &c->q}) v->resize(n);
   std::vector<Eigen::Triplet<double>> trip;
   trip.reserve(kp.nnz());
   for (int j = 0; j < n; ++j)

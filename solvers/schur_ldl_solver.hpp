@@ -14,6 +14,20 @@
 // Eigen SimplicialLDLT) and factorised numerically at each setup. LDL^T, not LL^T: K is
 // indefinite when springs are compressed.
 //
+// Small steps: Jacobi-preconditioned CG instead of the factorisation. When gamma is small
+// the reduced matrix S = M (I + gamma Gamma) - gamma^2 K is close to its diagonal (S ~ M
+// for gamma^2 omega_max^2 << 1), and a few conjugate-gradient iterations solve it for a
+// fraction of one LDL^T factorisation. At each setup the Gershgorin radius of D^-1 S
+// (D = diag S) is computed; if every S_jj > 0 and the radius is at most
+// SchurOptions::cg_max_radius, the factorisation is deferred and each solve runs CG (from
+// zero) until ||r||_2 <= cg_rel_tol ||b||_2. If CG breaks down (p'Sp <= 0) or needs more than
+// cg_max_iterations, S is factorised there and then, and LDL^T serves this setup's remaining
+// solves. The solver stays "direct" for SUNDIALS: every solve is exact to cg_rel_tol (1e-8 by
+// default; the Newton iteration needs far less), so the steps taken match the LDL^T path's
+// (tests/test_schur_ldl.cpp). Measured on the knit model's ringing phase, where CVODE takes
+// hundreds of microsecond steps (README, "Knit: cvode-bdf cost"). On the drape, steps are
+// large, the radius test fails, and the only added cost is one pass over S per setup.
+//
 // Requirements: A is the SUNMatrix that CVODE/ARKODE hold, a CSC sparse matrix with exactly
 // FirstOrderSystem::jacobian_pattern() (SUNMatScaleAddI keeps it since every diagonal entry is
 // present). Setup returns SUNLS_PACKAGE_FAIL_REC (recoverable) if the factorisation fails, so
@@ -27,7 +41,26 @@
 
 namespace knitsim::detail {
 
+struct SchurOptions {
+  // CG is tried when max_j sum_{i != j} |S_ij| / S_jj <= cg_max_radius; 0 = LDL^T only.
+  double cg_max_radius = 4.0;
+  int cg_max_iterations = 40;  // per solve, then LDL^T
+  double cg_rel_tol = 1e-8;    // ||S x - b||_2 <= cg_rel_tol ||b||_2
+};
+
+// Work done since creation.
+struct SchurCounts {
+  long setups = 0;
+  long factorisations = 0;  // numeric LDL^T factorisations
+  long cg_solves = 0;       // solves finished by CG
+  long cg_iterations = 0;   // CG iterations, including those of solves CG gave up on
+};
+
 // The returned solver owns its workspace; free it with SUNLinSolFree. `sys` must outlive it.
-SUNLinearSolver make_schur_ldl_solver(SUNContext ctx, const FirstOrderSystem& sys);
+SUNLinearSolver make_schur_ldl_solver(SUNContext ctx, const FirstOrderSystem& sys,
+                                      const SchurOptions& options = {});
+
+// Counts of a solver made by make_schur_ldl_solver.
+SchurCounts schur_counts(SUNLinearSolver LS);
 
 }  // namespace knitsim::detail

@@ -169,6 +169,7 @@ class StaticRelaxNewton final : public Integrator {
     st.rhs_evals += finished_.rhs_evals + newton_fevals_;
     st.jac_evals += finished_.jac_evals + newton_jevals_;
     st.lin_setups += finished_.lin_setups + newton_jevals_;
+    st.factorisations += finished_.factorisations + newton_jevals_;
     st.lin_iters += finished_.lin_iters;
     st.nonlin_iters += finished_.nonlin_iters + newton_iters_;
     st.nonlin_fails += finished_.nonlin_fails + rejected_;
@@ -234,6 +235,7 @@ class StaticRelaxNewton final : public Integrator {
     finished_.rhs_evals += s.rhs_evals;
     finished_.jac_evals += s.jac_evals;
     finished_.lin_setups += s.lin_setups;
+    finished_.factorisations += s.factorisations;
     finished_.lin_iters += s.lin_iters;
     finished_.nonlin_iters += s.nonlin_iters;
     finished_.nonlin_fails += s.nonlin_fails;

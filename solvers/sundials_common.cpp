@@ -1,7 +1,5 @@
 #include "solvers/sundials_common.hpp"
 
-#include "solvers/schur_ldl_solver.hpp"
-
 #include <sunlinsol/sunlinsol_klu.h>
 #include <sunmatrix/sunmatrix_dense.h>
 #include <sunmatrix/sunmatrix_sparse.h>
@@ -11,6 +9,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <sstream>
+
+#include "solvers/schur_ldl_solver.hpp"
 
 namespace knitsim::sun {
 
@@ -120,8 +120,18 @@ LinearSolverPtr make_newton_solver(IntegratorOptions::NewtonSolver which,
                                    const FirstOrderSystem& fo, N_Vector y, SUNMatrix A,
                                    SUNContext ctx) {
   if (which == IntegratorOptions::NewtonSolver::Klu) return make_klu(y, A, ctx);
-  return LinearSolverPtr(
-      check_created(knitsim::detail::make_schur_ldl_solver(ctx, fo), "make_schur_ldl_solver"));
+  knitsim::detail::SchurOptions options;
+  if (which == IntegratorOptions::NewtonSolver::SchurLdl) options.cg_max_radius = 0.0;
+  return LinearSolverPtr(check_created(knitsim::detail::make_schur_ldl_solver(ctx, fo, options),
+                                       "make_schur_ldl_solver"));
+}
+
+void add_newton_solver_counts(SUNLinearSolver ls, RunStats& st) {
+  st.factorisations = st.lin_setups;
+  if (!ls || SUNLinSolGetID(ls) != SUNLINEARSOLVER_CUSTOM) return;
+  const knitsim::detail::SchurCounts c = knitsim::detail::schur_counts(ls);
+  st.factorisations = c.factorisations;
+  st.lin_iters += c.cg_iterations;
 }
 
 NewtonMatrix::NewtonMatrix(const FirstOrderSystem& fo, MatrixKind kind, SUNContext ctx)

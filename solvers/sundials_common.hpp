@@ -168,6 +168,9 @@ LinearSolverPtr make_klu(N_Vector y, SUNMatrix A, SUNContext ctx);
 LinearSolverPtr make_newton_solver(IntegratorOptions::NewtonSolver which,
                                    const FirstOrderSystem& fo, N_Vector y, SUNMatrix A,
                                    SUNContext ctx);
+// After lin_setups and lin_iters are filled: sets st.factorisations (= lin_setups, or the
+// Schur solver's own count) and adds the Schur solver's CG iterations to lin_iters.
+void add_newton_solver_counts(SUNLinearSolver ls, RunStats& st);
 
 // ---- Newton matrix of the first-order system ------------------------------------------
 

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
 
 namespace knitsim {
 
@@ -39,6 +40,21 @@ CLI::Option* add_atol_options(CLI::App* cmd, double& atol, double& velocity_atol
                    "Absolute tolerance of the velocities, m/s (0 = --atol); ~ atol x the rate "
                    "(rad/s) of the motion to resolve")
       ->capture_default_str();
+}
+
+void add_newton_solver_option(CLI::App* cmd, IntegratorOptions::NewtonSolver& which) {
+  const std::map<std::string, IntegratorOptions::NewtonSolver> solvers = {
+      {"klu", IntegratorOptions::NewtonSolver::Klu},
+      {"ldl", IntegratorOptions::NewtonSolver::SchurLdl},
+      {"cg-ldl", IntegratorOptions::NewtonSolver::SchurCgLdl}};
+  cmd->add_option("--newton-solver", which,
+                  "Newton linear solver of cvode-bdf, arkode-dirk, arkode-imex: klu (2n LU), "
+                  "ldl (velocity block eliminated, 3n symmetric LDL^T) or cg-ldl (the same, with "
+                  "Jacobi-CG instead of the factorisation at small steps)")
+      ->transform(CLI::CheckedTransformer(solvers, CLI::ignore_case))
+      ->default_str(std::find_if(solvers.begin(), solvers.end(), [&](const auto& kv) {
+                      return kv.second == which;
+                    })->first);
 }
 
 void rethrow_with_flag_names(const std::invalid_argument& e,

@@ -7,12 +7,13 @@
 #include <utility>
 #include <vector>
 
+#include "solvers/integrator.hpp"
 #include "src/ica.hpp"
 
 namespace CLI {
 class App;
 class Option;
-}
+}  // namespace CLI
 
 namespace knitsim {
 
@@ -25,6 +26,10 @@ void add_ica_options(CLI::App* cmd, IcaOptions& o);
 // (m/s; 0 = --atol), bound to `atol` and `velocity_atol`; help shows their current values.
 // Returns the --velocity-atol option (knit appends its own default rule to the description).
 CLI::Option* add_atol_options(CLI::App* cmd, double& atol, double& velocity_atol);
+
+// --newton-solver {klu, ldl, cg-ldl} of drape and knit, bound to `which`
+// (IntegratorOptions::newton_solver).
+void add_newton_solver_option(CLI::App* cmd, IntegratorOptions::NewtonSolver& which);
 
 // Validation messages name struct fields ("revolution_rate = 2: ..."); the user typed flags.
 // Rethrows `e` with the field replaced by its flag ("--revolution = 2: ..."), for the ICA

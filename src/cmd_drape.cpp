@@ -7,7 +7,6 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <iostream>
-#include <map>
 #include <memory>
 #include <stdexcept>
 
@@ -137,14 +136,7 @@ void register_drape_command(CLI::App& app) {
   cmd->add_option("--max-wall", args->options.max_wall_seconds,
                   "Wall-clock cap, s (0 = none); the run then ends with status wall_limit")
       ->capture_default_str();
-  const std::map<std::string, IntegratorOptions::NewtonSolver> solvers = {
-      {"klu", IntegratorOptions::NewtonSolver::Klu},
-      {"ldl", IntegratorOptions::NewtonSolver::SchurLdl}};
-  cmd->add_option("--newton-solver", args->options.newton_solver,
-                  "Newton linear solver of cvode-bdf, arkode-dirk, arkode-imex: klu (2n LU) or "
-                  "ldl (velocity block eliminated, 3n symmetric LDL^T)")
-      ->transform(CLI::CheckedTransformer(solvers, CLI::ignore_case))
-      ->capture_default_str();
+  add_newton_solver_option(cmd, args->options.newton_solver);
   cmd->add_option("--out", args->out,
                   "Output folder (default: a fresh out/drape-<scene>-<YYYYmmdd-HHMMSS>)");
   cmd->add_option("--target", args->target,

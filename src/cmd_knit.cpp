@@ -76,6 +76,8 @@ struct KnitArgs {
   double velocity_atol = IntegratorOptions{}.velocity_atol;
   bool velocity_atol_given = false;  // --velocity-atol on the command line
   double dt = IntegratorOptions{}.dt;
+  int max_order = IntegratorOptions{}.max_order;
+  IntegratorOptions::NewtonSolver newton_solver = IntegratorOptions{}.newton_solver;
   int frames = 4;
   std::string out;
   bool step_history = false;
@@ -386,6 +388,8 @@ void run(const KnitArgs& args) {
                           ? args.velocity_atol
                           : kStabilisedVelocityAtol;
   opt.dt = args.dt;
+  opt.max_order = args.max_order;
+  opt.newton_solver = args.newton_solver;
   try {
     opt.validate();
   } catch (const std::invalid_argument& e) {
@@ -471,6 +475,9 @@ void register_knit_command(CLI::App& app) {
                              "; not given: 0, or 0.001 with knit.stabiliser > 0");
   cmd->add_option("--dt", args->dt, "Fixed step, s (fixed-step methods; 0 = automatic)")
       ->capture_default_str();
+  cmd->add_option("--max-order", args->max_order, "Cap on the method order (0 = default)")
+      ->capture_default_str();
+  add_newton_solver_option(cmd, args->newton_solver);
   cmd->add_option("--frames", args->frames,
                   "Captured frames (the start to the last residual check), >= 1")
       ->capture_default_str();

@@ -293,6 +293,7 @@ nlohmann::json to_json(const RunStats& s) {
           {"rhs_evals", s.rhs_evals},
           {"jac_evals", s.jac_evals},
           {"lin_setups", s.lin_setups},
+          {"factorisations", s.factorisations},
           {"lin_iters", s.lin_iters},
           {"nonlin_iters", s.nonlin_iters},
           {"nonlin_fails", s.nonlin_fails},

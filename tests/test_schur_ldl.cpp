@@ -33,11 +33,21 @@ TEST_CASE("Schur LDL^T solve equals a dense LU solve of I - gamma J") {
   SUNMatrix A = SUNSparseMatrix(N, N, P.nnz(), CSC_MAT, ctx);
   std::copy(P.colptr.begin(), P.colptr.end(), SUNSparseMatrix_IndexPointers(A));
   std::copy(P.rowind.begin(), P.rowind.end(), SUNSparseMatrix_IndexValues(A));
-  SUNLinearSolver LS = detail::make_schur_ldl_solver(ctx, fo);
+  // ldl: factorise at every setup. cg-ldl: the default options (CG at small gamma). forced
+  // fallback: CG may take one iteration only, so the solves it cannot finish factorise.
+  detail::SchurOptions ldl_only, forced_fallback;
+  ldl_only.cg_max_radius = 0.0;
+  forced_fallback.cg_max_iterations = 1;
+  const int variant = GENERATE(0, 1, 2);
+  const detail::SchurOptions options =
+      variant == 0 ? ldl_only : variant == 1 ? detail::SchurOptions{} : forced_fallback;
+  const bool cg = options.cg_max_radius > 0.0;
+  SUNLinearSolver LS = detail::make_schur_ldl_solver(ctx, fo, options);
   REQUIRE(LS != nullptr);
   N_Vector b = N_VNew_Serial(N, ctx), x = N_VNew_Serial(N, ctx);
 
-  for (double gamma : {1e-6, 1e-3, 1.0, 100.0}) {
+  long multi_iteration_cg = 0;  // CG solves that needed more than one iteration
+  for (double gamma : {1e-6, 1e-4, 1e-3, 1.0, 100.0}) {
     std::vector<double> jv(P.nnz());
     fo.jacobian_values(0.0, y.data(), jv.data());
     double* a = SUNSparseMatrix_Data(A);
@@ -47,16 +57,34 @@ TEST_CASE("Schur LDL^T solve equals a dense LU solve of I - gamma J") {
         a[k] = (P.rowind[k] == j ? 1.0 : 0.0) - gamma * jv[k];
         dense(P.rowind[k], j) -= gamma * jv[k];
       }
+    const detail::SchurCounts before = detail::schur_counts(LS);
     REQUIRE(SUNLinSolSetup(LS, A) == 0);
     Eigen::VectorXd rhs(N);
     for (int i = 0; i < N; ++i) rhs[i] = NV_Ith_S(b, i) = u(rng);
     REQUIRE(SUNLinSolSolve(LS, A, x, b, 0.0) == 0);
+    const detail::SchurCounts after = detail::schur_counts(LS);
+    const bool by_cg = after.cg_solves > before.cg_solves;
+    const long iterations = after.cg_iterations - before.cg_iterations;
     const Eigen::VectorXd ref = dense.partialPivLu().solve(rhs);
     double err = 0.0;
     for (int i = 0; i < N; ++i) err = std::max(err, std::abs(NV_Ith_S(x, i) - ref[i]));
-    INFO("gamma " << gamma << " max error " << err << " vs |ref| " << ref.cwiseAbs().maxCoeff());
-    CHECK(err <= 1e-9 * std::max(1.0, ref.cwiseAbs().maxCoeff()));
+    INFO("cg_max_radius " << options.cg_max_radius << ", cg_max_iterations "
+                          << options.cg_max_iterations << ", gamma " << gamma << ": max error "
+                          << err << " vs |ref| " << ref.cwiseAbs().maxCoeff() << ", by CG " << by_cg
+                          << " in " << iterations << " iterations");
+    // CG stops at a relative residual of 1e-8 on the well-conditioned reduced matrix.
+    CHECK(err <= (by_cg ? 1e-7 : 1e-9) * std::max(1.0, ref.cwiseAbs().maxCoeff()));
+    // Each solve is either CG's (no factorisation) or LDL^T's (exactly one per setup).
+    CHECK(after.factorisations - before.factorisations == (by_cg ? 0 : 1));
+    if (!cg) CHECK(iterations == 0);
+    if (gamma <= 1e-4 && cg) CHECK((by_cg || options.cg_max_iterations == 1));
+    if (gamma >= 100.0) CHECK_FALSE(by_cg);  // the stiffness dominates: radius test fails
+    if (by_cg && iterations > 1) ++multi_iteration_cg;
+    if (options.cg_max_iterations == 1) CHECK(iterations <= 1);
   }
+  // The fallback is exercised: with the default options some solve needed more than one CG
+  // iteration, so the same solve under forced_fallback was factorised instead.
+  if (cg && options.cg_max_iterations > 1) CHECK(multi_iteration_cg > 0);
   N_VDestroy(b);
   N_VDestroy(x);
   SUNLinSolFree(LS);
@@ -64,22 +92,33 @@ TEST_CASE("Schur LDL^T solve equals a dense LU solve of I - gamma J") {
   SUNContext_Free(&ctx);
 }
 
-TEST_CASE("cvode-bdf takes the same steps to the same equilibrium with KLU and Schur LDL^T") {
+TEST_CASE("cvode-bdf takes the same steps to the same equilibrium with KLU, LDL^T and CG-LDL^T") {
   const DrapeGrid g = build_drape_grid(DrapeParams{});
-  RunStats s[2];
-  std::vector<double> x[2];
-  const IntegratorOptions::NewtonSolver which[2] = {IntegratorOptions::NewtonSolver::Klu,
-                                                    IntegratorOptions::NewtonSolver::SchurLdl};
-  for (int k = 0; k < 2; ++k) {
+  using NS = IntegratorOptions::NewtonSolver;
+  const NS which[3] = {NS::Klu, NS::SchurLdl, NS::SchurCgLdl};
+  RunStats s[3];
+  std::vector<double> x[3];
+  for (int k = 0; k < 3; ++k) {
     IntegratorOptions opt;
     opt.newton_solver = which[k];
     std::vector<double> v;
     s[k] = run_to_equilibrium(g.network, "cvode-bdf", opt, x[k], v);
     REQUIRE(s[k].status == RunStatus::Equilibrium);
   }
-  CHECK(s[0].steps == s[1].steps);
-  CHECK(s[0].lin_setups == s[1].lin_setups);
-  double diff = 0.0;
-  for (size_t i = 0; i < x[0].size(); ++i) diff = std::max(diff, std::abs(x[0][i] - x[1][i]));
-  CHECK(diff < 1e-12);
+  for (int k = 1; k < 3; ++k) {
+    INFO("solver " << k << ": " << s[k].steps << " steps, " << s[k].lin_setups << " setups, "
+                   << s[k].factorisations << " factorisations, " << s[k].lin_iters
+                   << " CG iterations");
+    CHECK(s[0].steps == s[k].steps);
+    CHECK(s[0].lin_setups == s[k].lin_setups);
+    double diff = 0.0;
+    for (size_t i = 0; i < x[0].size(); ++i) diff = std::max(diff, std::abs(x[0][i] - x[k][i]));
+    CHECK(diff < 1e-12);
+  }
+  // KLU and LDL^T factorise at every setup; CG-LDL^T skips the early, small-step setups.
+  CHECK(s[0].factorisations == s[0].lin_setups);
+  CHECK(s[1].factorisations == s[1].lin_setups);
+  CHECK(s[1].lin_iters == 0);
+  CHECK(s[2].factorisations < s[2].lin_setups);
+  CHECK(s[2].lin_iters > 0);
 }
