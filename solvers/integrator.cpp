@@ -80,6 +80,18 @@ void IntegratorOptions::validate() const {
     bad_option("krylov_dim", krylov_dim, "must be in 0..500 (0 = default)");
 }
 
+const char* to_string(IntegratorOptions::NewtonSolver s) {
+  switch (s) {
+    case IntegratorOptions::NewtonSolver::Klu:
+      return "klu";
+    case IntegratorOptions::NewtonSolver::SchurLdl:
+      return "ldl";
+    case IntegratorOptions::NewtonSolver::SchurCgLdl:
+      return "cg-ldl";
+  }
+  return "?";
+}
+
 const char* to_string(RunStatus s) {
   switch (s) {
     case RunStatus::Equilibrium:

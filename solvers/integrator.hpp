@@ -67,7 +67,7 @@ struct IntegratorOptions {
   // SchurCgLdl ~1.9x faster than SchurLdl on the knit model's microsecond steps (README,
   // "Performance"), hence the default.
   enum class NewtonSolver { Klu, SchurLdl, SchurCgLdl };
-  NewtonSolver newton_solver = NewtonSolver::SchurCgLdl;
+  NewtonSolver newton_solver = NewtonSolver::SchurCgLdl;  // names: to_string below
   bool gmres_preconditioner = true;  // cvode-bdf-gmres: block-Jacobi preconditioner
 
   // Throws std::invalid_argument naming the bad field and its accepted range.
@@ -83,6 +83,8 @@ enum class RunStatus {
   Diverged,       // non-finite or runaway state
 };
 const char* to_string(RunStatus s);
+// "klu", "ldl", "cg-ldl": the names of --newton-solver and of summary.json's options.
+const char* to_string(IntegratorOptions::NewtonSolver s);
 
 struct RunStats {
   std::string integrator;

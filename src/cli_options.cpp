@@ -43,18 +43,15 @@ CLI::Option* add_atol_options(CLI::App* cmd, double& atol, double& velocity_atol
 }
 
 void add_newton_solver_option(CLI::App* cmd, IntegratorOptions::NewtonSolver& which) {
-  const std::map<std::string, IntegratorOptions::NewtonSolver> solvers = {
-      {"klu", IntegratorOptions::NewtonSolver::Klu},
-      {"ldl", IntegratorOptions::NewtonSolver::SchurLdl},
-      {"cg-ldl", IntegratorOptions::NewtonSolver::SchurCgLdl}};
+  using NS = IntegratorOptions::NewtonSolver;
+  std::map<std::string, NS> solvers;
+  for (const NS s : {NS::Klu, NS::SchurLdl, NS::SchurCgLdl}) solvers[to_string(s)] = s;
   cmd->add_option("--newton-solver", which,
                   "Newton linear solver of cvode-bdf, arkode-dirk, arkode-imex: klu (2n LU), "
                   "ldl (velocity block eliminated, 3n symmetric LDL^T) or cg-ldl (the same, with "
                   "Jacobi-CG instead of the factorisation at small steps)")
       ->transform(CLI::CheckedTransformer(solvers, CLI::ignore_case))
-      ->default_str(std::find_if(solvers.begin(), solvers.end(), [&](const auto& kv) {
-                      return kv.second == which;
-                    })->first);
+      ->default_str(to_string(which));
 }
 
 void rethrow_with_flag_names(const std::invalid_argument& e,

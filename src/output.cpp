@@ -266,6 +266,7 @@ nlohmann::json to_json(const IntegratorOptions& o) {
           {"max_wall_seconds", o.max_wall_seconds},
           {"check_every", o.check_every},
           {"runaway_position", o.runaway_position},
+          {"newton_solver", to_string(o.newton_solver)},
           {"krylov_dim", o.krylov_dim},
           {"gmres_preconditioner", o.gmres_preconditioner}};
 }

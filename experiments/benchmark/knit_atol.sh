@@ -10,8 +10,9 @@
 #   reference: implicit-euler (dt 1 s) to residual 1e-10 (it lands at 2.4e-12 in 5 steps);
 #   sweep:     rtol {1e-6, 1e-4} x atol {1e-9, 1e-8, 1e-7} x velocity_atol {0, 1e-9 .. 1e-1}
 #              (0 = atol on the velocities too), one run each;
-#   timed:     cvode-bdf at the knit defaults, at the drape defaults (rtol 1e-6, atol 1e-9,
-#              velocity_atol 0) and verlet, N runs each (CPU medians in knit_timed.csv);
+#   timed:     cvode-bdf at the knit defaults (Newton solver cg-ldl, and ldl for the ratio), at
+#              the drape defaults (rtol 1e-6, atol 1e-9, velocity_atol 0) and verlet, N runs
+#              each, interleaved (CPU medians in knit_timed.csv);
 #   drape:     four_corner and two_corner, cvode-bdf, rtol 1e-8, atol 1e-9, velocity_atol
 #              {0, 1e-8, 1e-6, 1e-4, 1e-2}: steps, set-ups, CPU, and the largest relative change
 #              of an edge's coefficient vector |c - c0| / |c0| against velocity_atol 0.
@@ -75,6 +76,7 @@ fi
 if part timed; then
   for rep in $(seq 1 "$REPEATS"); do
     knit knit-defaults cvode-bdf "$rep"
+    knit knit-defaults-ldl cvode-bdf "$rep" --newton-solver ldl
     knit drape-defaults cvode-bdf "$rep" --rtol 1e-6 --atol 1e-9 --velocity-atol 0
     knit verlet verlet "$rep"
   done
@@ -82,12 +84,14 @@ if part timed; then
 import csv, statistics, sys
 rows = list(csv.DictReader(open(sys.argv[1])))
 out = []
-for case in ["knit-defaults", "drape-defaults", "verlet"]:
+for case in ["knit-defaults", "knit-defaults-ldl", "drape-defaults", "verlet"]:
     rs = [r for r in rows if r["case"] == case]
     cpu = sorted(float(r["cpu_seconds"]) for r in rs)
     out.append(dict(case=case, integrator=rs[0]["integrator"], rtol=rs[0]["rtol"],
                     atol=rs[0]["atol"], velocity_atol=rs[0]["velocity_atol"], runs=len(rs),
-                    status=rs[0]["status"], steps=rs[0]["steps"], lin_setups=rs[0]["lin_setups"],
+                    newton_solver=rs[0]["newton_solver"], status=rs[0]["status"],
+                    steps=rs[0]["steps"], lin_setups=rs[0]["lin_setups"],
+                    factorisations=rs[0]["factorisations"],
                     cpu_median=statistics.median(cpu), cpu_min=cpu[0], cpu_max=cpu[-1],
                     shape_dx_over_r=rs[0]["shape_dx_over_r"]))
 w = csv.DictWriter(open(sys.argv[2], "w", newline=""), fieldnames=list(out[0].keys()))

@@ -18,7 +18,8 @@ import os
 import sys
 
 HEADER = ("case,integrator,rtol,atol,velocity_atol,repeat,status,steps,lin_setups,nonlin_iters,"
-          "t_final,residual,cpu_seconds,dx_max_over_r,shape_dx_over_r")
+          "t_final,residual,cpu_seconds,dx_max_over_r,shape_dx_over_r,newton_solver,"
+          "factorisations,lin_iters")
 
 
 def points(folder):
@@ -86,7 +87,9 @@ def row(run, ref, case, repeat):
     return ",".join([case, s["integrator"], repr(o["rtol"]), repr(o["atol"]),
                      repr(o["velocity_atol"]), repeat, s["status"], str(st["steps"]),
                      str(st["lin_setups"]), str(st["nonlin_iters"]), repr(s["t_final"]),
-                     repr(s["residual"]), repr(st["cpu_seconds"]), dx, shape])
+                     repr(s["residual"]), repr(st["cpu_seconds"]), dx, shape,
+                     o.get("newton_solver", ""), str(st.get("factorisations", "")),
+                     str(st.get("lin_iters", ""))])
 
 
 if __name__ == "__main__":
