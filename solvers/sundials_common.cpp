@@ -69,9 +69,33 @@ ContextPtr make_context() {
   return ContextPtr(ctx);
 }
 
+namespace {
+
+// N_VWrmsNorm for serial vectors, sqrt(sum (x_i w_i)^2 / n), with four partial sums. SUNDIALS'
+// own loop has one accumulator, so each element waits for the previous add (~4 cycles); the
+// integrators call it ~25 times per step (error test, Newton convergence, order selection,
+// stability-limit detection), 15 % of cvode-bdf's CPU on the 40 x 40 knit chart.
+double wrms_norm(N_Vector x, N_Vector w) {
+  const long n = N_VGetLength_Serial(x);
+  const double* xd = N_VGetArrayPointer(x);
+  const double* wd = N_VGetArrayPointer(w);
+  double s[4] = {0.0, 0.0, 0.0, 0.0};
+  long i = 0;
+  for (; i + 4 <= n; i += 4)
+    for (int k = 0; k < 4; ++k) {
+      const double p = xd[i + k] * wd[i + k];
+      s[k] += p * p;
+    }
+  for (; i < n; ++i) s[0] += (xd[i] * wd[i]) * (xd[i] * wd[i]);
+  return std::sqrt(((s[0] + s[1]) + (s[2] + s[3])) / static_cast<double>(n));
+}
+
+}  // namespace
+
 VectorPtr make_vector(long n, SUNContext ctx) {
   VectorPtr v(check_created(N_VNew_Serial(n, ctx), "N_VNew_Serial"));
   N_VConst(0.0, v.get());
+  v->ops->nvwrmsnorm = wrms_norm;  // clones (the integrators' work vectors) inherit it
   return v;
 }
 

@@ -289,9 +289,18 @@ TEST_CASE(
   CHECK(std::stod(r6[col(h6, "paper_error")]) == paper.table6_error);
   const DrapeFitProblem two(sample_scene("two_corner", 1), target, fo);
   const DrapeEvaluation e6 = two.evaluate(x);
-  REQUIRE_FALSE(e6.failed);
-  CHECK(r6[col(h6, "drape_status")] == "equilibrium");
-  CHECK(std::stod(r6[col(h6, "error")]) == Approx(e6.objective).epsilon(1e-12));
+  // The row records the re-run as it ended. A tiny-budget fit's parameters can end two_corner
+  // at t_max with the residual hovering at 1e-8..1e-7 (cvode-bdf's corrector noise at rtol
+  // 1e-8; ~10 % of random in-box two_corner drapes, README "Known limitations"), so both
+  // outcomes are checked rather than assumed.
+  INFO("two_corner re-run: " << to_string(e6.status) << ", " << e6.message);
+  if (e6.failed) {
+    CHECK(r6[col(h6, "error")].empty());
+    CHECK(r6[col(h6, "drape_status")] == std::string(to_string(e6.status)) + ": " + e6.message);
+  } else {
+    CHECK(r6[col(h6, "drape_status")] == "equilibrium");
+    CHECK(std::stod(r6[col(h6, "error")]) == Approx(e6.objective).epsilon(1e-12));
+  }
 
   // The report and the manifest are there.
   CHECK(fs::exists(d1 / "report.md"));

@@ -10,6 +10,7 @@
 #include "models/drape_grid.hpp"
 #include "solvers/integrator.hpp"
 #include "solvers/schur_ldl_solver.hpp"
+#include "solvers/sundials_common.hpp"
 #include "src/first_order.hpp"
 
 using namespace knitsim;
@@ -39,8 +40,9 @@ TEST_CASE("Schur LDL^T solve equals a dense LU solve of I - gamma J") {
   ldl_only.cg_max_radius = 0.0;
   forced_fallback.cg_max_iterations = 1;
   const int variant = GENERATE(0, 1, 2);
-  const detail::SchurOptions options =
-      variant == 0 ? ldl_only : variant == 1 ? detail::SchurOptions{} : forced_fallback;
+  const detail::SchurOptions options = variant == 0   ? ldl_only
+                                       : variant == 1 ? detail::SchurOptions{}
+                                                      : forced_fallback;
   const bool cg = options.cg_max_radius > 0.0;
   SUNLinearSolver LS = detail::make_schur_ldl_solver(ctx, fo, options);
   REQUIRE(LS != nullptr);
@@ -121,4 +123,31 @@ TEST_CASE("cvode-bdf takes the same steps to the same equilibrium with KLU, LDL^
   CHECK(s[1].lin_iters == 0);
   CHECK(s[2].factorisations < s[2].lin_setups);
   CHECK(s[2].lin_iters > 0);
+}
+
+TEST_CASE("make_vector's WRMS norm: SUNDIALS' value, four partial sums, inherited by clones") {
+  SUNContext ctx;
+  REQUIRE(SUNContext_Create(nullptr, &ctx) == 0);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (const long n : {1L, 3L, 4L, 7L, 9702L}) {
+    const sun::VectorPtr x = sun::make_vector(n, ctx);
+    N_Vector w = N_VClone(x.get());
+    double* xd = N_VGetArrayPointer(x.get());
+    double* wd = N_VGetArrayPointer(w);
+    long double sum = 0.0L;
+    for (long i = 0; i < n; ++i) {
+      xd[i] = 1e3 * u(rng);
+      wd[i] = 1e-6 / (1e-3 + std::abs(u(rng)));
+      sum += static_cast<long double>(xd[i] * wd[i]) * (xd[i] * wd[i]);
+    }
+    const double exact = static_cast<double>(std::sqrt(sum / n));
+    INFO("n " << n);
+    CHECK(x->ops->nvwrmsnorm != N_VWrmsNorm_Serial);  // the four-sum kernel is installed
+    CHECK(w->ops->nvwrmsnorm == x->ops->nvwrmsnorm);  // and cloned with the vector
+    CHECK(std::abs(N_VWrmsNorm(x.get(), w) - exact) <= 1e-14 * exact);
+    CHECK(std::abs(N_VWrmsNorm_Serial(x.get(), w) - exact) <= 1e-14 * exact);
+    N_VDestroy(w);
+  }
+  SUNContext_Free(&ctx);
 }

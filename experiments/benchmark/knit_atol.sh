@@ -44,7 +44,12 @@ part() { [ "$PART" = all ] || [ "$PART" = "$1" ]; }
 CHART=$root/models/charts/tucks40.chart
 mkdir -p "$OUT/runs"
 knit_csv=$OUT/knit.csv
-[ -f "$knit_csv" ] || python3 "$here/knit_row.py" --header > "$knit_csv"
+header=$(python3 "$here/knit_row.py" --header)
+if [ -f "$knit_csv" ] && [ "$(head -n 1 "$knit_csv")" != "$header" ]; then
+  mv "$knit_csv" "$knit_csv.old"  # written by an older knit_row.py: other columns
+  echo "knit_atol: $knit_csv had other columns; moved to $knit_csv.old" >&2
+fi
+[ -f "$knit_csv" ] || echo "$header" > "$knit_csv"
 
 # knit CASE INTEGRATOR REPEAT ARGS...: one knitsim knit run into runs/CASE-REPEAT; replaces its
 # knit.csv row (distances against runs/reference-1, none for the reference itself).
