@@ -71,7 +71,7 @@ bool cg_solve(SchurLdl& c, const Eigen::Ref<const Eigen::VectorXd>& b,
   c.p = c.z;
   double rz = c.r.dot(c.z);
   for (int it = 0; it < c.options.cg_max_iterations; ++it) {
-    c.q.noalias() = c.S * c.p;
+    c.q.noalias() = c.S.transpose() * c.p;  // S symmetric: the row-wise (gathering) product
     const double pq = c.p.dot(c.q);
     ++c.counts.cg_iterations;
     if (!(pq > 0.0)) return false;
