@@ -59,13 +59,14 @@ struct IntegratorOptions {
   // Linear solver for the Newton systems of cvode-bdf, arkode-dirk and arkode-imex:
   //   Klu        sparse LU of the 2n x 2n matrix I - gamma J (SUNDIALS' KLU);
   //   SchurLdl   velocity block eliminated, symmetric 3n x 3n LDL^T (schur_ldl_solver.hpp);
-  //   SchurCgLdl the same, but a setup whose reduced matrix is close to its diagonal (small
-  //              steps) is solved by Jacobi-preconditioned CG to 1e-8 and factorised only if
-  //              CG does not converge (schur_ldl_solver.hpp).
-  // All three solve the same Newton systems (CG to a relative residual of 1e-8), so the steps
-  // taken are the same; SchurLdl measured 1.3x faster than KLU on both drape scenes, and
-  // SchurCgLdl ~1.9x faster than SchurLdl on the knit model's microsecond steps (README,
-  // "Performance"), hence the default.
+  //   SchurCgLdl the same, but a setup whose reduced matrix is provably well conditioned
+  //              (small steps; Gershgorin radius of its Jacobi-scaled form <= 0.8) is solved
+  //              by Jacobi-preconditioned CG to a relative error <= 1e-6, and factorised only
+  //              if CG does not get there in 40 iterations (schur_ldl_solver.hpp).
+  // All three solve the same Newton systems; KLU and SchurLdl take the same steps, SchurCgLdl
+  // the same on four_corner and within a few steps where step control is on a knife edge.
+  // SchurLdl measured 1.3x faster than KLU on both drape scenes, and SchurCgLdl ~2x faster than
+  // SchurLdl on the knit model's microsecond steps (README, "Integrators"), hence the default.
   enum class NewtonSolver { Klu, SchurLdl, SchurCgLdl };
   NewtonSolver newton_solver = NewtonSolver::SchurCgLdl;  // names: to_string below
   bool gmres_preconditioner = true;  // cvode-bdf-gmres: block-Jacobi preconditioner

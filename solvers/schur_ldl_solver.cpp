@@ -6,6 +6,7 @@
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <cmath>
+#include <stdexcept>
 #include <vector>
 
 namespace knitsim::detail {
@@ -24,6 +25,7 @@ struct SchurLdl {
   SchurOptions options;
   bool factorised = false;               // this setup's S has been factorised
   bool try_cg = false;                   // this setup's S passed the radius test
+  double radius = -1.0;                  // its Gershgorin radius (D^-1 S), when try_cg
   Eigen::VectorXd inv_diag, r, z, p, q;  // CG: 1 / S_jj and work vectors (length n)
   SchurCounts counts;
   int last_flag = SUNLS_SUCCESS;
@@ -42,34 +44,40 @@ int factorise(SchurLdl& c) {
   return c.factorised ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_REC;
 }
 
-// Whether every S_jj > 0 and max_j sum_{i != j} |S_ij| / S_jj <= bound (S is symmetric, so
-// column sums are row sums); fills inv_diag on the way.
-bool jacobi_radius_within(SchurLdl& c, double bound) {
-  if (!(bound > 0.0)) return false;
+// Gershgorin radius of D^-1 S, rho = max_j sum_{i != j} |S_ij| / S_jj (S is symmetric, so
+// column sums are row sums), if every S_jj > 0 and rho <= bound; fills inv_diag on the way.
+// Returns -1 otherwise. The eigenvalues of D^-1 S then lie in [1 - rho, 1 + rho].
+double jacobi_radius(SchurLdl& c, double bound) {
+  if (!(bound > 0.0)) return -1.0;
   const double* s = c.S.valuePtr();
   const int* colptr = c.S.outerIndexPtr();
+  double rho = 0.0;
   for (int j = 0; j < c.n; ++j) {
     const double d = s[c.diag[j]];
-    if (!(d > 0.0)) return false;
+    if (!(d > 0.0)) return -1.0;
     double off = -d;
     for (int k = colptr[j]; k < colptr[j + 1]; ++k) off += std::abs(s[k]);
-    if (!(off <= bound * d)) return false;
+    if (!(off <= bound * d)) return -1.0;
+    rho = std::max(rho, off / d);
     c.inv_diag[j] = 1.0 / d;
   }
-  return true;
+  return rho;
 }
 
-// Jacobi-preconditioned CG on S x = b from x = 0; false if it breaks down or has not reached
-// cg_rel_tol within cg_max_iterations.
+// Jacobi-preconditioned CG on S x = b from x = 0, until the relative error in the D norm is
+// at most cg_rel_tol: with B = D^-1/2 S D^-1/2 (spectrum in [1 - rho, 1 + rho]), |e|_D <=
+// |r|_{D^-1} / (1 - rho) and |x|_D >= |b|_{D^-1} / (1 + rho), and |r|_{D^-1}^2 = r'z is CG's
+// own r'z. False if CG breaks down or has not got there within cg_max_iterations.
 bool cg_solve(SchurLdl& c, const Eigen::Ref<const Eigen::VectorXd>& b,
               Eigen::Ref<Eigen::VectorXd> x) {
-  const double target = c.options.cg_rel_tol * b.norm();
   x.setZero();
   c.r = b;
-  if (c.r.norm() <= target) return true;
   c.z = c.inv_diag.cwiseProduct(c.r);
   c.p = c.z;
   double rz = c.r.dot(c.z);
+  const double shrink = c.options.cg_rel_tol * (1.0 - c.radius) / (1.0 + c.radius);
+  const double target = shrink * shrink * rz;
+  if (!(rz > 0.0)) return rz == 0.0;  // b = 0: x = 0
   for (int it = 0; it < c.options.cg_max_iterations; ++it) {
     c.q.noalias() = c.S.transpose() * c.p;  // S symmetric: the row-wise (gathering) product
     const double pq = c.p.dot(c.q);
@@ -78,9 +86,9 @@ bool cg_solve(SchurLdl& c, const Eigen::Ref<const Eigen::VectorXd>& b,
     const double alpha = rz / pq;
     x += alpha * c.p;
     c.r -= alpha * c.q;
-    if (c.r.norm() <= target) return true;
     c.z = c.inv_diag.cwiseProduct(c.r);
     const double rz_next = c.r.dot(c.z);
+    if (rz_next <= target) return true;
     c.p = c.z + (rz_next / rz) * c.p;
     rz = rz_next;
   }
@@ -104,7 +112,8 @@ int setup(SUNLinearSolver LS, SUNMatrix A) {
   for (int j = 0; j < n; ++j) s[c.diag[j]] += m[j] * a[colptr[n + j] + 1];  // M A_vv
   ++c.counts.setups;
   c.factorised = false;
-  c.try_cg = jacobi_radius_within(c, c.options.cg_max_radius);
+  c.radius = jacobi_radius(c, c.options.cg_max_radius);
+  c.try_cg = c.radius >= 0.0;
   c.last_flag = c.try_cg ? SUNLS_SUCCESS : factorise(c);
   return c.last_flag;
 }
@@ -156,6 +165,8 @@ SchurCounts schur_counts(SUNLinearSolver LS) { return content(LS)->counts; }
 
 SUNLinearSolver make_schur_ldl_solver(SUNContext ctx, const FirstOrderSystem& sys,
                                       const SchurOptions& options) {
+  if (!(options.cg_max_radius >= 0.0 && options.cg_max_radius < 1.0))
+    throw std::invalid_argument("SchurOptions::cg_max_radius must be in [0, 1)");
   SUNLinearSolver LS = SUNLinSolNewEmpty(ctx);
   if (!LS) return nullptr;
   auto* c = new SchurLdl;
