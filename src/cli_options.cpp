@@ -44,13 +44,19 @@ CLI::Option* add_atol_options(CLI::App* cmd, double& atol, double& velocity_atol
 
 void add_newton_solver_option(CLI::App* cmd, IntegratorOptions::NewtonSolver& which) {
   using NS = IntegratorOptions::NewtonSolver;
-  std::map<std::string, NS> solvers;
-  for (const NS s : {NS::Klu, NS::SchurLdl, NS::SchurCgLdl}) solvers[to_string(s)] = s;
-  cmd->add_option("--newton-solver", which,
-                  "Newton linear solver of cvode-bdf, arkode-dirk, arkode-imex: klu (2n LU), "
-                  "ldl (velocity block eliminated, 3n symmetric LDL^T) or cg-ldl (the same, with "
-                  "Jacobi-CG instead of the factorisation at small steps)")
-      ->transform(CLI::CheckedTransformer(solvers, CLI::ignore_case))
+  static const NS all[] = {NS::Klu, NS::SchurLdl, NS::SchurCgLdl};
+  std::vector<std::string> names;
+  for (const NS s : all) names.emplace_back(to_string(s));
+  cmd->add_option_function<std::string>(
+         "--newton-solver",
+         [&which](const std::string& name) {
+           for (const NS s : all)
+             if (name == to_string(s)) which = s;
+         },
+         "Newton linear solver of cvode-bdf, arkode-dirk, arkode-imex: klu (2n LU), ldl "
+         "(velocity block eliminated, 3n symmetric LDL^T) or cg-ldl (the same, with Jacobi-CG "
+         "instead of the factorisation at small steps)")
+      ->check(CLI::IsMember(names))
       ->default_str(to_string(which));
 }
 

@@ -42,7 +42,8 @@ TEST_CASE("knitsim knit: a small tuck chart settles and its outputs agree with t
   std::string err;
   const int status =
       run_knit("--chart '" + (tmp / "small.chart").string() +
-                   "' --set knit.stabiliser=0.1 --frames 3 --step-history --quiet --out '" +
+                   "' --set knit.stabiliser=0.1 --frames 3 --step-history --newton-solver ldl "
+                   "--max-order 3 --quiet --out '" +
                    out.string() + "'",
                err);
   INFO(err);
@@ -58,6 +59,12 @@ TEST_CASE("knitsim knit: a small tuck chart settles and its outputs agree with t
   const KnitModel m = build_knit(parse_knit_chart(chart_text), p);
   const auto summary = nlohmann::json::parse(slurp(out / "summary.json"));
   CHECK(summary["status"] == "equilibrium");
+  // --newton-solver and --max-order reach the integrator
+  CHECK(summary["options"]["newton_solver"] == "ldl");
+  CHECK(summary["options"]["max_order"] == 3);
+  CHECK(summary["stats"]["factorisations"] == summary["stats"]["lin_setups"]);
+  CHECK(summary["stats"]["lin_iters"] == 0);
+  CHECK(summary["stats"]["max_order_used"].get<int>() <= 3);
   CHECK(summary["points"] == m.points.size());
   CHECK(summary["springs"] == m.network.spec().springs.size());
   CHECK(summary["springs_by_kind"]["tuck"] == m.count(KnitSpringKind::Tuck));
@@ -94,6 +101,8 @@ TEST_CASE("knitsim knit: bad input exits 2 with one line and writes nothing") {
       {"--chart '" + (tmp / "good.chart").string() + "' --set knit.stabiliser=2",
        "knit.stabiliser = 2: must be in [0, 1]"},
       {"--chart '" + (tmp / "good.chart").string() + "' --integrator nope", "--integrator = nope"},
+      {"--chart '" + (tmp / "good.chart").string() + "' --newton-solver lu",
+       "--newton-solver: lu not in {klu,ldl,cg-ldl}"},
   };
   for (const Case& c : cases) {
     CAPTURE(c.args);
