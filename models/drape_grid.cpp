@@ -22,7 +22,9 @@ const char* to_string(PinLayout layout) {
 }
 
 const char* to_string(DrapeSymmetry symmetry) {
-  return symmetry == DrapeSymmetry::Quarter ? "quarter" : "none";
+  return symmetry == DrapeSymmetry::Quarter  ? "quarter"
+         : symmetry == DrapeSymmetry::Eighth ? "eighth"
+                                             : "none";
 }
 
 int DrapeParams::cells() const {
@@ -49,13 +51,14 @@ void DrapeParams::validate() const {
     bad("pins.move_time", pin_move_time, "must be >= 0 s");
   if (!(perturbation >= 0.0) || !std::isfinite(perturbation))
     bad("model.perturbation", perturbation, "must be >= 0 m");
-  if (symmetry == DrapeSymmetry::Quarter && layout != PinLayout::FourCorner)
-    throw std::invalid_argument(
-        "model.symmetry = quarter: needs pins.layout = four_corner (two_corner is not symmetric "
-        "about the mid-plane y = W/2)");
-  if (symmetry == DrapeSymmetry::Quarter && perturbation != 0.0)
+  if (symmetry != DrapeSymmetry::None && layout != PinLayout::FourCorner)
+    throw std::invalid_argument(std::string("model.symmetry = ") + to_string(symmetry) +
+                                ": needs pins.layout = four_corner (two_corner is not symmetric "
+                                "about the mid-plane y = W/2)");
+  if (symmetry != DrapeSymmetry::None && perturbation != 0.0)
     bad("model.perturbation", perturbation,
-        "must be 0 with model.symmetry = quarter (a perturbed start is not mirror-symmetric)");
+        std::string("must be 0 with model.symmetry = ") + to_string(symmetry) +
+            " (a perturbed start is not mirror-symmetric)");
   const double n = std::floor(width / natural_length + 0.5);
   if ((n + 1) * (n + 1) > static_cast<double>(max_particles)) {
     std::ostringstream os;

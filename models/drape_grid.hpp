@@ -26,8 +26,9 @@ namespace knitsim {
 
 enum class PinLayout { FourCorner, TwoCorner };
 // What run_drape integrates: the whole grid, or one quarter of a four_corner grid with mirror
-// conditions on the two mid-planes (models/mirror_quarter.hpp; the result is unfolded).
-enum class DrapeSymmetry { None, Quarter };
+// conditions on the two mid-planes, or one eighth with the diagonal mirror too
+// (models/mirror_reduced.hpp; the result is unfolded).
+enum class DrapeSymmetry { None, Quarter, Eighth };
 
 struct DrapeParams {
   double width = 0.50;            // W, m (paper: 50 x 50 cm samples)
@@ -42,7 +43,7 @@ struct DrapeParams {
   double pin_move_time = 100.0;  // s, duration of the pin move when pin_span < 1
   double perturbation = 0.0;     // m, amplitude of the seeded initial z perturbation
   unsigned seed = 1;             // seed of that perturbation
-  // none | quarter (four_corner without perturbation; models/mirror_quarter.hpp)
+  // none | quarter | eighth (four_corner without perturbation; models/mirror_reduced.hpp)
   DrapeSymmetry symmetry = DrapeSymmetry::None;
   long max_particles = 4'000'000;  // refuse larger grids before allocating
 
@@ -84,6 +85,6 @@ const char* to_string(DrapeParameter p);  // stiffness | damping | elongation_li
 SpringNetworkTangent drape_tangent(const DrapeGrid& grid, DrapeParameter p, double t);
 
 const char* to_string(PinLayout layout);
-const char* to_string(DrapeSymmetry symmetry);  // none | quarter
+const char* to_string(DrapeSymmetry symmetry);  // none | quarter | eighth
 
 }  // namespace knitsim

@@ -15,7 +15,7 @@
 #include <stdexcept>
 #include <utility>
 
-#include "models/mirror_quarter.hpp"
+#include "models/mirror_reduced.hpp"
 #include "src/cli_options.hpp"
 #include "src/targets.hpp"
 
@@ -93,7 +93,8 @@ const std::vector<Key>& keys() {
         "an integer in 0..4294967295");
     choice("model.symmetry", &DrapeParams::symmetry,
            std::vector<std::pair<std::string, DrapeSymmetry>>{{"none", DrapeSymmetry::None},
-                                                              {"quarter", DrapeSymmetry::Quarter}});
+                                                              {"quarter", DrapeSymmetry::Quarter},
+                                                              {"eighth", DrapeSymmetry::Eighth}});
     choice("pins.layout", &DrapeParams::layout,
            std::vector<std::pair<std::string, PinLayout>>{{"four_corner", PinLayout::FourCorner},
                                                           {"two_corner", PinLayout::TwoCorner}});
@@ -289,13 +290,13 @@ DrapeResult run_drape(const Scene& scene, const std::string& integrator, RunObse
   DrapeResult r{build_drape_grid(scene.params), 0, RunStats{}, {}, {}};
   const SpringNetwork& net = r.grid.network;
   std::vector<double> x, v;
-  if (scene.params.symmetry == DrapeSymmetry::Quarter) {
-    const MirrorQuarter quarter = make_drape_quarter(r.grid);
+  if (scene.params.symmetry != DrapeSymmetry::None) {
+    const MirrorReduced reduced = make_drape_reduced(r.grid, scene.params.symmetry);
     std::vector<double> q, qv;
-    r.stats = run_to_equilibrium(quarter, *integ, scene.options, q, qv, observer);
-    r.integrated_dof = quarter.dof();
+    r.stats = run_to_equilibrium(reduced, *integ, scene.options, q, qv, observer);
+    r.integrated_dof = reduced.dof();
     x.resize(net.dof());
-    quarter.unfold(q.data(), x.data());
+    reduced.unfold(q.data(), x.data());
   } else {
     r.stats = run_to_equilibrium(net, *integ, scene.options, x, v, observer);
     r.integrated_dof = net.dof();

@@ -7,7 +7,8 @@
 //   [fabric] width (m), areal_density (g/m^2)
 //   [model]  stiffness (N/m), damping (N s/m), elongation_limit (percent),
 //            natural_length (m), topology (a|b|c), perturbation (m), seed (integer >= 0),
-//            symmetry (none|quarter: integrate one quarter of four_corner, unfolded after)
+//            symmetry (none|quarter|eighth: integrate one quarter or eighth of four_corner,
+//            unfolded after)
 //   [pins]   layout (four_corner|two_corner), span (fraction of the width), move_time (s)
 //   [run]    t_max (s), equilibrium_tol (static residual, dimensionless)
 // Line 2 of a scene file is a comment that describes it in one line (`knitsim list scenes`).
@@ -72,7 +73,7 @@ std::string default_integrator();
 // One drape run and the quantities every report of it shows.
 struct DrapeResult {
   DrapeGrid grid;               // the full model; particle (i, j) = grid.index(i, j)
-  int integrated_dof = 0;       // dof integrated: the grid's, or its quarter's (symmetry)
+  int integrated_dof = 0;       // dof integrated: the grid's, or its reduction's (symmetry)
   RunStats stats;               // status, counters, residual, wall time
   std::vector<Vec3> positions;  // all particles (pins included) at stats.t_final, m
   std::vector<Vec3> rest;       // all particles at t = 0, m
@@ -83,9 +84,9 @@ struct DrapeResult {
 
 // Builds the grid of `scene`, runs it from the flat state with run_to_equilibrium and the named
 // integrator (throws std::invalid_argument for an unknown name), and measures the result.
-// With model.symmetry = quarter the run integrates make_drape_quarter(grid) and unfolds its
-// final state onto the full grid, so positions, edges and outputs always see the full sheet.
-// A run that does not reach equilibrium is a status in result.stats, not an exception.
+// With model.symmetry = quarter | eighth the run integrates make_drape_reduced(grid) and unfolds
+// its final state onto the full grid, so positions, edges and outputs always see the full sheet. A
+// run that does not reach equilibrium is a status in result.stats, not an exception.
 DrapeResult run_drape(const Scene& scene, const std::string& integrator,
                       RunObserver* observer = nullptr);
 

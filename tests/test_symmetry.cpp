@@ -1,14 +1,14 @@
-// MirrorQuarter (models/mirror_quarter.hpp): the quarter of a symmetric drape grid is the exact
-// restriction of the full equations to symmetric states, its Jacobian passes the finite-
-// difference check, its unfolded equilibrium is the full model's, and asymmetric scenes are
-// refused.
+// MirrorReduced (models/mirror_reduced.hpp): the quarter and the eighth of a symmetric drape grid
+// are the exact restriction of the full equations to symmetric states, their Jacobians pass the
+// finite-difference check, their unfolded equilibria are the full model's, and asymmetric scenes
+// are refused.
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <functional>
 #include <random>
 
-#include "models/mirror_quarter.hpp"
+#include "models/mirror_reduced.hpp"
 #include "src/jacobian_check.hpp"
 #include "src/measurement.hpp"
 #include "src/scene.hpp"
@@ -24,9 +24,11 @@ DrapeGrid grid_of(char topology, double natural_length) {
   return build_drape_grid(p);
 }
 
-// A random symmetric state: the quarter's flat start plus noise of `amp` metres in every
+const DrapeSymmetry kReductions[] = {DrapeSymmetry::Quarter, DrapeSymmetry::Eighth};
+
+// A random symmetric state: the reduction's flat start plus noise of `amp` metres in every
 // unknown (large enough that the elongation limit is active on some springs).
-std::vector<double> random_quarter_state(const MirrorQuarter& q, double amp, unsigned seed) {
+std::vector<double> random_reduced_state(const MirrorReduced& q, double amp, unsigned seed) {
   std::vector<double> x(q.dof()), v(q.dof());
   q.initial_state(x.data(), v.data());
   std::mt19937 rng(seed);
@@ -52,61 +54,81 @@ std::string error_of(const std::function<void()>& f) {
 
 }  // namespace
 
-TEST_CASE("the quarter's equations are the full equations restricted to symmetric states") {
-  for (double L0 : {0.1, 0.049}) {  // n = 5 (no grid line on the planes) and n = 10
-    for (char topo : {'a', 'b', 'c'}) {
-      CAPTURE(L0, topo);
-      const DrapeGrid grid = grid_of(topo, L0);
-      const SpringNetwork& full = grid.network;
-      const MirrorQuarter quarter = make_drape_quarter(grid);
-      const std::vector<double> q = random_quarter_state(quarter, 0.2 * L0, 7);
-      std::vector<double> x(full.dof());
-      quarter.unfold(q.data(), x.data());
-      const double t = 1.0;
-      REQUIRE(full.max_strain(t, x.data()) > 0.05);  // the elongation limit's k_lim is active
+TEST_CASE("the reduced equations are the full equations restricted to symmetric states") {
+  for (DrapeSymmetry sym : kReductions)
+    for (double L0 : {0.1, 0.049}) {  // n = 5 (no grid line on the planes) and n = 10
+      for (char topo : {'a', 'b', 'c'}) {
+        CAPTURE(to_string(sym), L0, topo);
+        const DrapeGrid grid = grid_of(topo, L0);
+        const SpringNetwork& full = grid.network;
+        const MirrorReduced reduced = make_drape_reduced(grid, sym);
+        const int order = sym == DrapeSymmetry::Eighth ? 8 : 4;
+        REQUIRE(reduced.group_order() == order);
+        const std::vector<double> q = random_reduced_state(reduced, 0.2 * L0, 7);
+        std::vector<double> x(full.dof());
+        reduced.unfold(q.data(), x.data());
+        const double t = 1.0;
+        REQUIRE(full.max_strain(t, x.data()) > 0.05);  // the elongation limit's k_lim is active
 
-      // The unfolded state is symmetric: the full force on it is, so the x force on the
-      // plane x = W/2 vanishes; and the quarter's unknowns are the state's own coordinates.
-      for (size_t j = 0; j < q.size(); ++j) CHECK(x[quarter.full_dof()[j]] == q[j]);
+        // The reduction's unknowns are the unfolded state's own coordinates, and that state is
+        // symmetric: every particle sits at the mirror image of its images (diagonal included).
+        for (size_t j = 0; j < q.size(); ++j) CHECK(x[reduced.full_dof()[j]] == q[j]);
+        const MirrorPlanes planes = drape_mirror_planes(grid, order == 8);
+        std::vector<Vec3> pos;
+        full.all_positions(t, x.data(), pos);
+        const double c = planes.x_plane;
+        double asym = 0.0;
+        for (int p = 0; p < full.particle_count(); ++p) {
+          const Vec3 a = pos[p], bx = pos[planes.image_x[p]], by = pos[planes.image_y[p]];
+          asym = std::max({asym, std::abs(bx.x - (2 * c - a.x)), std::abs(by.y - (2 * c - a.y)),
+                           std::abs(bx.z - a.z), std::abs(by.z - a.z)});
+          if (order == 8) {
+            const Vec3 bd = pos[planes.image_d[p]];
+            asym =
+                std::max({asym, std::abs(bd.x - a.y), std::abs(bd.y - a.x), std::abs(bd.z - a.z)});
+          }
+        }
+        CHECK(asym <= 1e-15);
 
-      std::vector<double> a_full(full.dof()), a_q(quarter.dof());
-      full.conservative_acceleration(t, x.data(), a_full.data());
-      quarter.conservative_acceleration(t, q.data(), a_q.data());
-      const double scale = max_abs(a_full);
-      double worst = 0.0;
-      for (size_t j = 0; j < q.size(); ++j) {
-        const int k = quarter.full_dof()[j];
-        worst = std::max(worst, std::abs(a_q[j] - a_full[k]));
-        CHECK(quarter.damping_rate()[j] == Approx(full.damping_rate()[k]).epsilon(1e-14));
+        std::vector<double> a_full(full.dof()), a_q(reduced.dof());
+        full.conservative_acceleration(t, x.data(), a_full.data());
+        reduced.conservative_acceleration(t, q.data(), a_q.data());
+        const double scale = max_abs(a_full);
+        double worst = 0.0;
+        for (size_t j = 0; j < q.size(); ++j) {
+          const int k = reduced.full_dof()[j];
+          worst = std::max(worst, std::abs(a_q[j] - a_full[k]));
+          CHECK(reduced.damping_rate()[j] == Approx(full.damping_rate()[k]).epsilon(1e-14));
+        }
+        CHECK(worst <= 1e-12 * scale);
+        // E_R = E / |G| and the same static residual (the equilibrium criterion of SPEC 2.3).
+        CHECK(reduced.potential_energy(t, q.data()) ==
+              Approx(full.potential_energy(t, x.data()) / order).epsilon(1e-12));
+        CHECK(reduced.static_residual(t, q.data()) ==
+              Approx(full.static_residual(t, x.data())).epsilon(1e-12));
+        CHECK(reduced.residual_roundoff(t, q.data()) == full.residual_roundoff(t, x.data()));
+        // Fewer unknowns: about a reduced (an eighth) of the full dof, plus the mid-lines.
+        CHECK(reduced.dof() < full.dof() / (order == 8 ? 5 : 3));
       }
-      CHECK(worst <= 1e-12 * scale);
-      // E_Q = E / 4 and the same static residual (the equilibrium criterion of SPEC 2.3).
-      CHECK(quarter.potential_energy(t, q.data()) ==
-            Approx(full.potential_energy(t, x.data()) / 4).epsilon(1e-12));
-      CHECK(quarter.static_residual(t, q.data()) ==
-            Approx(full.static_residual(t, x.data())).epsilon(1e-12));
-      CHECK(quarter.residual_roundoff(t, q.data()) == full.residual_roundoff(t, x.data()));
-      // Fewer unknowns: about a quarter of the full dof (plus the mid-lines for even n).
-      CHECK(quarter.dof() < full.dof() / 3);
     }
-  }
 }
 
-TEST_CASE("the quarter's Jacobian (P^T K P through the ghost ties) matches finite differences") {
-  for (double L0 : {0.1, 0.0833}) {  // n = 5 and n = 6
-    for (char topo : {'a', 'b', 'c'}) {
-      CAPTURE(L0, topo);
-      const MirrorQuarter quarter = make_drape_quarter(grid_of(topo, L0));
-      const std::vector<double> q = random_quarter_state(quarter, 0.2 * L0, 3);
-      const JacobianCheck c = check_stiffness_jacobian(quarter, 0.0, q.data());
-      CAPTURE(c.worst_row, c.worst_col, c.worst_analytic, c.worst_fd);
-      CHECK(c.max_relative_error < 1e-6);
-      CHECK_FALSE(c.outside_pattern);
+TEST_CASE("the reduced Jacobian (P^T K P through the ghost ties) matches finite differences") {
+  for (DrapeSymmetry sym : kReductions)
+    for (double L0 : {0.1, 0.0833}) {  // n = 5 and n = 6
+      for (char topo : {'a', 'b', 'c'}) {
+        CAPTURE(to_string(sym), L0, topo);
+        const MirrorReduced reduced = make_drape_reduced(grid_of(topo, L0), sym);
+        const std::vector<double> q = random_reduced_state(reduced, 0.2 * L0, 3);
+        const JacobianCheck c = check_stiffness_jacobian(reduced, 0.0, q.data());
+        CAPTURE(c.worst_row, c.worst_col, c.worst_analytic, c.worst_fd);
+        CHECK(c.max_relative_error < 1e-6);
+        CHECK_FALSE(c.outside_pattern);
+      }
     }
-  }
 }
 
-TEST_CASE("the unfolded quarter equilibrium is the full four_corner equilibrium") {
+TEST_CASE("the unfolded quarter and eighth equilibria are the full four_corner equilibrium") {
   // implicit-euler takes the same steps on both (931 for a): the quarter's arithmetic is the
   // full one's restricted, so only round-off differs (measured 7e-17 m) -> bound 1e-12 m.
   // cvode-bdf's WRMS error norm averages over different unknowns, so its step sequence differs
@@ -116,45 +138,47 @@ TEST_CASE("the unfolded quarter equilibrium is the full four_corner equilibrium"
   // cvode-bdf runs at the fits' rtol 1e-8: at the default 1e-6 either run may end at t_max on
   // the corrector's residual plateau (README "Known limitations"; the quarter with topology c
   // does), which is not what this test is about.
-  for (const std::string& integ : {default_integrator(), std::string("implicit-euler")}) {
-    for (const char* topo : {"a", "c"}) {
-      CAPTURE(integ, topo);
-      Scene full_scene = load_scene("four_corner", {std::string("model.topology=") + topo});
-      Scene quarter_scene = load_scene(
-          "four_corner", {std::string("model.topology=") + topo, "model.symmetry=quarter"});
-      if (integ != "implicit-euler") full_scene.options.rtol = quarter_scene.options.rtol = 1e-8;
-      const DrapeResult full = run_drape(full_scene, integ);
-      const DrapeResult quarter = run_drape(quarter_scene, integ);
-      REQUIRE(full.stats.status == RunStatus::Equilibrium);
-      REQUIRE(quarter.stats.status == RunStatus::Equilibrium);
-      CHECK(quarter.integrated_dof < full.integrated_dof / 3);
-      double diff = 0.0;
-      for (size_t p = 0; p < full.positions.size(); ++p)
-        diff = std::max(diff, norm(full.positions[p] - quarter.positions[p]));
-      CHECK(diff < (integ == "implicit-euler" ? 1e-12 : 1e-9));
-      CHECK(quarter.centre_sag > 0.01);  // a real drape (1.3 cm for a)
-      // The unfolded state meets the full model's own criterion.
-      std::vector<double> x(full.grid.network.dof());
-      for (int p = 0; p < full.grid.network.particle_count(); ++p) {
-        const int f = full.grid.network.free_index(p);
-        if (f < 0) continue;
-        x[3 * f] = quarter.positions[p].x;
-        x[3 * f + 1] = quarter.positions[p].y;
-        x[3 * f + 2] = quarter.positions[p].z;
-      }
-      CHECK(full.grid.network.static_residual(quarter.stats.t_final, x.data()) <=
-            1.0001 * quarter_scene.options.equilibrium_tol);
-      const std::vector<EdgeFit> ef = measure_edges(full.grid, full.positions);
-      const std::vector<EdgeFit> eq = measure_edges(quarter.grid, quarter.positions);
-      double cmax = 0.0, cdiff = 0.0;
-      for (size_t e = 0; e < ef.size(); ++e)
-        for (size_t i = 0; i < ef[e].coefficients.size(); ++i) {
-          cmax = std::max(cmax, std::abs(ef[e].coefficients[i]));
-          cdiff = std::max(cdiff, std::abs(ef[e].coefficients[i] - eq[e].coefficients[i]));
+  // The eighth: the same bounds (its steps differ from the quarter's for the same reason).
+  for (const std::string sym : {"quarter", "eighth"})
+    for (const std::string& integ : {default_integrator(), std::string("implicit-euler")}) {
+      for (const char* topo : {"a", "c"}) {
+        CAPTURE(sym, integ, topo);
+        Scene full_scene = load_scene("four_corner", {std::string("model.topology=") + topo});
+        Scene quarter_scene = load_scene(
+            "four_corner", {std::string("model.topology=") + topo, "model.symmetry=" + sym});
+        if (integ != "implicit-euler") full_scene.options.rtol = quarter_scene.options.rtol = 1e-8;
+        const DrapeResult full = run_drape(full_scene, integ);
+        const DrapeResult quarter = run_drape(quarter_scene, integ);
+        REQUIRE(full.stats.status == RunStatus::Equilibrium);
+        REQUIRE(quarter.stats.status == RunStatus::Equilibrium);
+        CHECK(quarter.integrated_dof < full.integrated_dof / (sym == "eighth" ? 5 : 3));
+        double diff = 0.0;
+        for (size_t p = 0; p < full.positions.size(); ++p)
+          diff = std::max(diff, norm(full.positions[p] - quarter.positions[p]));
+        CHECK(diff < (integ == "implicit-euler" ? 1e-12 : 1e-9));
+        CHECK(quarter.centre_sag > 0.01);  // a real drape (1.3 cm for a)
+        // The unfolded state meets the full model's own criterion.
+        std::vector<double> x(full.grid.network.dof());
+        for (int p = 0; p < full.grid.network.particle_count(); ++p) {
+          const int f = full.grid.network.free_index(p);
+          if (f < 0) continue;
+          x[3 * f] = quarter.positions[p].x;
+          x[3 * f + 1] = quarter.positions[p].y;
+          x[3 * f + 2] = quarter.positions[p].z;
         }
-      CHECK(cdiff <= 1e-6 * cmax);
+        CHECK(full.grid.network.static_residual(quarter.stats.t_final, x.data()) <=
+              1.0001 * quarter_scene.options.equilibrium_tol);
+        const std::vector<EdgeFit> ef = measure_edges(full.grid, full.positions);
+        const std::vector<EdgeFit> eq = measure_edges(quarter.grid, quarter.positions);
+        double cmax = 0.0, cdiff = 0.0;
+        for (size_t e = 0; e < ef.size(); ++e)
+          for (size_t i = 0; i < ef[e].coefficients.size(); ++i) {
+            cmax = std::max(cmax, std::abs(ef[e].coefficients[i]));
+            cdiff = std::max(cdiff, std::abs(ef[e].coefficients[i] - eq[e].coefficients[i]));
+          }
+        CHECK(cdiff <= 1e-6 * cmax);
+      }
     }
-  }
 }
 
 TEST_CASE("asymmetric scenes and networks are refused with one line") {
@@ -167,14 +191,14 @@ TEST_CASE("asymmetric scenes and networks are refused with one line") {
         "model.perturbation = 0.001: must be 0 with model.symmetry = quarter (a perturbed "
         "start is not mirror-symmetric)");
   CHECK(error_of([] { load_scene("four_corner", {"model.symmetry=half"}); }) ==
-        "model.symmetry = half: must be one of none, quarter");
+        "model.symmetry = half: must be one of none, quarter, eighth");
 
   // The generic check, independent of the scene keys: a two_corner grid's pins...
   DrapeParams two;
   two.layout = PinLayout::TwoCorner;
   const DrapeGrid g2 = build_drape_grid(two);
   const std::string pins =
-      error_of([&] { (void)MirrorQuarter(g2.network, drape_mirror_planes(g2)); });
+      error_of([&] { (void)MirrorReduced(g2.network, drape_mirror_planes(g2)); });
   CHECK(pins.rfind("not mirror-symmetric: particle 0 is pinned and its image 110", 0) == 0);
 
   // ... and a topology with one shear diagonal only (a "topology" that breaks the mirrors).
@@ -188,7 +212,7 @@ TEST_CASE("asymmetric scenes and networks are refused with one line") {
                      spec.springs.end());  // (i, j+1)-(i+1, j): the anti-diagonals
   const SpringNetwork one_diagonal(spec);
   const std::string topo =
-      error_of([&] { (void)MirrorQuarter(one_diagonal, drape_mirror_planes(g)); });
+      error_of([&] { (void)MirrorReduced(one_diagonal, drape_mirror_planes(g)); });
   CHECK(topo.find("has no mirror image with the same rest length and stiffness") !=
         std::string::npos);
 }

@@ -1,4 +1,4 @@
-#include "models/mirror_quarter.hpp"
+#include "models/mirror_reduced.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -24,7 +24,7 @@ bool same_value(double a, double b) { return std::abs(a - b) <= 1e-12 * std::abs
 
 }  // namespace
 
-MirrorQuarter::MirrorQuarter(const SpringNetwork& full, const MirrorPlanes& planes)
+MirrorReduced::MirrorReduced(const SpringNetwork& full, const MirrorPlanes& planes)
     : full_(std::make_unique<SpringNetwork>(full)),
       gravity_(full.spec().gravity),
       residual_scale_(full.residual_force_scale()),
@@ -33,16 +33,24 @@ MirrorQuarter::MirrorQuarter(const SpringNetwork& full, const MirrorPlanes& plan
   const int np = full.particle_count();
   const std::vector<int>& ix = planes.image_x;
   const std::vector<int>& iy = planes.image_y;
+  const std::vector<int>& id = planes.image_d;
+  const bool diagonal = !id.empty();
+  group_order_ = diagonal ? 8 : 4;
   const double plane[3] = {planes.x_plane, planes.y_plane, 0.0};  // no mirror in z
-  if (static_cast<int>(ix.size()) != np || static_cast<int>(iy.size()) != np)
+  if (static_cast<int>(ix.size()) != np || static_cast<int>(iy.size()) != np ||
+      (diagonal && static_cast<int>(id.size()) != np))
     asymmetric("the image maps need one entry per particle (" + std::to_string(np) + ")");
   if (gravity_.x != 0.0 || gravity_.y != 0.0) asymmetric("gravity has an x or y component");
 
-  // Group {e, X, Y, XY} acting on particles, and the symmetry of the particle data.
+  // Group element g: bit 0 X, bit 1 Y, bit 2 D, acting as Y^(bit 1) X^(bit 0) D^(bit 2).
   auto image = [&](int g, int p) {
-    return g == 0 ? p : g == 1 ? ix[p] : g == 2 ? iy[p] : ix[iy[p]];
+    if (g & 4) p = id[p];
+    if (g & 1) p = ix[p];
+    if (g & 2) p = iy[p];
+    return p;
   };
   auto mirror = [&](Vec3 v, int g) {
+    if (g & 4) v = {plane[0] + v.y - plane[1], plane[1] + v.x - plane[0], v.z};
     if (g & 1) v.x = 2.0 * plane[0] - v.x;
     if (g & 2) v.y = 2.0 * plane[1] - v.y;
     return v;
@@ -53,19 +61,24 @@ MirrorQuarter::MirrorQuarter(const SpringNetwork& full, const MirrorPlanes& plan
   const double tol = 1e-9 * (extent > 0.0 ? extent : 1.0);
   std::vector<int> pin_slot(np, -1);
   for (size_t k = 0; k < spec.pinned.size(); ++k) pin_slot[spec.pinned[k]] = static_cast<int>(k);
+  std::vector<int> generators = {1, 2};
+  if (diagonal) generators.push_back(4);
   for (int p = 0; p < np; ++p) {
     const std::string who = "particle " + std::to_string(p);
-    if (ix[p] < 0 || ix[p] >= np || iy[p] < 0 || iy[p] >= np || ix[ix[p]] != p || iy[iy[p]] != p ||
+    auto valid = [np](int q) { return q >= 0 && q < np; };
+    if (!valid(ix[p]) || !valid(iy[p]) || ix[ix[p]] != p || iy[iy[p]] != p ||
         ix[iy[p]] != iy[ix[p]])
       asymmetric(who + ": the image maps are not two commuting involutions");
-    for (int g : {1, 2}) {
+    if (diagonal && (!valid(id[p]) || id[id[p]] != p || id[ix[p]] != iy[id[p]]))
+      asymmetric(who + ": the diagonal image map is not an involution with D X = Y D");
+    for (int g : generators) {
       const int q = image(g, p);
-      const std::string plane_name = g == 1 ? "x" : "y";
+      const std::string plane_name = g == 1 ? "x plane" : g == 2 ? "y plane" : "diagonal";
       if (!close(spec.positions[q], mirror(spec.positions[p], g), tol))
         asymmetric(who + " and its image " + std::to_string(q) + " across the " + plane_name +
-                   " plane are not mirror positions");
-      if (q != p && std::abs(component(spec.positions[p], g - 1) - plane[g - 1]) <= tol)
-        asymmetric(who + " lies on the " + plane_name + " plane but is not its own image");
+                   " are not mirror positions");
+      if (q != p && close(spec.positions[p], mirror(spec.positions[p], g), tol))
+        asymmetric(who + " lies on the " + plane_name + " but is not its own image");
       if (!same_value(spec.masses[p], spec.masses[q]))
         asymmetric(who + " and its image " + std::to_string(q) + " have different masses");
       if ((pin_slot[p] < 0) != (pin_slot[q] < 0))
@@ -82,59 +95,79 @@ MirrorQuarter::MirrorQuarter(const SpringNetwork& full, const MirrorPlanes& plan
     }
   }
 
-  // Fold: every particle's domain image d(p) and the mirrors taking d(p) to p.
-  std::vector<int> domain_of(np), flips(np);
+  // Fold: every particle's domain image d(p) and the element taking d(p) to p (p = g(d)).
+  std::vector<int> domain_of(np), element(np);
   for (int p = 0; p < np; ++p) {
     int g = 0;
     if (ix[p] != p && spec.positions[p].x > plane[0]) g |= 1;
     if (iy[p] != p && spec.positions[p].y > plane[1]) g |= 2;
-    domain_of[p] = image(g, p);
-    flips[p] = g;
+    int d = image(g, p);  // in the quarter x <= c_x, y <= c_y, which D maps onto itself
+    const Vec3& r = spec.positions[d];
+    if (diagonal && id[d] != d && r.y - plane[1] > r.x - plane[0]) {
+      d = id[d];
+      g |= 4;
+    }
+    domain_of[p] = d;
+    element[p] = g;
   }
 
-  // The unknowns q: free coordinates of the free domain particles, in particle order.
-  std::vector<int> q_of(3 * np, -1);  // (domain particle, coordinate) -> q entry
+  // The unknowns q: free coordinates of the free domain particles, in particle order. Each
+  // domain coordinate (d, c) is x_d[c] = q[q_of] + base (q_of -1: the constant base).
+  std::vector<int> q_of(3 * np, -1);
+  std::vector<double> base(3 * np, 0.0);
   for (int p = 0; p < np; ++p) {
     if (domain_of[p] != p || full.free_index(p) < 0) continue;
     int orbit = 0;
-    for (int g = 0; g < 4; ++g) {
+    for (int g = 0; g < group_order_; ++g) {
       bool seen = false;
       for (int h = 0; h < g; ++h) seen = seen || image(h, p) == image(g, p);
       if (!seen) ++orbit;
     }
-    const double w = orbit / 4.0;
+    const double w = orbit / static_cast<double>(group_order_);
     const double m = spec.masses[p];
     particle_begin_.push_back(static_cast<int>(mass_.size()));
     weight_.push_back(w);
     for (int c = 0; c < 3; ++c) {
-      if ((c == 0 && ix[p] == p) || (c == 1 && iy[p] == p)) continue;  // held on the plane
+      if ((c == 0 && ix[p] == p) || (c == 1 && iy[p] == p)) {  // held on the plane
+        base[3 * p + c] = plane[c];
+        continue;
+      }
+      if (c == 1 && diagonal && id[p] == p) {  // on the diagonal: y - c_y = x - c_x
+        q_of[3 * p + 1] = q_of[3 * p];
+        base[3 * p + 1] = plane[1] - plane[0];
+        multiplicity_[q_of[3 * p]] += 1.0;
+        continue;
+      }
       q_of[3 * p + c] = static_cast<int>(mass_.size());
       full_dof_.push_back(3 * full.free_index(p) + c);
       coordinate_.push_back(c);
-      mass_.push_back(w * m);
+      mass_.push_back(w * m);  // x the multiplicity, below
+      multiplicity_.push_back(1.0);
       gamma_.push_back(spec.damping / m);
       initial_.push_back(component(spec.positions[p], c));
     }
   }
   particle_begin_.push_back(static_cast<int>(mass_.size()));
+  for (size_t j = 0; j < mass_.size(); ++j) mass_[j] *= multiplicity_[j];
 
-  // The tie of every full free dof to q.
+  // The tie of every full free dof to q: coordinate c of p = g(d) is the mirrored coordinate
+  // src of d (D swaps x and y, X and Y flip them).
   tie_dof_.assign(full_dof_count_, -1);
   tie_sign_.assign(full_dof_count_, 1.0);
   tie_offset_.assign(full_dof_count_, 0.0);
   for (int p = 0; p < np; ++p) {
     if (full.free_index(p) < 0) continue;
+    const int d = domain_of[p], g = element[p];
     for (int c = 0; c < 3; ++c) {
       const int k = 3 * full.free_index(p) + c;
-      const int j = q_of[3 * domain_of[p] + c];
-      const bool flipped = c < 2 && (flips[p] & (1 << c));
+      const int src = (g & 4) && c < 2 ? 1 - c : c;
+      const int j = q_of[3 * d + src];
+      double offset = base[3 * d + src] + ((g & 4) && c < 2 ? plane[c] - plane[src] : 0.0);
+      const bool flipped = (c == 0 && (g & 1)) || (c == 1 && (g & 2));
+      if (flipped) offset = 2.0 * plane[c] - offset;
       tie_dof_[k] = j;
-      if (j < 0) {
-        tie_offset_[k] = plane[c];  // on the plane, and so is its image
-      } else if (flipped) {
-        tie_sign_[k] = -1.0;
-        tie_offset_[k] = 2.0 * plane[c];
-      }
+      tie_sign_[k] = j >= 0 && flipped ? -1.0 : 1.0;
+      tie_offset_[k] = offset;
     }
   }
 
@@ -150,7 +183,7 @@ MirrorQuarter::MirrorQuarter(const SpringNetwork& full, const MirrorPlanes& plan
                  std::to_string(spec.springs[s].b) + " (not supported)");
   std::vector<int> net_of(np, -1);
   SpringNetworkSpec q;
-  std::vector<int> net_full;  // quarter network particle -> full particle
+  std::vector<int> net_full;  // reduced network particle -> full particle
   auto add_particle = [&](int p) {
     net_of[p] = static_cast<int>(net_full.size());
     net_full.push_back(p);
@@ -167,8 +200,8 @@ MirrorQuarter::MirrorQuarter(const SpringNetwork& full, const MirrorPlanes& plan
   for (size_t s = 0; s < spec.springs.size(); ++s) {
     if (done[s]) continue;
     const Spring& sp = spec.springs[s];
-    int members[4], count = 0, best = 0, best_inside = -1;
-    for (int g = 0; g < 4; ++g) {
+    int members[8], count = 0, best = 0, best_inside = -1;
+    for (int g = 0; g < group_order_; ++g) {
       const int a = image(g, sp.a), b = image(g, sp.b);
       const auto it = spring_of.find(key(a, b));
       if (it == spring_of.end() || !same_value(sp.rest, spec.springs[it->second].rest) ||
@@ -185,16 +218,17 @@ MirrorQuarter::MirrorQuarter(const SpringNetwork& full, const MirrorPlanes& plan
     const int a = image(best, sp.a), b = image(best, sp.b);
     for (int p : {a, b})
       if (net_of[p] < 0) add_particle(p);  // a ghost: tied to its domain image
-    q.springs.push_back({net_of[a], net_of[b], sp.rest, count / 4.0 * sp.stiffness});
+    q.springs.push_back(
+        {net_of[a], net_of[b], sp.rest, count / static_cast<double>(group_order_) * sp.stiffness});
   }
-  q.damping = 0.0;  // the quarter's damping and gravity act on q directly
+  q.damping = 0.0;  // the reduction's damping and gravity act on q directly
   q.elongation_limit = spec.elongation_limit;
   q.limit_stiffness_factor = spec.limit_stiffness_factor;
   q.gravity = {0.0, 0.0, 0.0};
-  q.residual_force_scale = 1.0;  // unused: static_residual() is the quarter's own
+  q.residual_force_scale = 1.0;  // unused: static_residual() is the reduction's own
   net_ = std::make_unique<SpringNetwork>(std::move(q));
 
-  // Quarter network dof -> full dof, and the Jacobian P^T K P into the q pattern.
+  // Reduced network dof -> full dof, and the Jacobian P^T K P into the q pattern.
   net_full_dof_.assign(net_->dof(), -1);
   for (int k = 0; k < net_->particle_count(); ++k) {
     const int f = net_->free_index(k);
@@ -217,7 +251,7 @@ MirrorQuarter::MirrorQuarter(const SpringNetwork& full, const MirrorPlanes& plan
       const int r = tie_dof_[kr], c = tie_dof_[kc];
       if (r < 0 || c < 0) continue;
       jac_target_[e] = pattern_.find(r, c);
-      // The network's values are rows of M_net^-1 dF/dx; the quarter's rows are M_q^-1 dF/dq.
+      // The network's values are rows of M_net^-1 dF/dx; the reduction's are M_q^-1 dF/dq.
       jac_factor_[e] = tie_sign_[kr] * tie_sign_[kc] * net_->mass()[kp.rowind[e]] / mass_[r];
     }
   x_net_.resize(net_->dof());
@@ -227,11 +261,11 @@ MirrorQuarter::MirrorQuarter(const SpringNetwork& full, const MirrorPlanes& plan
   x_full_.resize(full_dof_count_);
 }
 
-void MirrorQuarter::expand(const double* q) const {
+void MirrorReduced::expand(const double* q) const {
   for (size_t k = 0; k < x_net_.size(); ++k) x_net_[k] = tied_value(q, net_full_dof_[k]);
 }
 
-void MirrorQuarter::reduced_force(double t, const double* q) const {
+void MirrorReduced::reduced_force(double t, const double* q) const {
   expand(q);
   net_->net_force(t, x_net_.data(), f_net_.data());
   std::fill(f_red_.begin(), f_red_.end(), 0.0);
@@ -242,23 +276,23 @@ void MirrorQuarter::reduced_force(double t, const double* q) const {
   }
 }
 
-void MirrorQuarter::initial_state(double* q, double* v) const {
+void MirrorReduced::initial_state(double* q, double* v) const {
   std::copy(initial_.begin(), initial_.end(), q);
   std::fill(v, v + dof(), 0.0);
 }
 
-void MirrorQuarter::conservative_acceleration(double t, const double* q, double* a) const {
+void MirrorReduced::conservative_acceleration(double t, const double* q, double* a) const {
   reduced_force(t, q);
   const double g[3] = {gravity_.x, gravity_.y, gravity_.z};
   for (int j = 0; j < dof(); ++j) a[j] = f_red_[j] / mass_[j] + g[coordinate_[j]];
 }
 
-void MirrorQuarter::constant_acceleration(double /*t*/, double* a) const {
+void MirrorReduced::constant_acceleration(double /*t*/, double* a) const {
   const double g[3] = {gravity_.x, gravity_.y, gravity_.z};
   for (int j = 0; j < dof(); ++j) a[j] = g[coordinate_[j]];
 }
 
-void MirrorQuarter::stiffness_values(double t, const double* q, double* values) const {
+void MirrorReduced::stiffness_values(double t, const double* q, double* values) const {
   expand(q);
   net_->stiffness_values(t, x_net_.data(), k_net_.data());
   std::fill(values, values + pattern_.nnz(), 0.0);
@@ -266,7 +300,7 @@ void MirrorQuarter::stiffness_values(double t, const double* q, double* values) 
     if (jac_target_[e] >= 0) values[jac_target_[e]] += jac_factor_[e] * k_net_[e];
 }
 
-double MirrorQuarter::static_residual(double t, const double* q) const {
+double MirrorReduced::static_residual(double t, const double* q) const {
   reduced_force(t, q);
   const double g[3] = {gravity_.x, gravity_.y, gravity_.z};
   double worst = 0.0;
@@ -274,19 +308,19 @@ double MirrorQuarter::static_residual(double t, const double* q) const {
     double f2 = 0.0;
     for (int j = particle_begin_[r]; j < particle_begin_[r + 1]; ++j) {
       const double f = (f_red_[j] + mass_[j] * g[coordinate_[j]]) / weight_[r];
-      f2 += f * f;
+      f2 += f * f / multiplicity_[j];
     }
     if (!(f2 <= worst)) worst = f2;  // NaN propagates
   }
   return std::sqrt(worst) / residual_scale_;
 }
 
-double MirrorQuarter::residual_roundoff(double t, const double* q) const {
+double MirrorReduced::residual_roundoff(double t, const double* q) const {
   unfold(q, x_full_.data());
   return full_->residual_roundoff(t, x_full_.data());
 }
 
-bool MirrorQuarter::project(double t, double* q, double* /*v*/) const {
+bool MirrorReduced::project(double t, double* q, double* /*v*/) const {
   expand(q);
   // SpringNetwork::project moves positions only (velocities unchanged), so v is not passed.
   if (!net_->project(t, x_net_.data(), nullptr)) return false;
@@ -298,7 +332,7 @@ bool MirrorQuarter::project(double t, double* q, double* /*v*/) const {
   return true;
 }
 
-double MirrorQuarter::potential_energy(double t, const double* q) const {
+double MirrorReduced::potential_energy(double t, const double* q) const {
   expand(q);
   double e = net_->potential_energy(t, x_net_.data());  // springs (the network has no gravity)
   const double g[3] = {gravity_.x, gravity_.y, gravity_.z};
@@ -306,19 +340,19 @@ double MirrorQuarter::potential_energy(double t, const double* q) const {
   return e;
 }
 
-void MirrorQuarter::unfold(const double* q, double* x_full) const {
+void MirrorReduced::unfold(const double* q, double* x_full) const {
   for (int k = 0; k < full_dof_count_; ++k) x_full[k] = tied_value(q, k);
 }
 
-std::string MirrorQuarter::describe() const {
+std::string MirrorReduced::describe() const {
   std::ostringstream os;
-  os << "mirror quarter: " << weight_.size() << " free particles, " << dof() << " dof ("
-     << full_dof_count_ << " in the full model), " << net_->spec().springs.size()
-     << " springs, Jacobian nnz " << pattern_.nnz();
+  os << (group_order_ == 8 ? "mirror eighth: " : "mirror quarter: ") << weight_.size()
+     << " free particles, " << dof() << " dof (" << full_dof_count_ << " in the full model), "
+     << net_->spec().springs.size() << " springs, Jacobian nnz " << pattern_.nnz();
   return os.str();
 }
 
-MirrorPlanes drape_mirror_planes(const DrapeGrid& grid) {
+MirrorPlanes drape_mirror_planes(const DrapeGrid& grid, bool diagonal) {
   const int n = grid.n;
   MirrorPlanes planes;
   planes.x_plane = planes.y_plane = 0.5 * n * grid.params.natural_length;
@@ -326,19 +360,23 @@ MirrorPlanes drape_mirror_planes(const DrapeGrid& grid) {
     for (int j = 0; j <= n; ++j) {
       planes.image_x.push_back(grid.index(i, n - j));
       planes.image_y.push_back(grid.index(n - i, j));
+      if (diagonal) planes.image_d.push_back(grid.index(j, i));
     }
   return planes;
 }
 
-MirrorQuarter make_drape_quarter(const DrapeGrid& grid) {
+MirrorReduced make_drape_reduced(const DrapeGrid& grid, DrapeSymmetry symmetry) {
   DrapeParams p = grid.params;
-  p.symmetry = DrapeSymmetry::Quarter;
+  p.symmetry = symmetry;
   p.validate();  // the layout and perturbation conditions, with their field names
+  if (p.symmetry == DrapeSymmetry::None)
+    throw std::invalid_argument("model.symmetry = none: no mirror reduction to build");
   try {
-    return MirrorQuarter(grid.network, drape_mirror_planes(grid));
+    return MirrorReduced(grid.network,
+                         drape_mirror_planes(grid, p.symmetry == DrapeSymmetry::Eighth));
   } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(std::string("model.symmetry = quarter: topology ") + p.topology +
-                                " is " + e.what());
+    throw std::invalid_argument(std::string("model.symmetry = ") + to_string(p.symmetry) +
+                                ": topology " + p.topology + " is " + e.what());
   }
 }
 
