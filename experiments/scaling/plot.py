@@ -6,10 +6,13 @@
 Writes DIR/cost.png (CPU seconds and peak RSS against particles, log-log, one line per
 solver; runs that did not reach equilibrium drawn hollow), DIR/fit.csv (per solver: the
 least-squares exponent p of cpu ~ C particles^p and of steps ~ C particles^q over the runs
-that reached equilibrium, with the number of points) and prints the fit table.
+that reached equilibrium, with the number of points) and prints the fit table. Repeated runs
+of one solver and grid (run.sh --target) enter as one point: the median CPU time of the rounds
+(the status and steps of the median run); DIR/median.csv lists those points with the range.
 """
 import csv
 import math
+import statistics
 import sys
 
 import matplotlib
@@ -29,8 +32,32 @@ def slope(xs, ys):
     return sum((a - mx) * (b - my) for a, b in zip(lx, ly)) / sxx
 
 
+def medians(rows):
+    """One row per (solver, particles): the run with the median CPU time of its rounds (the
+    lower median for an even count), plus the rounds' count, minimum and maximum CPU."""
+    groups = {}
+    for r in rows:
+        groups.setdefault((r["solver"], r["particles"]), []).append(r)
+    out = []
+    for rs in groups.values():
+        timed = sorted((r for r in rs if r["cpu_seconds"]), key=lambda r: float(r["cpu_seconds"]))
+        pick = dict(timed[(len(timed) - 1) // 2] if timed else rs[0])
+        cpus = [float(r["cpu_seconds"]) for r in timed]
+        pick.update(rounds=len(rs), cpu_min=min(cpus) if cpus else "",
+                    cpu_max=max(cpus) if cpus else "",
+                    cpu_median=statistics.median(cpus) if cpus else "")
+        out.append(pick)
+    return out
+
+
 def main(out):
-    rows = list(csv.DictReader(open(out + "/runs.csv")))
+    rows = medians(list(csv.DictReader(open(out + "/runs.csv"))))
+    with open(out + "/median.csv", "w", newline="") as f:
+        keys = ["solver", "n", "particles", "integrated_dof", "status", "steps", "factorisations",
+                "rounds", "cpu_median", "cpu_min", "cpu_max", "centre_sag_m", "residual"]
+        w = csv.DictWriter(f, fieldnames=keys, extrasaction="ignore")
+        w.writeheader()
+        w.writerows(rows)
     solvers = list(dict.fromkeys(r["solver"] for r in rows))
     fig, (ax_cpu, ax_mem) = plt.subplots(1, 2, figsize=(11, 4.5))
     fits = []

@@ -2,10 +2,16 @@
 # Scaling study (issue 5 item 7; SPEC 2.12 "report how cost grows with the number of
 # particles"): four_corner drapes of one 50 x 50 cm sheet refined from 11 x 11 to 101 x 101
 # particles (and 141 x 141 in full mode) with cvode-bdf (Schur LDL^T and KLU), cvode-bdf-gmres
-# and implicit-euler. CPU time, steps and peak memory per run; growth exponents fitted by
-# plot.py (reads only the CSV).
+# and implicit-euler on the full grid, and `static` on the eighth the scene requires
+# (model.symmetry = eighth; solver label static-eighth). CPU time, steps and peak memory per
+# run; growth exponents fitted by plot.py (reads only the CSV; repeated runs enter as medians).
 #
-#   experiments/scaling/run.sh [--quick] [--out DIR] [--max-wall S]
+#   experiments/scaling/run.sh [--quick | --target [--repeats R]] [--out DIR] [--max-wall S]
+#
+# --target: the SPEC 2.12 target "a 101 x 101 four_corner equilibrium in <= 5 s" only: n = 100
+# with static on the eighth and on the quarter and cvode-bdf on the eighth, R rounds (default
+# 3) of the three in turn (runs interleaved, so load drifts hit all three alike); default DIR
+# out/scaling-target.
 #
 # Refinement: cells per side n, natural length L0 = W / n (W = 0.50 m, so the sheet is the
 # same at every n), stiffness k = 852 N/m per spring (one spring stands for a strip of
@@ -25,28 +31,42 @@ here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
 KNITSIM=${KNITSIM:-$root/build/knitsim}
 QUICK=0
-OUT=$root/out/scaling
+TARGET=0
+REPEATS=3
+OUT=
 MAX_WALL=
+usage="usage: $0 [--quick | --target [--repeats R]] [--out DIR] [--max-wall S]"
 while [ $# -gt 0 ]; do
   case "$1" in
     --quick) QUICK=1 ;;
-    --out) OUT=$2; shift ;;
-    --max-wall) MAX_WALL=$2; shift ;;
-    *) echo "usage: $0 [--quick] [--out DIR] [--max-wall S]" >&2; exit 2 ;;
+    --target) TARGET=1 ;;
+    --repeats) REPEATS=${2:-}; shift ;;
+    --out) OUT=${2:-}; shift ;;
+    --max-wall) MAX_WALL=${2:-}; shift ;;
+    *) echo "$usage" >&2; exit 2 ;;
   esac
   shift
 done
+case "$REPEATS" in '' | *[!0-9]* | 0) echo "scaling: --repeats must be an integer >= 1" >&2; exit 2 ;; esac
+[ "$QUICK$TARGET" != 11 ] || { echo "scaling: --quick and --target exclude each other" >&2; exit 2; }
+if [ -z "$OUT" ]; then
+  if [ "$TARGET" = 1 ]; then OUT=$root/out/scaling-target; else OUT=$root/out/scaling; fi
+fi
 [ -x "$KNITSIM" ] || { echo "scaling: $KNITSIM not built (run ./run.sh --build-only)" >&2; exit 2; }
 [ -x /usr/bin/time ] || { echo "scaling: /usr/bin/time (GNU time) is needed for peak memory" >&2; exit 2; }
-if [ "$QUICK" = 1 ]; then GRIDS="10 20 40"; MAX_WALL=${MAX_WALL:-60}; else GRIDS="10 20 40 60 80 100 140"; MAX_WALL=${MAX_WALL:-1800}; fi
+if [ "$QUICK" = 1 ]; then GRIDS="10 20 40"; MAX_WALL=${MAX_WALL:-60};
+elif [ "$TARGET" = 1 ]; then GRIDS="100"; MAX_WALL=${MAX_WALL:-600};
+else GRIDS="10 20 40 60 80 100 140"; MAX_WALL=${MAX_WALL:-1800}; fi
 mkdir -p "$OUT/runs"
 runs_csv=$OUT/runs.csv
-echo "n,particles,dof,natural_length_m,damping_Ns_per_m,solver,status,t_final,steps,rhs_evals,jac_evals,lin_setups,nonlin_iters,residual,centre_sag_m,cpu_seconds,wall_seconds,max_rss_kb" > "$runs_csv"
+echo "n,particles,dof,natural_length_m,damping_Ns_per_m,solver,status,t_final,steps,rhs_evals,jac_evals,lin_setups,nonlin_iters,residual,centre_sag_m,cpu_seconds,wall_seconds,max_rss_kb,integrated_dof,factorisations,round" > "$runs_csv"
 
-# One drape: run n solver integrator [knitsim options...]; appends a row to runs.csv.
+# One drape: run n solver integrator [knitsim options...]; appends a row to runs.csv (ROUND:
+# the repeat, in the folder name and the last column).
+ROUND=1
 run() {
   local n=$1 solver=$2 integ=$3; shift 3
-  local dir=$OUT/runs/$n-$solver
+  local dir=$OUT/runs/$n-$solver-r$ROUND
   local L0 c
   L0=$(python3 -c "print(repr(0.50 / $n))")
   c=$(python3 -c "print(repr(12.0 * ((0.50 / $n) / 0.049) ** 2))")
@@ -54,9 +74,9 @@ run() {
   /usr/bin/time -v -o "$dir/time.txt" "$KNITSIM" drape --scene four_corner \
     --set model.natural_length="$L0" --set model.damping="$c" --integrator "$integ" \
     --max-wall "$MAX_WALL" --quiet --out "$dir/drape" "$@" > "$dir/stdout.txt" 2>&1 || true
-  python3 - "$dir" "$n" "$solver" "$L0" "$c" >> "$runs_csv" <<'PY'
+  python3 - "$dir" "$n" "$solver" "$L0" "$c" "$ROUND" >> "$runs_csv" <<'PY'
 import json, re, sys
-d, n, solver, L0, c = sys.argv[1:6]
+d, n, solver, L0, c, rnd = sys.argv[1:7]
 rss = re.search(r"Maximum resident set size \(kbytes\): (\d+)", open(d + "/time.txt").read())
 try:
     s = json.load(open(d + "/drape/summary.json"))
@@ -65,29 +85,42 @@ except (OSError, ValueError):
 n = int(n)
 if s is None:  # the run failed before writing its summary (e.g. out of memory): keep a row
     print(",".join([str(n), str((n + 1) ** 2), "", L0, c, solver, "failed"] + [""] * 10 +
-                   [rss.group(1) if rss else ""]))
+                   [rss.group(1) if rss else "", "", "", rnd]))
 else:
     print(",".join(str(v) for v in [n, s["grid"]["particles"], s["grid"]["dof"],
           L0, c, solver, s["status"], repr(s["t_final"]), s["steps"], s["rhs_evals"],
           s["jac_evals"], s["lin_setups"], s["nonlin_iters"], repr(s["residual"]),
           repr(s["centre_sag_m"]), repr(s["cpu_seconds"]), repr(s["wall_seconds"]),
-          rss.group(1) if rss else ""]))
+          rss.group(1) if rss else "", s["grid"]["integrated_dof"], s["factorisations"], rnd]))
 PY
   tail -n 1 "$runs_csv"
 }
 
-for n in $GRIDS; do
-  run "$n" cvode-bdf-ldl cvode-bdf --newton-solver ldl
-  run "$n" cvode-bdf-klu cvode-bdf --newton-solver klu
-  run "$n" cvode-bdf-gmres cvode-bdf-gmres
-  run "$n" implicit-euler implicit-euler
-done
+eighth=(--set model.symmetry=eighth)
+if [ "$TARGET" = 1 ]; then
+  for ROUND in $(seq 1 "$REPEATS"); do
+    run 100 static-eighth static "${eighth[@]}"
+    run 100 static-quarter static --set model.symmetry=quarter
+    run 100 cvode-bdf-eighth cvode-bdf "${eighth[@]}"
+  done
+else
+  for n in $GRIDS; do
+    run "$n" cvode-bdf-ldl cvode-bdf --newton-solver ldl
+    run "$n" cvode-bdf-klu cvode-bdf --newton-solver klu
+    run "$n" cvode-bdf-gmres cvode-bdf-gmres
+    run "$n" implicit-euler implicit-euler
+    run "$n" static-eighth static "${eighth[@]}"
+  done
+fi
 
 commit=$(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)
-python3 - "$OUT/manifest.json" "$KNITSIM" "$QUICK" "$MAX_WALL" "$commit" "$GRIDS" <<'PY'
+mode=
+[ "$QUICK" = 1 ] && mode=" --quick"
+[ "$TARGET" = 1 ] && mode=" --target --repeats $REPEATS"
+python3 - "$OUT/manifest.json" "$KNITSIM" "$mode" "$MAX_WALL" "$commit" "$GRIDS" <<'PY'
 import datetime, json, os, sys
 json.dump({"experiment": "scaling",
-           "command": "experiments/scaling/run.sh" + (" --quick" if sys.argv[3] == "1" else ""),
+           "command": "experiments/scaling/run.sh" + sys.argv[3],
            "grids_n": [int(g) for g in sys.argv[6].split()], "max_wall_seconds": float(sys.argv[4]),
            "knitsim": sys.argv[2], "git_commit": sys.argv[5],
            "created_utc": datetime.datetime.utcnow().isoformat() + "Z",
