@@ -215,4 +215,20 @@ TEST_CASE("asymmetric scenes and networks are refused with one line") {
       error_of([&] { (void)MirrorReduced(one_diagonal, drape_mirror_planes(g)); });
   CHECK(topo.find("has no mirror image with the same rest length and stiffness") !=
         std::string::npos);
+
+  // The eighth: refused on two_corner like the quarter, and a fabric stiffer along one grid
+  // direction than the other (warp != weft) keeps the two mid-plane mirrors but not the
+  // diagonal one: the quarter accepts it, the eighth names the first spring without an image.
+  CHECK(error_of([] { load_scene("two_corner", {"model.symmetry=eighth"}); }) ==
+        "model.symmetry = eighth: needs pins.layout = four_corner (two_corner is not symmetric "
+        "about the mid-plane y = W/2)");
+  SpringNetworkSpec warp = g.network.spec();
+  for (Spring& s : warp.springs)
+    if (s.b == s.a + 1) s.stiffness *= 2.0;  // (i, j)-(i, j+1): along one grid direction
+  const SpringNetwork anisotropic(warp);
+  CHECK(error_of([&] { (void)MirrorReduced(anisotropic, drape_mirror_planes(g)); }).empty());
+  const std::string eighth =
+      error_of([&] { (void)MirrorReduced(anisotropic, drape_mirror_planes(g, true)); });
+  CHECK(eighth.find("has no mirror image with the same rest length and stiffness") !=
+        std::string::npos);
 }
