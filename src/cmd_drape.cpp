@@ -41,7 +41,8 @@ std::string human_summary(const Scene& scene, const DrapeResult& r, const std::s
                          std::to_string(r.grid.network.spec().springs.size()) + " springs, " +
                          std::to_string(r.grid.network.dof()) + " dof" +
                          (r.integrated_dof != r.grid.network.dof()
-                              ? " (" + std::to_string(r.integrated_dof) + " integrated: quarter)"
+                              ? " (" + std::to_string(r.integrated_dof) +
+                                    " integrated: " + to_string(scene.params.symmetry) + ")"
                               : std::string())},
             {"integrator", s.integrator},
             {"status", std::string(to_string(s.status)) + " (" + s.message + ")"},
