@@ -18,7 +18,11 @@
 #include "src/lm_fit.hpp"
 #include "src/render.hpp"
 
-// Set by CMakeLists.txt on this file only (configure-time facts).
+// KNITSIM_GIT_COMMIT: the commit this binary was built from (generated at every build by
+// src/git_commit.cmake); the rest set by CMakeLists.txt on this file only (configure-time facts).
+#if __has_include("knitsim_git_commit.hpp")
+#include "knitsim_git_commit.hpp"
+#endif
 #ifndef KNITSIM_GIT_COMMIT
 #define KNITSIM_GIT_COMMIT "unknown"
 #endif
