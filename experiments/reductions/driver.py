@@ -11,12 +11,13 @@ saves against the full model, measured where the code allows it (SPEC 1, 2.1-2.3
                 difference from the equilibrium-stop state.
   static.csv    the `static` integrator (cvode-bdf relaxation + KINSOL Newton polish) vs
                 cvode-bdf alone: CPU, steps, final residual, max position difference.
-  symmetry.csv  four_corner integrated on one quarter with mirror conditions
-                (model.symmetry = quarter, models/mirror_quarter.hpp) vs the full grid, per grid
-                size n and integrator: integrated dof, steps, RHS, set-ups, CPU, speed-up, and
-                the max position difference and Eq. 5 coefficient error of the unfolded
-                equilibrium against the full one. Full and quarter runs alternate, so both
-                medians see the same machine load.
+  symmetry.csv  four_corner integrated on one quarter (model.symmetry = quarter: the two
+                mid-plane mirrors) and on one eighth (= eighth: the diagonal mirror too;
+                models/mirror_reduced.hpp) vs the full grid, per grid size n and integrator:
+                integrated dof, steps, RHS, set-ups, factorisations, CPU, speed-up, and the max
+                position difference and Eq. 5 coefficient error of the unfolded equilibrium
+                against the full one. Full, quarter and eighth runs alternate, so the medians
+                see the same machine load.
 CPU figures are medians of REPEATS runs of the solver's own cpu_seconds (set-up and output
 excluded).
 """
@@ -99,21 +100,23 @@ def main():
     symmetry = []
     for n in [10] if args.quick else [10, 50]:
         size = ["--set", "model.natural_length=%r" % (0.5 / n)] if n != 10 else []
-        quarter = ["--set", "model.symmetry=quarter"]
+        models = [("full", []), ("quarter", ["--set", "model.symmetry=quarter"]),
+                  ("eighth", ["--set", "model.symmetry=eighth"])]
         # implicit-euler at n = 50 takes > 300 s wall per run on the shared machine: n = 10 only.
         for integ in ["cvode-bdf"] if args.quick or n != 10 else ["cvode-bdf", "implicit-euler"]:
-            pairs = [(drape("four_corner", integ, size), drape("four_corner", integ, size + quarter))
-                     for _ in range(repeats)]
-            full_run = pairs[-1][0]
-            full_cpu = statistics.median(p[0].summary["cpu_seconds"] for p in pairs)
+            rounds = [[drape("four_corner", integ, size + extra) for _, extra in models]
+                      for _ in range(repeats)]
+            full_run = rounds[-1][0]
+            full_cpu = statistics.median(p[0].summary["cpu_seconds"] for p in rounds)
             full_x = expkit.read_positions(full_run)
-            for model, k in (("full", 0), ("quarter", 1)):
-                r = pairs[-1][k]
-                cpu = statistics.median(p[k].summary["cpu_seconds"] for p in pairs)
+            for k, (model, _) in enumerate(models):
+                r = rounds[-1][k]
+                cpu = statistics.median(p[k].summary["cpu_seconds"] for p in rounds)
                 symmetry.append(dict(
                     n=n, integrator=integ, model=model, dof=r.summary["grid"]["integrated_dof"],
                     status=r.summary["status"], steps=r.summary["steps"],
                     rhs_evals=r.summary["rhs_evals"], lin_setups=r.summary["lin_setups"],
+                    factorisations=r.summary["factorisations"],
                     cpu_seconds=cpu, speedup=full_cpu / cpu,
                     max_position_difference_m=expkit.max_position_error(
                         expkit.read_positions(r), full_x),
