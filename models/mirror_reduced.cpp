@@ -133,6 +133,9 @@ MirrorReduced::MirrorReduced(const SpringNetwork& full, const MirrorPlanes& plan
         continue;
       }
       if (c == 1 && diagonal && id[p] == p) {  // on the diagonal: y - c_y = x - c_x
+        if (q_of[3 * p] < 0)  // x held on the x plane, y on the diagonal: only the centre
+          asymmetric("particle " + std::to_string(p) +
+                     " lies on the x plane and the diagonal but is not its own y image");
         q_of[3 * p + 1] = q_of[3 * p];
         base[3 * p + 1] = plane[1] - plane[0];
         multiplicity_[q_of[3 * p]] += 1.0;
