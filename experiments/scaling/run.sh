@@ -6,12 +6,17 @@
 # (model.symmetry = eighth; solver label static-eighth). CPU time, steps and peak memory per
 # run; growth exponents fitted by plot.py (reads only the CSV; repeated runs enter as medians).
 #
-#   experiments/scaling/run.sh [--quick | --target [--repeats R]] [--out DIR] [--max-wall S]
+#   experiments/scaling/run.sh [--quick | --target [--repeats R]] [--grids "N ..."]
+#                              [--solver LABEL] [--out DIR] [--max-wall S]
 #
 # --target: the SPEC 2.12 target "a 101 x 101 four_corner equilibrium in <= 5 s" only: n = 100
 # with static on the eighth and on the quarter and cvode-bdf on the eighth, R rounds (default
 # 3) of the three in turn (runs interleaved, so load drifts hit all three alike); default DIR
 # out/scaling-target.
+# --grids: cells per side to run instead of the mode's list; --solver: only the runs with this
+# label (cvode-bdf-ldl, cvode-bdf-klu, cvode-bdf-gmres, implicit-euler, static-eighth,
+# static-quarter, cvode-bdf-eighth), e.g. --solver static-eighth --grids "100 140 200" for the
+# reduced model on grids the full-grid solvers cannot reach in useful time.
 #
 # Refinement: cells per side n, natural length L0 = W / n (W = 0.50 m, so the sheet is the
 # same at every n), stiffness k = 852 N/m per spring (one spring stands for a strip of
@@ -35,12 +40,16 @@ TARGET=0
 REPEATS=3
 OUT=
 MAX_WALL=
-usage="usage: $0 [--quick | --target [--repeats R]] [--out DIR] [--max-wall S]"
+usage="usage: $0 [--quick | --target [--repeats R]] [--grids \"N ...\"] [--solver LABEL] [--out DIR] [--max-wall S]"
+GRIDS_OPT=
+SOLVER=
 while [ $# -gt 0 ]; do
   case "$1" in
     --quick) QUICK=1 ;;
     --target) TARGET=1 ;;
     --repeats) REPEATS=${2:-}; shift ;;
+    --grids) GRIDS_OPT=${2:-}; shift ;;
+    --solver) SOLVER=${2:-}; shift ;;
     --out) OUT=${2:-}; shift ;;
     --max-wall) MAX_WALL=${2:-}; shift ;;
     *) echo "$usage" >&2; exit 2 ;;
@@ -48,6 +57,13 @@ while [ $# -gt 0 ]; do
   shift
 done
 case "$REPEATS" in '' | *[!0-9]* | 0) echo "scaling: --repeats must be an integer >= 1" >&2; exit 2 ;; esac
+for g in $GRIDS_OPT; do
+  case "$g" in '' | *[!0-9]* | 0 | 1) echo "scaling: --grids: $g is not an integer >= 2" >&2; exit 2 ;; esac
+done
+case "$SOLVER" in
+  '' | cvode-bdf-ldl | cvode-bdf-klu | cvode-bdf-gmres | implicit-euler | static-eighth | static-quarter | cvode-bdf-eighth) ;;
+  *) echo "scaling: --solver $SOLVER not in {cvode-bdf-ldl,cvode-bdf-klu,cvode-bdf-gmres,implicit-euler,static-eighth,static-quarter,cvode-bdf-eighth}" >&2; exit 2 ;;
+esac
 [ "$QUICK$TARGET" != 11 ] || { echo "scaling: --quick and --target exclude each other" >&2; exit 2; }
 if [ -z "$OUT" ]; then
   if [ "$TARGET" = 1 ]; then OUT=$root/out/scaling-target; else OUT=$root/out/scaling; fi
@@ -57,6 +73,7 @@ fi
 if [ "$QUICK" = 1 ]; then GRIDS="10 20 40"; MAX_WALL=${MAX_WALL:-60};
 elif [ "$TARGET" = 1 ]; then GRIDS="100"; MAX_WALL=${MAX_WALL:-600};
 else GRIDS="10 20 40 60 80 100 140"; MAX_WALL=${MAX_WALL:-1800}; fi
+[ -z "$GRIDS_OPT" ] || GRIDS=$GRIDS_OPT
 mkdir -p "$OUT/runs"
 runs_csv=$OUT/runs.csv
 echo "n,particles,dof,natural_length_m,damping_Ns_per_m,solver,status,t_final,steps,rhs_evals,jac_evals,lin_setups,nonlin_iters,residual,centre_sag_m,cpu_seconds,wall_seconds,max_rss_kb,integrated_dof,factorisations,round" > "$runs_csv"
@@ -66,6 +83,7 @@ echo "n,particles,dof,natural_length_m,damping_Ns_per_m,solver,status,t_final,st
 ROUND=1
 run() {
   local n=$1 solver=$2 integ=$3; shift 3
+  [ -z "$SOLVER" ] || [ "$SOLVER" = "$solver" ] || return 0
   local dir=$OUT/runs/$n-$solver-r$ROUND
   local L0 c
   L0=$(python3 -c "print(repr(0.50 / $n))")
@@ -99,9 +117,11 @@ PY
 eighth=(--set model.symmetry=eighth)
 if [ "$TARGET" = 1 ]; then
   for ROUND in $(seq 1 "$REPEATS"); do
-    run 100 static-eighth static "${eighth[@]}"
-    run 100 static-quarter static --set model.symmetry=quarter
-    run 100 cvode-bdf-eighth cvode-bdf "${eighth[@]}"
+    for n in $GRIDS; do
+      run "$n" static-eighth static "${eighth[@]}"
+      run "$n" static-quarter static --set model.symmetry=quarter
+      run "$n" cvode-bdf-eighth cvode-bdf "${eighth[@]}"
+    done
   done
 else
   for n in $GRIDS; do
@@ -117,6 +137,8 @@ commit=$(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)
 mode=
 [ "$QUICK" = 1 ] && mode=" --quick"
 [ "$TARGET" = 1 ] && mode=" --target --repeats $REPEATS"
+[ -z "$GRIDS_OPT" ] || mode="$mode --grids \"$GRIDS_OPT\""
+[ -z "$SOLVER" ] || mode="$mode --solver $SOLVER"
 python3 - "$OUT/manifest.json" "$KNITSIM" "$mode" "$MAX_WALL" "$commit" "$GRIDS" <<'PY'
 import datetime, json, os, sys
 json.dump({"experiment": "scaling",
