@@ -22,9 +22,17 @@ const char* to_string(PinLayout layout) {
 }
 
 const char* to_string(DrapeSymmetry symmetry) {
-  return symmetry == DrapeSymmetry::Quarter  ? "quarter"
-         : symmetry == DrapeSymmetry::Eighth ? "eighth"
-                                             : "none";
+  switch (symmetry) {
+    case DrapeSymmetry::Half:
+      return "half";
+    case DrapeSymmetry::Quarter:
+      return "quarter";
+    case DrapeSymmetry::Eighth:
+      return "eighth";
+    case DrapeSymmetry::None:
+      break;
+  }
+  return "none";
 }
 
 int DrapeParams::cells() const {
@@ -51,7 +59,8 @@ void DrapeParams::validate() const {
     bad("pins.move_time", pin_move_time, "must be >= 0 s");
   if (!(perturbation >= 0.0) || !std::isfinite(perturbation))
     bad("model.perturbation", perturbation, "must be >= 0 m");
-  if (symmetry != DrapeSymmetry::None && layout != PinLayout::FourCorner)
+  if ((symmetry == DrapeSymmetry::Quarter || symmetry == DrapeSymmetry::Eighth) &&
+      layout != PinLayout::FourCorner)
     throw std::invalid_argument(std::string("model.symmetry = ") + to_string(symmetry) +
                                 ": needs pins.layout = four_corner (two_corner is not symmetric "
                                 "about the mid-plane y = W/2)");

@@ -25,10 +25,11 @@
 namespace knitsim {
 
 enum class PinLayout { FourCorner, TwoCorner };
-// What run_drape integrates: the whole grid, or one quarter of a four_corner grid with mirror
-// conditions on the two mid-planes, or one eighth with the diagonal mirror too
-// (models/mirror_reduced.hpp; the result is unfolded).
-enum class DrapeSymmetry { None, Quarter, Eighth };
+// What run_drape integrates: the whole grid; one half with the mirror condition on the mid-plane
+// x = W/2 (four_corner or two_corner); one quarter of a four_corner grid with mirror conditions
+// on both mid-planes; or one eighth with the diagonal mirror too (models/mirror_reduced.hpp; the
+// result is unfolded).
+enum class DrapeSymmetry { None, Half, Quarter, Eighth };
 
 struct DrapeParams {
   double width = 0.50;            // W, m (paper: 50 x 50 cm samples)
@@ -43,7 +44,8 @@ struct DrapeParams {
   double pin_move_time = 100.0;  // s, duration of the pin move when pin_span < 1
   double perturbation = 0.0;     // m, amplitude of the seeded initial z perturbation
   unsigned seed = 1;             // seed of that perturbation
-  // none | quarter | eighth (four_corner without perturbation; models/mirror_reduced.hpp)
+  // none | half | quarter | eighth (without perturbation; quarter and eighth four_corner only;
+  // models/mirror_reduced.hpp)
   DrapeSymmetry symmetry = DrapeSymmetry::None;
   long max_particles = 4'000'000;  // refuse larger grids before allocating
 
@@ -85,6 +87,6 @@ const char* to_string(DrapeParameter p);  // stiffness | damping | elongation_li
 SpringNetworkTangent drape_tangent(const DrapeGrid& grid, DrapeParameter p, double t);
 
 const char* to_string(PinLayout layout);
-const char* to_string(DrapeSymmetry symmetry);  // none | quarter | eighth
+const char* to_string(DrapeSymmetry symmetry);  // none | half | quarter | eighth
 
 }  // namespace knitsim

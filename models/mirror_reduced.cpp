@@ -34,10 +34,11 @@ MirrorReduced::MirrorReduced(const SpringNetwork& full, const MirrorPlanes& plan
   const std::vector<int>& ix = planes.image_x;
   const std::vector<int>& iy = planes.image_y;
   const std::vector<int>& id = planes.image_d;
-  const bool diagonal = !id.empty();
-  group_order_ = diagonal ? 8 : 4;
+  const bool has_y = !iy.empty(), diagonal = !id.empty();
+  group_order_ = diagonal ? 8 : has_y ? 4 : 2;  // elements g = 0 .. |G| - 1 (bits below)
   const double plane[3] = {planes.x_plane, planes.y_plane, 0.0};  // no mirror in z
-  if (static_cast<int>(ix.size()) != np || static_cast<int>(iy.size()) != np ||
+  if (diagonal && !has_y) asymmetric("a diagonal mirror needs the y mirror too");
+  if (static_cast<int>(ix.size()) != np || (has_y && static_cast<int>(iy.size()) != np) ||
       (diagonal && static_cast<int>(id.size()) != np))
     asymmetric("the image maps need one entry per particle (" + std::to_string(np) + ")");
   if (gravity_.x != 0.0 || gravity_.y != 0.0) asymmetric("gravity has an x or y component");
@@ -61,13 +62,14 @@ MirrorReduced::MirrorReduced(const SpringNetwork& full, const MirrorPlanes& plan
   const double tol = 1e-9 * (extent > 0.0 ? extent : 1.0);
   std::vector<int> pin_slot(np, -1);
   for (size_t k = 0; k < spec.pinned.size(); ++k) pin_slot[spec.pinned[k]] = static_cast<int>(k);
-  std::vector<int> generators = {1, 2};
+  std::vector<int> generators = {1};
+  if (has_y) generators.push_back(2);
   if (diagonal) generators.push_back(4);
   for (int p = 0; p < np; ++p) {
     const std::string who = "particle " + std::to_string(p);
     auto valid = [np](int q) { return q >= 0 && q < np; };
-    if (!valid(ix[p]) || !valid(iy[p]) || ix[ix[p]] != p || iy[iy[p]] != p ||
-        ix[iy[p]] != iy[ix[p]])
+    if (!valid(ix[p]) || ix[ix[p]] != p) asymmetric(who + ": the x image map is not an involution");
+    if (has_y && (!valid(iy[p]) || iy[iy[p]] != p || ix[iy[p]] != iy[ix[p]]))
       asymmetric(who + ": the image maps are not two commuting involutions");
     if (diagonal && (!valid(id[p]) || id[id[p]] != p || id[ix[p]] != iy[id[p]]))
       asymmetric(who + ": the diagonal image map is not an involution with D X = Y D");
@@ -100,7 +102,7 @@ MirrorReduced::MirrorReduced(const SpringNetwork& full, const MirrorPlanes& plan
   for (int p = 0; p < np; ++p) {
     int g = 0;
     if (ix[p] != p && spec.positions[p].x > plane[0]) g |= 1;
-    if (iy[p] != p && spec.positions[p].y > plane[1]) g |= 2;
+    if (has_y && iy[p] != p && spec.positions[p].y > plane[1]) g |= 2;
     int d = image(g, p);  // in the quarter x <= c_x, y <= c_y, which D maps onto itself
     const Vec3& r = spec.positions[d];
     if (diagonal && id[d] != d && r.y - plane[1] > r.x - plane[0]) {
@@ -128,7 +130,7 @@ MirrorReduced::MirrorReduced(const SpringNetwork& full, const MirrorPlanes& plan
     particle_begin_.push_back(static_cast<int>(mass_.size()));
     weight_.push_back(w);
     for (int c = 0; c < 3; ++c) {
-      if ((c == 0 && ix[p] == p) || (c == 1 && iy[p] == p)) {  // held on the plane
+      if ((c == 0 && ix[p] == p) || (c == 1 && has_y && iy[p] == p)) {  // held on the plane
         base[3 * p + c] = plane[c];
         continue;
       }
@@ -349,21 +351,24 @@ void MirrorReduced::unfold(const double* q, double* x_full) const {
 
 std::string MirrorReduced::describe() const {
   std::ostringstream os;
-  os << (group_order_ == 8 ? "mirror eighth: " : "mirror quarter: ") << weight_.size()
-     << " free particles, " << dof() << " dof (" << full_dof_count_ << " in the full model), "
-     << net_->spec().springs.size() << " springs, Jacobian nnz " << pattern_.nnz();
+  os << (group_order_ == 8   ? "mirror eighth: "
+         : group_order_ == 4 ? "mirror quarter: "
+                             : "mirror half: ")
+     << weight_.size() << " free particles, " << dof() << " dof (" << full_dof_count_
+     << " in the full model), " << net_->spec().springs.size() << " springs, Jacobian nnz "
+     << pattern_.nnz();
   return os.str();
 }
 
-MirrorPlanes drape_mirror_planes(const DrapeGrid& grid, bool diagonal) {
+MirrorPlanes drape_mirror_planes(const DrapeGrid& grid, DrapeSymmetry symmetry) {
   const int n = grid.n;
   MirrorPlanes planes;
   planes.x_plane = planes.y_plane = 0.5 * n * grid.params.natural_length;
   for (int i = 0; i <= n; ++i)
     for (int j = 0; j <= n; ++j) {
       planes.image_x.push_back(grid.index(i, n - j));
-      planes.image_y.push_back(grid.index(n - i, j));
-      if (diagonal) planes.image_d.push_back(grid.index(j, i));
+      if (symmetry != DrapeSymmetry::Half) planes.image_y.push_back(grid.index(n - i, j));
+      if (symmetry == DrapeSymmetry::Eighth) planes.image_d.push_back(grid.index(j, i));
     }
   return planes;
 }
@@ -375,8 +380,7 @@ MirrorReduced make_drape_reduced(const DrapeGrid& grid, DrapeSymmetry symmetry) 
   if (p.symmetry == DrapeSymmetry::None)
     throw std::invalid_argument("model.symmetry = none: no mirror reduction to build");
   try {
-    return MirrorReduced(grid.network,
-                         drape_mirror_planes(grid, p.symmetry == DrapeSymmetry::Eighth));
+    return MirrorReduced(grid.network, drape_mirror_planes(grid, symmetry));
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(std::string("model.symmetry = ") + to_string(p.symmetry) +
                                 ": topology " + p.topology + " is " + e.what());

@@ -93,6 +93,7 @@ const std::vector<Key>& keys() {
         "an integer in 0..4294967295");
     choice("model.symmetry", &DrapeParams::symmetry,
            std::vector<std::pair<std::string, DrapeSymmetry>>{{"none", DrapeSymmetry::None},
+                                                              {"half", DrapeSymmetry::Half},
                                                               {"quarter", DrapeSymmetry::Quarter},
                                                               {"eighth", DrapeSymmetry::Eighth}});
     choice("pins.layout", &DrapeParams::layout,

@@ -7,8 +7,8 @@
 //   [fabric] width (m), areal_density (g/m^2)
 //   [model]  stiffness (N/m), damping (N s/m), elongation_limit (percent),
 //            natural_length (m), topology (a|b|c), perturbation (m), seed (integer >= 0),
-//            symmetry (none|quarter|eighth: integrate one quarter or eighth of four_corner,
-//            unfolded after)
+//            symmetry (none|half|quarter|eighth: integrate one half of the grid, or one
+//            quarter or eighth of four_corner, unfolded after)
 //   [pins]   layout (four_corner|two_corner), span (fraction of the width), move_time (s)
 //   [run]    t_max (s), equilibrium_tol (static residual, dimensionless)
 // Line 2 of a scene file is a comment that describes it in one line (`knitsim list scenes`).
@@ -84,9 +84,9 @@ struct DrapeResult {
 
 // Builds the grid of `scene`, runs it from the flat state with run_to_equilibrium and the named
 // integrator (throws std::invalid_argument for an unknown name), and measures the result.
-// With model.symmetry = quarter | eighth the run integrates make_drape_reduced(grid) and unfolds
-// its final state onto the full grid, so positions, edges and outputs always see the full sheet. A
-// run that does not reach equilibrium is a status in result.stats, not an exception.
+// With model.symmetry = half | quarter | eighth the run integrates make_drape_reduced(grid) and
+// unfolds its final state onto the full grid, so positions, edges and outputs always see the full
+// sheet. A run that does not reach equilibrium is a status in result.stats, not an exception.
 DrapeResult run_drape(const Scene& scene, const std::string& integrator,
                       RunObserver* observer = nullptr);
 
