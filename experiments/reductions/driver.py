@@ -12,11 +12,12 @@ saves against the full model, measured where the code allows it (SPEC 1, 2.1-2.3
   static.csv    the `static` integrator (cvode-bdf relaxation + KINSOL Newton polish) vs
                 cvode-bdf alone: CPU, steps, final residual, max position difference.
   symmetry.csv  four_corner integrated on one quarter (model.symmetry = quarter: the two
-                mid-plane mirrors) and on one eighth (= eighth: the diagonal mirror too;
-                models/mirror_reduced.hpp) vs the full grid, per grid size n and integrator:
+                mid-plane mirrors) and on one eighth (= eighth: the diagonal mirror too), and
+                two_corner on one half (= half: the mirror x = W/2; models/mirror_reduced.hpp)
+                vs the full grid, per scene, grid size n and integrator:
                 integrated dof, steps, RHS, set-ups, factorisations, CPU, speed-up, and the max
                 position difference and Eq. 5 coefficient error of the unfolded equilibrium
-                against the full one. Full, quarter and eighth runs alternate, so the medians
+                against the full one. The full and reduced runs alternate, so the medians
                 see the same machine load.
 CPU figures are medians of REPEATS runs of the solver's own cpu_seconds (set-up and output
 excluded).
@@ -98,13 +99,19 @@ def main():
         for row in stop[-len(ends) - 1:] + static[-2:]:
             print(scene, {k: row[k] for k in row if k != "scene"}, flush=True)
     symmetry = []
-    for n in [10] if args.quick else [10, 50]:
+    sym = lambda name: ["--set", "model.symmetry=" + name]  # noqa: E731
+    four = [("full", []), ("quarter", sym("quarter")), ("eighth", sym("eighth"))]
+    # (scene, n, integrators, models); implicit-euler at n = 50 takes > 300 s wall per run on the
+    # shared machine (n = 10 only), and on two_corner it needs ~3e5 steps of dt = 1 s.
+    cases = [("four_corner", 10, ["cvode-bdf"] if args.quick else ["cvode-bdf", "implicit-euler"],
+              four)]
+    if not args.quick:
+        cases += [("four_corner", 50, ["cvode-bdf"], four),
+                  ("two_corner", 10, ["cvode-bdf"], [("full", []), ("half", sym("half"))])]
+    for scene, n, integs, models in cases:
         size = ["--set", "model.natural_length=%r" % (0.5 / n)] if n != 10 else []
-        models = [("full", []), ("quarter", ["--set", "model.symmetry=quarter"]),
-                  ("eighth", ["--set", "model.symmetry=eighth"])]
-        # implicit-euler at n = 50 takes > 300 s wall per run on the shared machine: n = 10 only.
-        for integ in ["cvode-bdf"] if args.quick or n != 10 else ["cvode-bdf", "implicit-euler"]:
-            rounds = [[drape("four_corner", integ, size + extra) for _, extra in models]
+        for integ in integs:
+            rounds = [[drape(scene, integ, size + extra) for _, extra in models]
                       for _ in range(repeats)]
             full_run = rounds[-1][0]
             full_cpu = statistics.median(p[0].summary["cpu_seconds"] for p in rounds)
@@ -113,7 +120,8 @@ def main():
                 r = rounds[-1][k]
                 cpu = statistics.median(p[k].summary["cpu_seconds"] for p in rounds)
                 symmetry.append(dict(
-                    n=n, integrator=integ, model=model, dof=r.summary["grid"]["integrated_dof"],
+                    scene=scene, n=n, integrator=integ, model=model,
+                    dof=r.summary["grid"]["integrated_dof"],
                     status=r.summary["status"], steps=r.summary["steps"],
                     rhs_evals=r.summary["rhs_evals"], lin_setups=r.summary["lin_setups"],
                     factorisations=r.summary["factorisations"],

@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """Plot of experiments/reductions from its CSV only: CPU of each variant relative to the
-reduced default (cvode-bdf, stop at equilibrium, topology a; for the symmetry-reduced quarter
-and eighth: relative to the full grid of the same n and integrator) -> reductions.png.
+reduced default (cvode-bdf, stop at equilibrium, topology a; for the symmetry-reduced half,
+quarter and eighth: relative to the full grid of the same scene, n and integrator) ->
+reductions.png.
 Usage: plot.py OUT"""
 import csv
 import os
@@ -28,8 +29,8 @@ for r in topo:
 if os.path.exists(os.path.join(out, "symmetry.csv")):
     for r in read("symmetry.csv"):
         if r["model"] != "full":
-            labels.append("four_corner n=%s %s\n%s (%s dof)" % (r["n"], r["integrator"], r["model"],
-                                                                r["dof"]))
+            labels.append("%s n=%s %s\n%s (%s dof)" % (r.get("scene", "four_corner"), r["n"],
+                                                       r["integrator"], r["model"], r["dof"]))
             vals.append(1.0 / float(r["speedup"]))
 fig, ax = plt.subplots(figsize=(12, 5.5))
 ax.bar(range(len(vals)), vals, color="tab:blue")
@@ -40,7 +41,7 @@ ax.set_ylabel("CPU relative to the reduced default")
 for i, v in enumerate(vals):
     ax.text(i, v, "%.3g" % v, ha="center", va="bottom", fontsize=7)
 ax.set_title("Reductions: equilibrium stop vs fixed end time, static polish, springs per topology, "
-             "quarter and eighth by symmetry",
+             "half, quarter and eighth by symmetry",
              fontsize=9)
 fig.tight_layout()
 fig.savefig(os.path.join(out, "reductions.png"), dpi=120)
