@@ -17,9 +17,11 @@ for r in rows:
         labels.append("%s\nscipy BDF rtol %s" % (r["scene"], r["scipy_rtol"]))
         vals.append(float(r["scipy_cpu"]))
         colors.append("tab:gray")
-    labels.append("%s\nknitsim rtol %s" % (r["scene"], r["knitsim_rtol"]))
+    model = r.get("knitsim_model", "full")
+    labels.append("%s\nknitsim rtol %s%s" % (r["scene"], r["knitsim_rtol"],
+                                             "" if model == "full" else "\non the " + model))
     vals.append(float(r["knitsim_cpu_median"]))
-    colors.append("tab:blue")
+    colors.append("tab:blue" if model == "full" else "tab:green")
 fig, ax = plt.subplots(figsize=(8, 4))
 ax.bar(range(len(vals)), vals, color=colors)
 ax.set_yscale("log")
