@@ -103,7 +103,7 @@ MirrorReduced::MirrorReduced(const SpringNetwork& full, const MirrorPlanes& plan
     int g = 0;
     if (ix[p] != p && spec.positions[p].x > plane[0]) g |= 1;
     if (has_y && iy[p] != p && spec.positions[p].y > plane[1]) g |= 2;
-    int d = image(g, p);  // in the quarter x <= c_x, y <= c_y, which D maps onto itself
+    int d = image(g, p);  // x <= c_x (and y <= c_y: the quarter, which D maps onto itself)
     const Vec3& r = spec.positions[d];
     if (diagonal && id[d] != d && r.y - plane[1] > r.x - plane[0]) {
       d = id[d];
