@@ -29,8 +29,9 @@
 # machine, and cvode-bdf-gmres, which never settles, uses all of it; on a loaded machine raise
 # it). Grids: n = 10 20 40 60 80 100
 # 140; --quick: 10 20 40.
-# Writes DIR/runs.csv (one row per run), DIR/manifest.json, DIR/runs/<n>-<solver>/ (each
-# knitsim output folder and its /usr/bin/time -v log); default DIR = out/scaling.
+# Writes DIR/runs.csv (one row per run), DIR/manifest.json (with the binary's build stamp as
+# knitsim_build), DIR/runs/<n>-<solver>/ (each knitsim output folder and its /usr/bin/time -v
+# log); default DIR = out/scaling.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
@@ -140,13 +141,18 @@ mode=
 [ -z "$GRIDS_OPT" ] || mode="$mode --grids \"$GRIDS_OPT\""
 [ -z "$SOLVER" ] || mode="$mode --solver $SOLVER"
 python3 - "$OUT/manifest.json" "$KNITSIM" "$mode" "$MAX_WALL" "$commit" "$GRIDS" <<'PY'
-import datetime, json, os, sys
-json.dump({"experiment": "scaling",
-           "command": "experiments/scaling/run.sh" + sys.argv[3],
-           "grids_n": [int(g) for g in sys.argv[6].split()], "max_wall_seconds": float(sys.argv[4]),
-           "knitsim": sys.argv[2], "git_commit": sys.argv[5],
-           "created_utc": datetime.datetime.utcnow().isoformat() + "Z",
-           "load_average": os.getloadavg(), "nproc": os.cpu_count()},
-          open(sys.argv[1], "w"), indent=2)
+import datetime, glob, json, os, sys
+m = {"experiment": "scaling",
+     "command": "experiments/scaling/run.sh" + sys.argv[3],
+     "grids_n": [int(g) for g in sys.argv[6].split()], "max_wall_seconds": float(sys.argv[4]),
+     "knitsim": sys.argv[2], "git_commit": sys.argv[5],
+     "created_utc": datetime.datetime.utcnow().isoformat() + "Z",
+     "load_average": os.getloadavg(), "nproc": os.cpu_count()}
+# The binary's own build stamp (git_commit is the repository's HEAD when the study ended).
+for kp in sorted(glob.glob(os.path.join(os.path.dirname(sys.argv[1]), "runs", "*", "drape", "manifest.json"))):
+    km = json.load(open(kp))
+    m["knitsim_build"] = {k: km.get(k) for k in ("git_commit", "build_type", "compiler", "libraries")}
+    break
+json.dump(m, open(sys.argv[1], "w"), indent=2)
 PY
 echo "scaling: wrote $runs_csv and $OUT/manifest.json; plot: /usr/bin/python3 $here/plot.py $OUT"
