@@ -68,6 +68,18 @@ class Run:
         return s.get("stats", s)
 
 
+BUILD_FIELDS = ("git_commit", "build_type", "compiler", "libraries")
+FIRST_BUILD = None  # the build stamp (BUILD_FIELDS) in the manifest of the study's first run
+
+
+def note_build(manifest_path):
+    """Keep the build stamp of the first run that wrote a manifest (FIRST_BUILD)."""
+    global FIRST_BUILD
+    if FIRST_BUILD is None and os.path.exists(manifest_path):
+        km = json.load(open(manifest_path))
+        FIRST_BUILD = {k: km.get(k) for k in BUILD_FIELDS}
+
+
 def run_knitsim(out, label, args, timeout=None):
     """knitsim ARGS --quiet --out OUT/runs/LABEL. Exit 0 (equilibrium) and 3 (another status,
     outputs written) are results; anything else (bad input) stops the driver."""
@@ -79,6 +91,7 @@ def run_knitsim(out, label, args, timeout=None):
             json.load(open(manifest_path)).get("command_line") == " ".join(cmd):
         summary = json.load(open(summary_path))
         status = summary.get("stats", summary).get("status")
+        note_build(manifest_path)
         return Run(folder, 0 if status == "equilibrium" else 3, summary, "")
     shutil.rmtree(folder, ignore_errors=True)
     try:
@@ -88,6 +101,7 @@ def run_knitsim(out, label, args, timeout=None):
     if p.returncode not in (0, 3):
         sys.exit("knitsim failed (exit %d): %s\n%s" % (p.returncode, " ".join(cmd), p.stderr))
     summary = json.load(open(summary_path)) if os.path.exists(summary_path) else None
+    note_build(manifest_path)
     return Run(folder, p.returncode, summary, p.stderr)
 
 
@@ -155,7 +169,8 @@ def loglog_slope(xs, ys):
 
 def write_manifest(args, name, sample_run=None, extra=None):
     """OUT/manifest.json: study, command line, git commit, knitsim binary and its own manifest
-    (build type, libraries), machine load, and the study's parameters (`extra`)."""
+    (build commit and type, libraries: from `sample_run`, else from the study's first run),
+    machine load, and the study's parameters (`extra`)."""
     try:
         commit = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"],
                                 capture_output=True, text=True).stdout.strip() or "unknown"
@@ -171,12 +186,12 @@ def write_manifest(args, name, sample_run=None, extra=None):
          "created_utc": datetime.datetime.utcnow().isoformat(timespec="seconds") + "Z",
          "nproc": os.cpu_count(),
          "load_average": os.getloadavg()}
-    if sample_run is not None:
-        kp = os.path.join(sample_run.folder, "manifest.json")
-        if os.path.exists(kp):
-            km = json.load(open(kp))
-            m["knitsim_build"] = {k: km.get(k) for k in ("git_commit", "build_type", "compiler",
-                                                          "libraries")}
+    kp = os.path.join(sample_run.folder, "manifest.json") if sample_run is not None else ""
+    if os.path.exists(kp):
+        km = json.load(open(kp))
+        m["knitsim_build"] = {k: km.get(k) for k in BUILD_FIELDS}
+    elif FIRST_BUILD is not None:
+        m["knitsim_build"] = FIRST_BUILD
     m.update(extra or {})
     with open(os.path.join(args.out, "manifest.json"), "w") as f:
         json.dump(m, f, indent=2)
