@@ -376,7 +376,7 @@ class Cvode final : public Integrator {
     st.nonlin_iters = nni;
     st.nonlin_fails = nncf;
     st.err_test_fails = netf;
-    add_newton_solver_counts(method_ == CvodeMethod::BdfGmres ? nullptr : s_->ls.get(), st);
+    add_newton_solver_counts(s_->ls.get(), st);
     st.max_order_used = max_order_used_;
   }
 

@@ -161,6 +161,10 @@ int free_solver(SUNLinearSolver LS) {
 
 }  // namespace
 
+bool is_schur_ldl_solver(SUNLinearSolver LS) {
+  return LS && LS->ops && LS->ops->solve == solve && LS->content;
+}
+
 SchurCounts schur_counts(SUNLinearSolver LS) { return content(LS)->counts; }
 
 SUNLinearSolver make_schur_ldl_solver(SUNContext ctx, const FirstOrderSystem& sys,

@@ -69,6 +69,10 @@ struct SchurCounts {
 SUNLinearSolver make_schur_ldl_solver(SUNContext ctx, const FirstOrderSystem& sys,
                                       const SchurOptions& options = {});
 
+// True if LS was made by make_schur_ldl_solver (it is SUNLINEARSOLVER_CUSTOM, like any
+// user-supplied solver, so the ID alone cannot tell).
+bool is_schur_ldl_solver(SUNLinearSolver LS);
+
 // Counts of a solver made by make_schur_ldl_solver.
 SchurCounts schur_counts(SUNLinearSolver LS);
 

@@ -152,7 +152,7 @@ LinearSolverPtr make_newton_solver(IntegratorOptions::NewtonSolver which,
 
 void add_newton_solver_counts(SUNLinearSolver ls, RunStats& st) {
   st.factorisations = st.lin_setups;
-  if (!ls || SUNLinSolGetID(ls) != SUNLINEARSOLVER_CUSTOM) return;
+  if (!knitsim::detail::is_schur_ldl_solver(ls)) return;
   const knitsim::detail::SchurCounts c = knitsim::detail::schur_counts(ls);
   st.factorisations = c.factorisations;
   st.lin_iters += c.cg_iterations;

@@ -46,6 +46,12 @@ TEST_CASE("Schur LDL^T solve equals a dense LU solve of I - gamma J") {
   const bool cg = options.cg_max_radius > 0.0;
   SUNLinearSolver LS = detail::make_schur_ldl_solver(ctx, fo, options);
   REQUIRE(LS != nullptr);
+  // Recognised by its own operations, not by its ID: another custom solver is not it.
+  CHECK(detail::is_schur_ldl_solver(LS));
+  SUNLinearSolver other = SUNLinSolNewEmpty(ctx);
+  CHECK_FALSE(detail::is_schur_ldl_solver(other));
+  CHECK_FALSE(detail::is_schur_ldl_solver(nullptr));
+  SUNLinSolFreeEmpty(other);
   N_Vector b = N_VNew_Serial(N, ctx), x = N_VNew_Serial(N, ctx);
 
   long multi_iteration_cg = 0;  // CG solves that needed more than one iteration
