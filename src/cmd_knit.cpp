@@ -379,14 +379,23 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
 
 void run(const KnitArgs& args) {
   const KnitChart chart = read_chart(args.chart);
+  const std::string integrator = args.integrator.empty() ? default_integrator() : args.integrator;
+  std::unique_ptr<Integrator> integ;
+  try {
+    integ = make_integrator(integrator);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("--") + e.what());  // "--integrator = X: ..."
+  }
   KnitParams params;
   IntegratorOptions opt;
   apply_sets(args.sets, params, opt);
   opt.rtol = args.rtol;
   opt.atol = args.atol;
-  opt.velocity_atol = args.velocity_atol_given || params.stabiliser_ratio <= 0.0
-                          ? args.velocity_atol
-                          : kStabilisedVelocityAtol;
+  // The stabilised default is an error-control setting: the fixed-step methods have none, so
+  // their summaries keep the (unused) value given, not 1e-3.
+  const bool stabilised_default =
+      !args.velocity_atol_given && params.stabiliser_ratio > 0.0 && integ->info().adaptive;
+  opt.velocity_atol = stabilised_default ? kStabilisedVelocityAtol : args.velocity_atol;
   opt.dt = args.dt;
   opt.max_order = args.max_order;
   opt.newton_solver = args.newton_solver;
@@ -397,13 +406,6 @@ void run(const KnitArgs& args) {
   }
   if (args.frames < 1)
     throw std::invalid_argument("--frames = " + std::to_string(args.frames) + ": must be >= 1");
-  const std::string integrator = args.integrator.empty() ? default_integrator() : args.integrator;
-  std::unique_ptr<Integrator> integ;
-  try {
-    integ = make_integrator(integrator);
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(std::string("--") + e.what());  // "--integrator = X: ..."
-  }
   const KnitModel model = build_knit(chart, params);  // validates params
 
   const std::string name = fs::path(args.chart).stem().string();

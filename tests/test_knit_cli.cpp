@@ -62,6 +62,7 @@ TEST_CASE("knitsim knit: a small tuck chart settles and its outputs agree with t
   // --newton-solver and --max-order reach the integrator
   CHECK(summary["options"]["newton_solver"] == "ldl");
   CHECK(summary["options"]["max_order"] == 3);
+  CHECK(summary["options"]["velocity_atol"] == 1e-3);  // the stabilised chart's default
   CHECK(summary["stats"]["factorisations"] == summary["stats"]["lin_setups"]);
   CHECK(summary["stats"]["lin_iters"] == 0);
   CHECK(summary["stats"]["max_order_used"].get<int>() <= 3);
@@ -79,6 +80,27 @@ TEST_CASE("knitsim knit: a small tuck chart settles and its outputs agree with t
   const std::string steps = slurp(out / "steps.csv");
   CHECK(steps.rfind("step,t,h,order,residual\n", 0) == 0);
   CHECK(count_lines(steps) == 1 + summary["stats"]["steps"].get<int>());
+  fs::remove_all(tmp);
+}
+
+TEST_CASE("knitsim knit: the stabilised velocity_atol default is for adaptive methods only") {
+  // verlet has no error control: its summary records the velocity_atol given (0), not the 1e-3
+  // that cvode-bdf gets on the same stabilised chart (the test above).
+  const fs::path tmp =
+      fs::temp_directory_path() / ("knitsim-knit-vatol-" + std::to_string(getpid()));
+  fs::remove_all(tmp);
+  fs::create_directories(tmp);
+  std::ofstream(tmp / "small.chart") << "KKKKK\nKKTKK\nKKKKK\n";
+  std::string err;
+  const int status = run_knit("--chart '" + (tmp / "small.chart").string() +
+                                  "' --set knit.stabiliser=0.1 --integrator verlet "
+                                  "--set run.t_max=1e-5 --quiet --out '" +
+                                  (tmp / "out").string() + "'",
+                              err);
+  INFO(err);
+  REQUIRE((status == 0 || status == 3));  // 3: t_max before the steady state, outputs written
+  const auto summary = nlohmann::json::parse(slurp(tmp / "out" / "summary.json"));
+  CHECK(summary["options"]["velocity_atol"] == 0.0);
   fs::remove_all(tmp);
 }
 
