@@ -16,6 +16,7 @@ import datetime
 import json
 import math
 import os
+import resource
 import shutil
 import subprocess
 import sys
@@ -103,6 +104,13 @@ def run_knitsim(out, label, args, timeout=None):
     summary = json.load(open(summary_path)) if os.path.exists(summary_path) else None
     note_build(manifest_path)
     return Run(folder, p.returncode, summary, p.stderr)
+
+
+def cpu_children():
+    """User + system CPU seconds of this process's finished children (getrusage): the cost of
+    a knitsim run that reports no cpu_seconds of its own (e.g. `knitsim fit`), by difference."""
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
 
 
 def read_positions(run):

@@ -16,7 +16,6 @@ objective.csv  rtol, parameter set, objective, |objective - objective at rtol 1e
 """
 import json
 import os
-import resource
 import sys
 import time
 
@@ -24,11 +23,6 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 import expkit  # noqa: E402
 
 TWIN = {"model.stiffness": 1000.0, "model.damping": 15.0, "model.natural_length": 0.052}
-
-
-def cpu_children():
-    r = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return r.ru_utime + r.ru_stime
 
 
 def sets(d):
@@ -48,10 +42,10 @@ def main():
     expkit.write_target_from(twin, target)
     fits = []
     for rtol in reversed(rtols):  # tightest first: its result is the reference
-        c0, w0 = cpu_children(), time.perf_counter()
+        c0, w0 = expkit.cpu_children(), time.perf_counter()
         run = expkit.run_knitsim(args.out, "fit-%g" % rtol, ["fit", "--scene", "four_corner",
                                  "--target", target, "--rtol", rtol, "--seed", 1] + budget)
-        cpu, wall = cpu_children() - c0, time.perf_counter() - w0
+        cpu, wall = expkit.cpu_children() - c0, time.perf_counter() - w0
         s = run.summary
         p = s["params"]
         fits.append(dict(rtol=rtol, stiffness=p["stiffness"], damping=p["damping"],
@@ -73,7 +67,7 @@ def main():
     for name, params in (("twin", TWIN), ("fit_at_tightest_rtol", fitted)):
         ref_obj = None
         for rtol in reversed(rtols):
-            c0 = cpu_children()
+            c0 = expkit.cpu_children()
             run = expkit.run_knitsim(args.out, "obj-%s-%g" % (name, rtol),
                                      ["drape", "--scene", "four_corner", "--rtol", rtol,
                                       "--target", target] + sets(params))
@@ -83,7 +77,7 @@ def main():
                                   objective_change=abs(s["objective"] - ref_obj),
                                   status=s["status"], steps=s["steps"], t_final=s["t_final"],
                                   cpu_seconds=s["cpu_seconds"],
-                                  process_cpu_seconds=cpu_children() - c0))
+                                  process_cpu_seconds=expkit.cpu_children() - c0))
     expkit.write_csv(os.path.join(args.out, "fits.csv"), fits)
     expkit.write_csv(os.path.join(args.out, "objective.csv"), objective)
     expkit.write_manifest(args, "fit_tolerance", sample_run=twin,
