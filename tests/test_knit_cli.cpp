@@ -86,22 +86,18 @@ TEST_CASE("knitsim knit: a small tuck chart settles and its outputs agree with t
 TEST_CASE("knitsim knit: the stabilised velocity_atol default is for adaptive methods only") {
   // verlet has no error control: its summary records the velocity_atol given (0), not the 1e-3
   // that cvode-bdf gets on the same stabilised chart (the test above).
-  const fs::path tmp =
-      fs::temp_directory_path() / ("knitsim-knit-vatol-" + std::to_string(getpid()));
-  fs::remove_all(tmp);
-  fs::create_directories(tmp);
-  std::ofstream(tmp / "small.chart") << "KKKKK\nKKTKK\nKKKKK\n";
+  const TempDir tmp("knit-vatol");
+  std::ofstream(tmp.path / "small.chart") << "KKKKK\nKKTKK\nKKKKK\n";
   std::string err;
-  const int status = run_knit("--chart '" + (tmp / "small.chart").string() +
+  const int status = run_knit("--chart '" + (tmp.path / "small.chart").string() +
                                   "' --set knit.stabiliser=0.1 --integrator verlet "
                                   "--set run.t_max=1e-5 --quiet --out '" +
-                                  (tmp / "out").string() + "'",
+                                  (tmp.path / "out").string() + "'",
                               err);
   INFO(err);
   REQUIRE((status == 0 || status == 3));  // 3: t_max before the steady state, outputs written
-  const auto summary = nlohmann::json::parse(slurp(tmp / "out" / "summary.json"));
+  const auto summary = nlohmann::json::parse(slurp(tmp.path / "out" / "summary.json"));
   CHECK(summary["options"]["velocity_atol"] == 0.0);
-  fs::remove_all(tmp);
 }
 
 TEST_CASE("knitsim knit: bad input exits 2 with one line and writes nothing") {
