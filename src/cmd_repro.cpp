@@ -5,7 +5,8 @@
 //   knitsim repro table4|table6|taguchi|fig13|all [--preset quick|paper] [--jobs J] [--out DIR]
 //                 [--resume] [--targets DIR] [--optimizer ica|lm|ica,lm] [overrides of the
 //                 preset: --samples --sets --runs --decades --countries --imperialists
-//                 --replicates --seed] [--no-pictures]
+//                 --replicates --seed] [--four-corner-symmetry none|quarter|eighth]
+//                 [--no-pictures]
 //
 // --optimizer: the optimizers of Tables 4 and 6 (default ica); lm adds table4_lm.csv,
 // table6_lm.csv and lm_vs_ica.csv (src/repro.hpp); Taguchi and Fig. 13 always use the ICA.
@@ -56,6 +57,7 @@ struct ReproArgs {
   std::vector<std::string> optimizers;
   int runs = 0, decades = 0, countries = 0, imperialists = 0, replicates = 0;
   std::uint64_t seed = 0;
+  std::string four_corner_symmetry;
   bool no_pictures = false;
   bool quiet = false;
 };
@@ -85,6 +87,8 @@ void run(const ReproArgs& a, const CLI::App& cmd) {
     o.targets_dir = KNITSIM_TARGETS_DIR;
   }
   try {
+    if (cmd.count("--four-corner-symmetry"))
+      o.four_corner_symmetry = four_corner_symmetry_from_name(a.four_corner_symmetry);
     if (cmd.count("--optimizer")) {
       o.optimizers.clear();
       for (const std::string& m : a.optimizers)
@@ -93,6 +97,7 @@ void run(const ReproArgs& a, const CLI::App& cmd) {
     o.validate();
   } catch (const std::invalid_argument& e) {
     rethrow_with_flag_names(e, {{"taguchi_replicates", "--replicates"},
+                                {"four_corner_symmetry", "--four-corner-symmetry"},
                                 {"optimizers", "--optimizer"},
                                 {"runs", "--runs"},
                                 {"samples", "--samples"},
@@ -159,6 +164,10 @@ void register_repro_command(CLI::App& app) {
   cmd->add_option("--imperialists", args->imperialists, "Override: ICA imperialists per fit");
   cmd->add_option("--replicates", args->replicates, "Override: Taguchi replicates per run");
   cmd->add_option("--seed", args->seed, "Override: base seed of every unit (default 2017)");
+  cmd->add_option("--four-corner-symmetry", args->four_corner_symmetry,
+                  "Integrate every four_corner fit and drape on this symmetry reduction: none | "
+                  "quarter | eighth (the exact restriction to the symmetric states, "
+                  "models/mirror_reduced.hpp); two_corner stays whole");
   cmd->add_flag("--no-pictures", args->no_pictures, "Skip the fitted drapes' pictures");
   cmd->add_flag("--quiet", args->quiet, "Nothing on stdout");
   cmd->callback([args, cmd] { run(*args, *cmd); });

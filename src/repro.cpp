@@ -57,6 +57,12 @@ ReproOptimizer repro_optimizer_from_name(const std::string& name) {
   throw std::invalid_argument("optimizers = " + name + ": accepted ica|lm");
 }
 
+DrapeSymmetry four_corner_symmetry_from_name(const std::string& name) {
+  for (DrapeSymmetry d : {DrapeSymmetry::None, DrapeSymmetry::Quarter, DrapeSymmetry::Eighth})
+    if (name == to_string(d)) return d;
+  throw std::invalid_argument("four_corner_symmetry = " + name + ": accepted none|quarter|eighth");
+}
+
 namespace {
 
 [[noreturn]] void bad(const std::string& field, const std::string& value,
@@ -98,6 +104,8 @@ void ReproOptions::validate() const {
   for (int d : taguchi_decades)
     if (d < 1) bad("taguchi_decades", std::to_string(d), "accepted >= 1 each");
   if (!(rtol > 0.0 && rtol <= 0.1)) bad("rtol", format_number(rtol), "accepted (0, 0.1]");
+  if (four_corner_symmetry == DrapeSymmetry::Half)
+    bad("four_corner_symmetry", to_string(four_corner_symmetry), "accepted none|quarter|eighth");
   DrapeFitOptions fit;  // the ICA options and the integrator name
   fit.ica = ica;
   fit.integrator = integrator;
@@ -218,10 +226,14 @@ namespace {
 
 double cpu_now() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
 
-// The built-in scene `scene` with the sample's areal density and the reproduction's rtol.
+// The built-in scene `scene` with the sample's areal density and the reproduction's rtol (and
+// on four_corner its symmetry reduction).
 Scene sample_scene(const std::string& scene, int sample, const ReproOptions& o) {
-  Scene s = load_scene(
-      scene, {"fabric.areal_density=" + format_number(paper_sample(sample).areal_density, 17)});
+  std::vector<std::string> sets = {"fabric.areal_density=" +
+                                   format_number(paper_sample(sample).areal_density, 17)};
+  if (scene == "four_corner")
+    sets.push_back(std::string("model.symmetry=") + to_string(o.four_corner_symmetry));
+  Scene s = load_scene(scene, sets);
   s.options.rtol = o.rtol;
   s.validate();
   return s;
@@ -542,6 +554,7 @@ json options_json(const ReproOptions& o) {
           {"seed", o.seed},
           {"integrator", o.integrator.empty() ? default_integrator() : o.integrator},
           {"rtol", o.rtol},
+          {"four_corner_symmetry", to_string(o.four_corner_symmetry)},
           {"synthetic",
            {{"noise_mm", o.synthetic.noise_mm},
             {"photos", o.synthetic.photos},
@@ -990,7 +1003,11 @@ ReproSummary run_repro(const ReproOptions& o, ReproTargets& targets, const fs::p
          << " decades, beta " << o.ica.beta << ", gamma " << o.ica.gamma << ", revolution "
          << o.ica.revolution_rate << ", xi " << o.ica.xi << "; base seed " << o.seed
          << "; integrator " << (o.integrator.empty() ? default_integrator() : o.integrator)
-         << ", rtol " << format_number(o.rtol) << ".\n\nTargets:\n\n";
+         << ", rtol " << format_number(o.rtol) << "; four_corner integrated "
+         << (o.four_corner_symmetry == DrapeSymmetry::None
+                 ? std::string("whole")
+                 : std::string("on the ") + to_string(o.four_corner_symmetry) + " (model.symmetry)")
+         << ".\n\nTargets:\n\n";
   for (const auto& [key, source] : provenance.items())
     report << "- " << key << ": " << source.get<std::string>() << "\n";
   report << "\n";

@@ -61,6 +61,7 @@
 #include <utility>
 #include <vector>
 
+#include "models/drape_grid.hpp"
 #include "src/ica.hpp"
 #include "src/lm_fit.hpp"
 #include "src/synthetic_targets.hpp"
@@ -78,6 +79,8 @@ enum class ReproOptimizer { Ica, Lm };
 const char* to_string(ReproOptimizer optimizer);
 // "ica" | "lm"; std::invalid_argument "optimizers = X: accepted ica|lm" otherwise.
 ReproOptimizer repro_optimizer_from_name(const std::string& name);
+// none | quarter | eighth (ReproOptions::four_corner_symmetry); else std::invalid_argument.
+DrapeSymmetry four_corner_symmetry_from_name(const std::string& name);
 
 // CPU seconds of one four_corner drape with the paper's explicit Euler at its stability limit
 // (experiments/benchmark/README.md, `run.sh --quick`, 2026-11-22: 1.23e8 steps x 4.94 us).
@@ -105,7 +108,12 @@ struct ReproOptions {
   std::array<int, 3> taguchi_decades = {10, 20, 40};
   std::uint64_t seed = 2017;  // base seed of every unit (unit_seed)
   std::string integrator;     // empty: default_integrator()
-  double rtol = 1e-8;         // of every drape (as knitsim fit, src/drape_fit.hpp)
+  // model.symmetry of every four_corner fit and drape (none | quarter | eighth): the ICA and LM
+  // fits are all on four_corner (Table 6 evaluates their parameters on two_corner, which stays
+  // whole), and the eighth is the exact restriction of the full equations to the symmetric
+  // states the scene reaches (models/mirror_reduced.hpp).
+  DrapeSymmetry four_corner_symmetry = DrapeSymmetry::None;
+  double rtol = 1e-8;  // of every drape (as knitsim fit, src/drape_fit.hpp)
   // Committed targets <dir>/<set>_sample<s>.csv; a missing file is generated in memory with
   // make_synthetic_target(sample, set, synthetic). Empty: generate all.
   std::string targets_dir;
@@ -116,6 +124,7 @@ struct ReproOptions {
   // Throws std::invalid_argument "<field> = <value>: accepted range" (samples in 1..9, each
   // once; sets non-empty and distinct; optimizers non-empty and distinct, lm only with
   // table4|table6|all; runs, taguchi_replicates >= 1; taguchi_decades >= 1; rtol in (0, 0.1];
+  // four_corner_symmetry none | quarter | eighth;
   // DrapeFitOptions::validate of ica and integrator; lm; synthetic).
   void validate() const;
 };
