@@ -166,7 +166,7 @@ void register_repro_command(CLI::App& app) {
   cmd->add_option("--seed", args->seed, "Override: base seed of every unit (default 2017)");
   cmd->add_option("--four-corner-symmetry", args->four_corner_symmetry,
                   "Integrate every four_corner fit and drape on this symmetry reduction: none | "
-                  "quarter | eighth (the exact restriction to the symmetric states, "
+                  "quarter | eighth (default; the exact restriction to the symmetric states, "
                   "models/mirror_reduced.hpp); two_corner stays whole");
   cmd->add_flag("--no-pictures", args->no_pictures, "Skip the fitted drapes' pictures");
   cmd->add_flag("--quiet", args->quiet, "Nothing on stdout");

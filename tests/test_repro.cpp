@@ -78,9 +78,15 @@ std::vector<double> country(const std::vector<std::string>& header,
   return x;
 }
 
+// The scene run_repro evaluates: the sample's fabric; four_corner on the repro's default
+// symmetry reduction.
 Scene sample_scene(const std::string& name, int sample) {
-  Scene s = load_scene(
-      name, {"fabric.areal_density=" + format_number(paper_sample(sample).areal_density, 17)});
+  std::vector<std::string> sets = {"fabric.areal_density=" +
+                                   format_number(paper_sample(sample).areal_density, 17)};
+  if (name == "four_corner")
+    sets.push_back(std::string("model.symmetry=") +
+                   to_string(repro_preset("quick").four_corner_symmetry));
+  Scene s = load_scene(name, sets);
   s.options.rtol = 1e-8;
   return s;
 }
@@ -186,6 +192,45 @@ TEST_CASE("presets and validation", "[repro]") {
   o.task = ReproTask::All;
   CHECK_NOTHROW(o.validate());
   CHECK_THROWS_WITH(repro_optimizer_from_name("pso"), Catch::Contains("optimizers = pso"));
+  CHECK(four_corner_symmetry_from_name("eighth") == DrapeSymmetry::Eighth);
+  CHECK(repro_preset("quick").four_corner_symmetry == DrapeSymmetry::Eighth);  // the default
+  CHECK(repro_preset("paper").four_corner_symmetry == DrapeSymmetry::Eighth);
+  CHECK_THROWS_WITH(four_corner_symmetry_from_name("half"),
+                    Catch::Contains("four_corner_symmetry = half: accepted none|quarter|eighth"));
+  o = repro_preset("quick");
+  o.four_corner_symmetry = DrapeSymmetry::Half;  // four_corner has no half reduction of its own
+  CHECK_THROWS_WITH(o.validate(), Catch::Contains("four_corner_symmetry = half"));
+}
+
+TEST_CASE("repro on the eighth: the same fits and Tables 4 and 6 as on the whole sheet",
+          "[repro]") {
+  TempDir tmp("repro-eighth");
+  const fs::path whole = tmp.path / "whole", eighth = tmp.path / "eighth";
+  fs::create_directories(whole);
+  fs::create_directories(eighth);
+  ReproOptions o = tiny_options(1);
+  o.four_corner_symmetry = DrapeSymmetry::None;
+  ReproTargets targets(o);
+  run_repro(o, targets, whole, false);
+  o.four_corner_symmetry = DrapeSymmetry::Eighth;
+  run_repro(o, targets, eighth, false);
+  for (const char* table : {"table4.csv", "table6.csv"}) {
+    const auto a = read_csv(whole / table), b = read_csv(eighth / table);
+    REQUIRE(a.size() == b.size());
+    REQUIRE(a.size() == 2);  // header + twin sample 1
+    const std::vector<std::string>& h = a[0];
+    INFO(table);
+    // The same ICA path: the same country (to the restriction's round-off), the same topology
+    // and evaluation count, the same error to 1e-6 relative.
+    for (const char* p : {"stiffness", "damping", "elongation_limit", "natural_length", "error"})
+      CHECK(std::stod(b[1][col(h, p)]) ==
+            Approx(std::stod(a[1][col(h, p)])).epsilon(std::string(p) == "error" ? 1e-6 : 1e-9));
+    CHECK(b[1][col(h, "topology")] == a[1][col(h, "topology")]);
+    if (std::string(table) == "table4.csv")
+      CHECK(b[1][col(h, "evaluations")] == a[1][col(h, "evaluations")]);
+  }
+  const std::string report = knitsim::test::slurp(eighth / "report.md");
+  CHECK(report.find("four_corner integrated on the eighth") != std::string::npos);
 }
 
 TEST_CASE(
@@ -314,7 +359,8 @@ TEST_CASE("knitsim repro: bad input is one line, exit 2, nothing written", "[rep
         std::string("table4 --samples 3-1"), std::string("table4 --preset fast"),
         std::string("table4 --jobs 0"), std::string("all --sets twin,wool"),
         std::string("table4 --targets /nonexistent"), std::string("table4 --optimizer xyz"),
-        std::string("fig13 --optimizer lm"), std::string("table4 --optimizer lm,lm")}) {
+        std::string("fig13 --optimizer lm"), std::string("table4 --optimizer lm,lm"),
+        std::string("table4 --four-corner-symmetry half")}) {
     const fs::path out = tmp.path / "out";
     const knitsim::test::Run run =
         knitsim::test::run_knitsim("repro " + args + " --out '" + out.string() + "'", tmp);
