@@ -113,10 +113,11 @@ SpringNetwork::SpringNetwork(SpringNetworkSpec spec) : spec_(std::move(spec)) {
     for (int br = 0; br < 2; ++br)
       for (int bc = 0; bc < 2; ++bc) {
         if (ends[br] < 0 || ends[bc] < 0) continue;
-        for (int p = 0; p < 3; ++p)
-          for (int q = 0; q < 3; ++q)
-            slots_[si * 36 + (2 * br + bc) * 9 + 3 * p + q] =
-                pattern_.find(3 * ends[br] + p, 3 * ends[bc] + q);
+        // A block's three rows are adjacent in each of its columns (all three are entries).
+        for (int q = 0; q < 3; ++q) {
+          const int top = pattern_.find(3 * ends[br], 3 * ends[bc] + q);
+          for (int p = 0; p < 3; ++p) slots_[si * 36 + (2 * br + bc) * 9 + 3 * p + q] = top + p;
+        }
       }
   }
   pin_pos_.resize(spec_.pinned.size());

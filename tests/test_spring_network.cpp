@@ -3,11 +3,14 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <set>
+#include <stdexcept>
 
 #include "models/drape_grid.hpp"
 #include "models/spring_network.hpp"
 #include "solvers/integrator.hpp"
 #include "src/jacobian_check.hpp"
+#include "src/sparse.hpp"
 
 using namespace knitsim;
 
@@ -92,6 +95,34 @@ TEST_CASE("Jacobian includes the elongation-limit spring when it is active") {
   // Finite differences straddle the kink of the limiting spring for a few springs; a small
   // step keeps that rare.
   CHECK(check_stiffness_jacobian(g.network, 0.0, x.data(), 1e-8).max_relative_error < 1e-4);
+}
+
+TEST_CASE("make_csc_pattern: sorted unique rows per column, against a set of pairs") {
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 50; ++trial) {
+    const int rows = 1 + static_cast<int>(rng() % 9), cols = 1 + static_cast<int>(rng() % 9);
+    const bool diagonal = rows == cols && trial % 2 == 0;
+    std::vector<std::pair<int, int>> entries;
+    const int count = static_cast<int>(rng() % 40);  // includes none, and many duplicates
+    for (int k = 0; k < count; ++k)
+      entries.emplace_back(static_cast<int>(rng() % rows), static_cast<int>(rng() % cols));
+    std::set<std::pair<int, int>> expected;  // (col, row): the CSC order
+    for (const auto& [r, c] : entries) expected.insert({c, r});
+    if (diagonal)
+      for (int i = 0; i < rows; ++i) expected.insert({i, i});
+
+    const CscPattern p = make_csc_pattern(rows, cols, entries, diagonal);
+    REQUIRE(p.rows == rows);
+    REQUIRE(p.cols == cols);
+    REQUIRE(p.colptr.size() == static_cast<size_t>(cols + 1));
+    std::vector<std::pair<int, int>> got;
+    for (int j = 0; j < cols; ++j)
+      for (int k = p.colptr[j]; k < p.colptr[j + 1]; ++k) got.emplace_back(j, p.rowind[k]);
+    CHECK(got == std::vector<std::pair<int, int>>(expected.begin(), expected.end()));
+    for (const auto& [c, r] : expected) CHECK(p.find(r, c) >= 0);
+  }
+  CHECK_THROWS_AS(make_csc_pattern(2, 2, {{2, 0}}, false), std::logic_error);
+  CHECK_THROWS_AS(make_csc_pattern(2, 3, {}, true), std::logic_error);
 }
 
 TEST_CASE("every diagonal entry is in the stiffness pattern") {
