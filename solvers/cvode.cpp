@@ -12,7 +12,8 @@
 //   cvode-bdf-gmres  the same BDF/Newton, matrix-free SPGMR: analytic products
 //                    J w = [w_v; Ax w_x - Gamma w_v] (Ax refreshed in jtsetup at the Newton
 //                    iterate), optional left block-Jacobi preconditioner (below), Krylov
-//                    dimension IntegratorOptions::krylov_dim (0 = SUNDIALS' 5).
+//                    dimension IntegratorOptions::krylov_dim (0 = SUNDIALS' 5), linear
+//                    tolerance factor krylov_eps_lin (it sets the residual floor).
 //   cvode-adams      Adams-Moulton orders 1..12 solved by fixed-point iteration (no Jacobian,
 //                    no linear solver): its step is bounded by stability, ~1/max|lambda|, so
 //                    on the drape (c/m ~ 1e5 /s) it costs like an explicit method.
@@ -44,14 +45,19 @@
 // byte (tests/test_synthetic_targets.cpp) and the repro numbers, and the robust answer to the
 // plateau at rtol 1e-6 is `static` (40 of 40 settle, same CPU) or rtol 1e-8.
 //
-// Preconditioner (cvode-bdf-gmres, on with IntegratorOptions::gmres_preconditioner): per
-// particle p (dof 3p..3p+2 and their velocities) the 6 x 6 diagonal block of I - gamma J,
-//     P_p = [[I, -gamma I], [-gamma B_p, D_p]],  B_p = Ax's 3 x 3 diagonal block of p,
-//     D_p = diag(1 + gamma gamma_i),
-// is inverted exactly through its Schur complement S_p = D_p - gamma^2 B_p (3 x 3):
-//     z_v = S_p^-1 (r_v + gamma B_p r_x),  z_x = r_x + gamma z_v.
-// B_p is refreshed when CVODE asks for a new Jacobian (jok false); S_p^-1 at every psetup.
-// Requires dof() to be a multiple of 3 (particles in 3-D).
+// Preconditioners of cvode-bdf-gmres (IntegratorOptions::gmres_preconditioner), all of the
+// form P = [[I, -gamma I], [-gamma B, D]], D = I + gamma Gamma, with B the Jacobian block Ax
+// (or part of it) at the latest Jacobian refresh (psetup with jok false); P^-1 through the
+// Schur complement S = D - gamma^2 B:
+//     z_v = S^-1 (r_v + gamma B r_x),  z_x = r_x + gamma z_v.
+//   block-jacobi  B = Ax's 3 x 3 diagonal block per particle p: S_p^-1 inverted exactly
+//                 (needs dof() a multiple of 3);
+//   schur-ic      B = Ax, S scaled by M to the symmetric M D - gamma^2 K and approximated by
+//                 Eigen's incomplete Cholesky (which shifts the diagonal until the pivots
+//                 are positive: S is indefinite where springs are compressed);
+//   schur-ldl     the same S by sparse LDL^T (analysed once): exact at the set-up, lagged
+//                 until the next one, where GMRES corrects the lag.
+// S (or S_p^-1) is rebuilt at every psetup (gamma changes), the Jacobian only when jok is false.
 //
 // Counters (fill_stats): rhs_evals include the linear solver's difference-quotient RHS
 // calls; jac_evals are Jacobian evaluations (gmres: Ax refreshes for products plus
@@ -61,6 +67,9 @@
 #include <sunlinsol/sunlinsol_spgmr.h>
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
+#include <Eigen/IterativeLinearSolvers>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -94,27 +103,54 @@ int cvode_linsys(double t, N_Vector y, N_Vector /*fy*/, SUNMatrix /*A*/, sunbool
   });
 }
 
-// ---- cvode-bdf-gmres: Jacobian-vector products and the block-Jacobi preconditioner -------
+// ---- cvode-bdf-gmres: Jacobian-vector products and the preconditioners -----------------
+
+using GmresPreconditioner = IntegratorOptions::GmresPreconditioner;
 
 struct KrylovProblem final : OdeProblem {
-  explicit KrylovProblem(const FirstOrderSystem& system) : OdeProblem(system) {
+  KrylovProblem(const FirstOrderSystem& system, GmresPreconditioner which)
+      : OdeProblem(system), preconditioner(which) {
     const MechanicalSystem& sys = system.mechanical();
     const CscPattern& p = sys.stiffness_pattern();
+    const int n = sys.dof();
     ax_product.assign(p.nnz(), 0.0);
     ax_scratch.assign(p.nnz(), 0.0);
-    const int particles = sys.dof() / 3;
-    block_pos.assign(9 * particles, -1);
-    for (int q = 0; q < particles; ++q)
-      for (int c = 0; c < 3; ++c)
-        for (int r = 0; r < 3; ++r) block_pos[9 * q + 3 * c + r] = p.find(3 * q + r, 3 * q + c);
-    block_ax.assign(9 * particles, 0.0);
-    block_inv.assign(9 * particles, 0.0);
+    if (which == GmresPreconditioner::BlockJacobi) {
+      const int particles = n / 3;
+      block_pos.assign(9 * particles, -1);
+      for (int q = 0; q < particles; ++q)
+        for (int c = 0; c < 3; ++c)
+          for (int r = 0; r < 3; ++r) block_pos[9 * q + 3 * c + r] = p.find(3 * q + r, 3 * q + c);
+      block_ax.assign(9 * particles, 0.0);
+      block_inv.assign(9 * particles, 0.0);
+    } else if (which != GmresPreconditioner::None) {
+      // S in the stiffness pattern: Eigen's compressed columns hold the same sorted rows, so
+      // S's values are filled in the pattern's order.
+      std::vector<Eigen::Triplet<double>> entries;
+      for (int c = 0; c < p.cols; ++c)
+        for (int e = p.colptr[c]; e < p.colptr[c + 1]; ++e)
+          entries.emplace_back(p.rowind[e], c, 0.0);
+      schur.resize(n, n);
+      schur.setFromTriplets(entries.begin(), entries.end());
+      schur.makeCompressed();
+      ax_rx.assign(n, 0.0);
+      rhs = Eigen::VectorXd::Zero(n);
+    }
   }
+  GmresPreconditioner preconditioner;
   std::vector<double> ax_product;  // Ax at the latest jtsetup (stiffness pattern order)
   std::vector<double> ax_scratch;  // Ax at the latest preconditioner refresh
-  std::vector<int> block_pos;      // per particle, column-major 3 x 3: position in Ax, -1 absent
-  std::vector<double> block_ax;    // per particle: B_p, column-major
-  std::vector<double> block_inv;   // per particle: S_p^-1, column-major
+  // BlockJacobi
+  std::vector<int> block_pos;     // per particle, column-major 3 x 3: position in Ax, -1 absent
+  std::vector<double> block_ax;   // per particle: B_p, column-major
+  std::vector<double> block_inv;  // per particle: S_p^-1, column-major
+  // SchurIc, SchurLdl
+  Eigen::SparseMatrix<double> schur;  // S = M (I + gamma Gamma) - gamma^2 K at the latest psetup
+  Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>> ic;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> ldlt;
+  bool analysed = false;
+  std::vector<double> ax_rx;
+  Eigen::VectorXd rhs, z_v;
 };
 
 KrylovProblem& krylov(void* user_data) {
@@ -167,53 +203,97 @@ bool invert3(const double* a, double* inv) {
   return true;
 }
 
+// Block-Jacobi set-up: S_p^-1 per particle.
+int block_jacobi_setup(KrylovProblem& k, double gamma) {
+  const MechanicalSystem& sys = k.fo.mechanical();
+  const auto& g = sys.damping_rate();
+  for (std::size_t i = 0; i < k.block_pos.size(); ++i)
+    k.block_ax[i] = k.block_pos[i] < 0 ? 0.0 : k.ax_scratch[k.block_pos[i]];
+  for (int q = 0; q < sys.dof() / 3; ++q) {
+    double s[9];
+    const double* b = &k.block_ax[9 * q];
+    for (int i = 0; i < 9; ++i) s[i] = -gamma * gamma * b[i];
+    for (int r = 0; r < 3; ++r) s[4 * r] += 1.0 + gamma * g[3 * q + r];
+    if (!invert3(s, &k.block_inv[9 * q])) return 1;
+  }
+  return 0;
+}
+
+// Schur set-up: S = M (I + gamma Gamma) - gamma^2 K with K = M Ax, then its incomplete
+// Cholesky (Eigen's, with its diagonal shift where S is not positive definite) or its LDL^T.
+int schur_setup(KrylovProblem& k, double gamma) {
+  const MechanicalSystem& sys = k.fo.mechanical();
+  const CscPattern& p = sys.stiffness_pattern();
+  const auto& m = sys.mass();
+  const auto& g = sys.damping_rate();
+  double* s = k.schur.valuePtr();
+  for (int c = 0; c < p.cols; ++c)
+    for (int e = p.colptr[c]; e < p.colptr[c + 1]; ++e) {
+      const int i = p.rowind[e];
+      s[e] = -gamma * gamma * m[i] * k.ax_scratch[e] + (i == c ? m[i] * (1.0 + gamma * g[i]) : 0.0);
+    }
+  if (k.preconditioner == GmresPreconditioner::SchurIc) {
+    if (!k.analysed) k.ic.analyzePattern(k.schur);
+    k.analysed = true;
+    k.ic.factorize(k.schur);
+    return k.ic.info() == Eigen::Success ? 0 : 1;
+  }
+  if (!k.analysed) k.ldlt.analyzePattern(k.schur);
+  k.analysed = true;
+  k.ldlt.factorize(k.schur);
+  return k.ldlt.info() == Eigen::Success ? 0 : 1;
+}
+
 int cvode_psetup(double t, N_Vector y, N_Vector /*fy*/, sunbooleantype jok, sunbooleantype* jcur,
                  double gamma, void* user_data) {
   return guarded([&] {
     KrylovProblem& k = krylov(user_data);
-    const MechanicalSystem& sys = k.fo.mechanical();
-    const int particles = sys.dof() / 3;
     if (jok == SUNFALSE) {
-      sys.stiffness_values(t, vec_data(y), k.ax_scratch.data());
-      for (std::size_t i = 0; i < k.block_pos.size(); ++i)
-        k.block_ax[i] = k.block_pos[i] < 0 ? 0.0 : k.ax_scratch[k.block_pos[i]];
-      if (finite_or_recoverable(k.block_ax.data(), static_cast<long>(k.block_ax.size())) != 0)
+      k.fo.mechanical().stiffness_values(t, vec_data(y), k.ax_scratch.data());
+      if (finite_or_recoverable(k.ax_scratch.data(), static_cast<long>(k.ax_scratch.size())) != 0)
         return 1;
     }
     *jcur = jok == SUNFALSE ? SUNTRUE : SUNFALSE;
-    const auto& g = sys.damping_rate();
-    for (int q = 0; q < particles; ++q) {
-      double s[9];
-      const double* b = &k.block_ax[9 * q];
-      for (int i = 0; i < 9; ++i) s[i] = -gamma * gamma * b[i];
-      for (int r = 0; r < 3; ++r) s[4 * r] += 1.0 + gamma * g[3 * q + r];
-      if (!invert3(s, &k.block_inv[9 * q])) return 1;
-    }
-    return 0;
+    return k.preconditioner == GmresPreconditioner::BlockJacobi ? block_jacobi_setup(k, gamma)
+                                                                : schur_setup(k, gamma);
   });
 }
 
+// z = P^-1 r for P = [[I, -gamma I], [-gamma B, D]] (B = Ax or its diagonal blocks at the
+// latest refresh, D = I + gamma Gamma): z_v = (D - gamma^2 B)^-1 (r_v + gamma B r_x),
+// z_x = r_x + gamma z_v.
 int cvode_psolve(double /*t*/, N_Vector /*y*/, N_Vector /*fy*/, N_Vector r, N_Vector z,
                  double gamma, double /*delta*/, int /*lr*/, void* user_data) {
   return guarded([&] {
     KrylovProblem& k = krylov(user_data);
-    const int n = k.fo.mechanical().dof();
+    const MechanicalSystem& sys = k.fo.mechanical();
+    const int n = sys.dof();
     const double* rx = vec_data(r);
     const double* rv = rx + n;
     double* zx = vec_data(z);
     double* zv = zx + n;
-    for (int q = 0; q < n / 3; ++q) {
-      const double* b = &k.block_ax[9 * q];
-      const double* inv = &k.block_inv[9 * q];
-      double rhs[3];
-      for (int i = 0; i < 3; ++i)
-        rhs[i] = rv[3 * q + i] +
-                 gamma * (b[i] * rx[3 * q] + b[3 + i] * rx[3 * q + 1] + b[6 + i] * rx[3 * q + 2]);
-      for (int i = 0; i < 3; ++i) {
-        zv[3 * q + i] = inv[i] * rhs[0] + inv[3 + i] * rhs[1] + inv[6 + i] * rhs[2];
-        zx[3 * q + i] = rx[3 * q + i] + gamma * zv[3 * q + i];
+    if (k.preconditioner == GmresPreconditioner::BlockJacobi) {
+      for (int q = 0; q < n / 3; ++q) {
+        const double* b = &k.block_ax[9 * q];
+        const double* inv = &k.block_inv[9 * q];
+        double rhs[3];
+        for (int i = 0; i < 3; ++i)
+          rhs[i] = rv[3 * q + i] +
+                   gamma * (b[i] * rx[3 * q] + b[3 + i] * rx[3 * q + 1] + b[6 + i] * rx[3 * q + 2]);
+        for (int i = 0; i < 3; ++i)
+          zv[3 * q + i] = inv[i] * rhs[0] + inv[3 + i] * rhs[1] + inv[6 + i] * rhs[2];
       }
+    } else {  // the same with the whole Ax, scaled by M to the symmetric S
+      csc_multiply(sys.stiffness_pattern(), k.ax_scratch.data(), rx, k.ax_rx.data());
+      const auto& m = sys.mass();
+      for (int i = 0; i < n; ++i) k.rhs[i] = m[i] * (rv[i] + gamma * k.ax_rx[i]);
+      if (k.preconditioner == GmresPreconditioner::SchurIc)
+        k.z_v = k.ic.solve(k.rhs);
+      else
+        k.z_v = k.ldlt.solve(k.rhs);
+      std::copy_n(k.z_v.data(), n, zv);
     }
+    for (int i = 0; i < n; ++i) zx[i] = rx[i] + gamma * zv[i];
     return 0;
   });
 }
@@ -243,7 +323,8 @@ class Cvode final : public Integrator {
          << " (dense LU is for small meshes; use cvode-bdf)";
       throw std::invalid_argument(os.str());
     }
-    if (method_ == CvodeMethod::BdfGmres && opt.gmres_preconditioner && n % 3 != 0)
+    if (method_ == CvodeMethod::BdfGmres &&
+        opt.gmres_preconditioner == GmresPreconditioner::BlockJacobi && n % 3 != 0)
       throw std::invalid_argument(info_.name +
                                   ": block-Jacobi preconditioner needs dof() = "
                                   "3 x particles, got " +
@@ -255,7 +336,7 @@ class Cvode final : public Integrator {
     SUNContext ctx = s->ctx.get();
     s->fo = std::make_unique<FirstOrderSystem>(sys);
     if (method_ == CvodeMethod::BdfGmres)
-      s->problem = std::make_unique<KrylovProblem>(*s->fo);
+      s->problem = std::make_unique<KrylovProblem>(*s->fo, opt.gmres_preconditioner);
     else
       s->problem = std::make_unique<OdeProblem>(*s->fo);
     s->y = make_state(x0, v0, n, ctx);
@@ -294,13 +375,15 @@ class Cvode final : public Integrator {
         break;
       }
       case CvodeMethod::BdfGmres: {
-        const int pretype = opt.gmres_preconditioner ? SUN_PREC_LEFT : SUN_PREC_NONE;
+        const bool pre = opt.gmres_preconditioner != GmresPreconditioner::None;
+        const int pretype = pre ? SUN_PREC_LEFT : SUN_PREC_NONE;
         s->ls = LinearSolverPtr(
             check_created(SUNLinSol_SPGMR(y, pretype, opt.krylov_dim, ctx), "SUNLinSol_SPGMR"));
         check(CVodeSetLinearSolver(mem, s->ls.get(), nullptr), "CVodeSetLinearSolver", kLsName,
               log);
         check(CVodeSetJacTimes(mem, cvode_jtsetup, cvode_jtimes), "CVodeSetJacTimes", kLsName, log);
-        if (opt.gmres_preconditioner)
+        check(CVodeSetEpsLin(mem, opt.krylov_eps_lin), "CVodeSetEpsLin", kLsName, log);
+        if (pre)
           check(CVodeSetPreconditioner(mem, cvode_psetup, cvode_psolve), "CVodeSetPreconditioner",
                 kLsName, log);
         break;

@@ -78,6 +78,8 @@ void IntegratorOptions::validate() const {
     bad_option("runaway_position", runaway_position, "must be > 0 m and finite");
   if (krylov_dim < 0 || krylov_dim > 500)
     bad_option("krylov_dim", krylov_dim, "must be in 0..500 (0 = default)");
+  if (!(krylov_eps_lin > 0.0 && krylov_eps_lin <= 1.0))
+    bad_option("krylov_eps_lin", krylov_eps_lin, "must be in (0, 1]");
 }
 
 const char* to_string(IntegratorOptions::NewtonSolver s) {
@@ -88,6 +90,20 @@ const char* to_string(IntegratorOptions::NewtonSolver s) {
       return "ldl";
     case IntegratorOptions::NewtonSolver::SchurCgLdl:
       return "cg-ldl";
+  }
+  return "?";
+}
+
+const char* to_string(IntegratorOptions::GmresPreconditioner p) {
+  switch (p) {
+    case IntegratorOptions::GmresPreconditioner::None:
+      return "none";
+    case IntegratorOptions::GmresPreconditioner::BlockJacobi:
+      return "block-jacobi";
+    case IntegratorOptions::GmresPreconditioner::SchurIc:
+      return "schur-ic";
+    case IntegratorOptions::GmresPreconditioner::SchurLdl:
+      return "schur-ldl";
   }
   return "?";
 }

@@ -55,7 +55,15 @@ struct IntegratorOptions {
   // methods (a check costs about one RHS), 1 (every step) for all others.
   long check_every = 0;
   double runaway_position = 1e3;  // |x_i| above this (m) counts as a blow-up
-  int krylov_dim = 0;             // GMRES Krylov dimension; 0 = SUNDIALS default (5)
+  // cvode-bdf-gmres: Krylov dimension (0 = SUNDIALS' default, 5) and CVODE's linear-solver
+  // tolerance factor (CVodeSetEpsLin: GMRES stops at eps_lin x the Newton tolerance; SUNDIALS'
+  // default 0.05). The static residual a GMRES run can reach is proportional to eps_lin:
+  // four_corner 11 x 11, Krylov 30, ends at t_max on a floor of 2.9e-5 / 2.8e-6 / 3.8e-7 /
+  // 4.6e-8 at eps_lin 5e-2 / 5e-3 / 5e-4 / 5e-5, and settles (residual < 1e-8) at 5e-6 (230
+  // steps), 5e-7 (204), 1e-7 (226), 1e-8 (216). With Krylov 5 it fails the corrector at any
+  // eps_lin (2026-11-23, README "Integrators").
+  int krylov_dim = 30;
+  double krylov_eps_lin = 5e-7;
   // Linear solver for the Newton systems of cvode-bdf, arkode-dirk and arkode-imex:
   //   Klu        sparse LU of the 2n x 2n matrix I - gamma J (SUNDIALS' KLU);
   //   SchurLdl   velocity block eliminated, symmetric 3n x 3n LDL^T (schur_ldl_solver.hpp);
@@ -69,7 +77,18 @@ struct IntegratorOptions {
   // SchurLdl on the knit model's microsecond steps (README, "Integrators"), hence the default.
   enum class NewtonSolver { Klu, SchurLdl, SchurCgLdl };
   NewtonSolver newton_solver = NewtonSolver::SchurCgLdl;  // names: to_string below
-  bool gmres_preconditioner = true;  // cvode-bdf-gmres: block-Jacobi preconditioner
+  // Left preconditioner of cvode-bdf-gmres, P ~ I - gamma J at CVODE's preconditioner set-ups
+  // (the velocity block eliminated as in SchurLdl, so P^-1 needs S^-1 for
+  // S = M (I + gamma Gamma) - gamma^2 K):
+  //   None         no preconditioner;
+  //   BlockJacobi  per particle the 6 x 6 diagonal block of I - gamma J, inverted exactly;
+  //   SchurIc      S by Eigen's incomplete Cholesky (IncompleteCholesky, AMD ordering);
+  //   SchurLdl     S by sparse LDL^T, factorised at each preconditioner set-up and lagged
+  //                between them (GMRES corrects the lag, so the Newton systems are solved to
+  //                eps_lin with the current gamma and Jacobian).
+  // Measured in experiments/scaling and README "Integrators".
+  enum class GmresPreconditioner { None, BlockJacobi, SchurIc, SchurLdl };
+  GmresPreconditioner gmres_preconditioner = GmresPreconditioner::SchurLdl;
 
   // Throws std::invalid_argument naming the bad field and its accepted range.
   void validate() const;
@@ -86,6 +105,7 @@ enum class RunStatus {
 const char* to_string(RunStatus s);
 // "klu", "ldl", "cg-ldl": the names of --newton-solver and of summary.json's options.
 const char* to_string(IntegratorOptions::NewtonSolver s);
+const char* to_string(IntegratorOptions::GmresPreconditioner p);
 
 struct RunStats {
   std::string integrator;

@@ -41,22 +41,50 @@ CLI::Option* add_atol_options(CLI::App* cmd, double& atol, double& velocity_atol
       ->capture_default_str();
 }
 
+namespace {
+
+// --flag NAME for an enum option: NAME is one of to_string(value) over `all`.
+template <typename E, size_t N>
+void add_named_option(CLI::App* cmd, const std::string& flag, E& which, const E (&all)[N],
+                      const std::string& help) {
+  std::vector<std::string> names;
+  for (const E e : all) names.emplace_back(to_string(e));
+  cmd->add_option_function<std::string>(
+         flag,
+         [&which, &all](const std::string& name) {
+           for (const E e : all)
+             if (name == to_string(e)) which = e;
+         },
+         help)
+      ->check(CLI::IsMember(names))
+      ->default_str(to_string(which));
+}
+
+}  // namespace
+
 void add_newton_solver_option(CLI::App* cmd, IntegratorOptions::NewtonSolver& which) {
   using NS = IntegratorOptions::NewtonSolver;
   static const NS all[] = {NS::Klu, NS::SchurLdl, NS::SchurCgLdl};
-  std::vector<std::string> names;
-  for (const NS s : all) names.emplace_back(to_string(s));
-  cmd->add_option_function<std::string>(
-         "--newton-solver",
-         [&which](const std::string& name) {
-           for (const NS s : all)
-             if (name == to_string(s)) which = s;
-         },
-         "Newton linear solver of cvode-bdf, arkode-dirk, arkode-imex: klu (2n LU), ldl "
-         "(velocity block eliminated, 3n symmetric LDL^T) or cg-ldl (the same, with Jacobi-CG "
-         "instead of the factorisation at small steps)")
-      ->check(CLI::IsMember(names))
-      ->default_str(to_string(which));
+  add_named_option(cmd, "--newton-solver", which, all,
+                   "Newton linear solver of cvode-bdf, arkode-dirk, arkode-imex: klu (2n LU), ldl "
+                   "(velocity block eliminated, 3n symmetric LDL^T) or cg-ldl (the same, with "
+                   "Jacobi-CG instead of the factorisation at small steps)");
+}
+
+void add_gmres_options(CLI::App* cmd, IntegratorOptions& o) {
+  using GP = IntegratorOptions::GmresPreconditioner;
+  static const GP all[] = {GP::None, GP::BlockJacobi, GP::SchurIc, GP::SchurLdl};
+  add_named_option(cmd, "--gmres-preconditioner", o.gmres_preconditioner, all,
+                   "cvode-bdf-gmres: none, block-jacobi (6 x 6 per particle), schur-ic "
+                   "(incomplete Cholesky of the 3n Schur matrix) or schur-ldl (its LDL^T, lagged "
+                   "between set-ups)");
+  cmd->add_option("--krylov-dim", o.krylov_dim,
+                  "cvode-bdf-gmres: Krylov dimension (0 = SUNDIALS' 5)")
+      ->capture_default_str();
+  cmd->add_option("--eps-lin", o.krylov_eps_lin,
+                  "cvode-bdf-gmres: linear tolerance factor (CVodeSetEpsLin); the residual a run "
+                  "can reach is proportional to it")
+      ->capture_default_str();
 }
 
 void rethrow_with_flag_names(const std::invalid_argument& e,
@@ -88,7 +116,9 @@ const std::vector<std::pair<std::string, std::string>>& run_option_names() {
       {"dt", "--dt"},
       {"max_order", "--max-order"},
       {"max_steps", "--max-steps"},
-      {"max_wall_seconds", "--max-wall"}};
+      {"max_wall_seconds", "--max-wall"},
+      {"krylov_dim", "--krylov-dim"},
+      {"krylov_eps_lin", "--eps-lin"}};
   return names;
 }
 

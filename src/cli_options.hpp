@@ -30,6 +30,8 @@ CLI::Option* add_atol_options(CLI::App* cmd, double& atol, double& velocity_atol
 // --newton-solver {klu, ldl, cg-ldl} of drape and knit, bound to `which`
 // (IntegratorOptions::newton_solver).
 void add_newton_solver_option(CLI::App* cmd, IntegratorOptions::NewtonSolver& which);
+// --gmres-preconditioner, --krylov-dim and --eps-lin (cvode-bdf-gmres) into `o`.
+void add_gmres_options(CLI::App* cmd, IntegratorOptions& o);
 
 // Validation messages name struct fields ("revolution_rate = 2: ..."); the user typed flags.
 // Rethrows `e` with the field replaced by its flag ("--revolution = 2: ..."), for the ICA

@@ -70,6 +70,9 @@ void run(const DrapeArgs& args) {
   scene.options.max_steps = o.max_steps;
   scene.options.max_wall_seconds = o.max_wall_seconds;
   scene.options.newton_solver = o.newton_solver;
+  scene.options.krylov_dim = o.krylov_dim;
+  scene.options.krylov_eps_lin = o.krylov_eps_lin;
+  scene.options.gmres_preconditioner = o.gmres_preconditioner;
   scene.validate();
 
   const std::string integrator = args.integrator.empty() ? default_integrator() : args.integrator;
@@ -138,6 +141,7 @@ void register_drape_command(CLI::App& app) {
                   "Wall-clock cap, s (0 = none); the run then ends with status wall_limit")
       ->capture_default_str();
   add_newton_solver_option(cmd, args->options.newton_solver);
+  add_gmres_options(cmd, args->options);
   cmd->add_option("--out", args->out,
                   "Output folder (default: a fresh out/drape-<scene>-<YYYYmmdd-HHMMSS>)");
   cmd->add_option("--target", args->target,

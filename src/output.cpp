@@ -272,7 +272,8 @@ nlohmann::json to_json(const IntegratorOptions& o) {
           {"runaway_position", o.runaway_position},
           {"newton_solver", to_string(o.newton_solver)},
           {"krylov_dim", o.krylov_dim},
-          {"gmres_preconditioner", o.gmres_preconditioner}};
+          {"krylov_eps_lin", o.krylov_eps_lin},
+          {"gmres_preconditioner", to_string(o.gmres_preconditioner)}};
 }
 
 nlohmann::json to_json(const DrapeLmOptions& o) {

@@ -36,6 +36,9 @@ TEST_CASE("bad input: exit 2, one stderr line naming the field, --out not create
       {"--rtol abc", "--rtol"},
       {"--max-steps 0", "--max-steps = 0"},
       {"--integrator nope", "--integrator = nope: must be one of"},
+      {"--gmres-preconditioner ilu", "--gmres-preconditioner: ilu not in {none,block-jacobi"},
+      {"--eps-lin 0", "--eps-lin = 0: must be in (0, 1]"},
+      {"--krylov-dim 501", "--krylov-dim = 501: must be in 0..500"},
       {"--bogus", "--bogus"},
   };
   for (const Case& c : cases) {
@@ -231,9 +234,9 @@ TEST_CASE("drape --target: edges.csv always, Eq. 5 objective against a target") 
         f << "four_corner," << edge << ",coeff," << k << "," << c[k].get<double>() << "\n";
   }
   const fs::path same = tmp.path / "same", stiffer = tmp.path / "stiffer";
-  REQUIRE(run_knitsim(common + "--target '" + target.string() + "' --out '" + same.string() + "'",
-                      tmp)
-              .status == 0);
+  REQUIRE(
+      run_knitsim(common + "--target '" + target.string() + "' --out '" + same.string() + "'", tmp)
+          .status == 0);
   REQUIRE(run_knitsim(common + "--set model.stiffness=1100 --target '" + target.string() +
                           "' --out '" + stiffer.string() + "'",
                       tmp)

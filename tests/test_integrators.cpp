@@ -432,13 +432,6 @@ TEST_CASE("every implicit integrator lands on the implicit-euler drape equilibri
     if (info.explicit_method) continue;
     IntegratorOptions opt;
     opt.max_steps = 20'000;
-    // Inexact Krylov solves leave a residual floor of ~1e-7..1e-4 (measured for every
-    // tolerance, restart and Krylov size tried): cvode-bdf-gmres is held to 1e-3 here, and
-    // test_sundials checks it the same way.
-    if (info.name == "cvode-bdf-gmres") {
-      opt.equilibrium_tol = 1e-3;
-      opt.krylov_dim = 20;
-    }
     RunStats s;
     const auto x = equilibrium(g.network, info.name, opt, s);
     const double diff = max_abs_difference(x, ref);
@@ -446,7 +439,7 @@ TEST_CASE("every implicit integrator lands on the implicit-euler drape equilibri
                    << " steps, residual " << s.residual << ", wall " << s.wall_seconds
                    << " s; max |x - x_ref| " << diff << " m");
     CHECK(s.status == RunStatus::Equilibrium);
-    CHECK(diff <= (info.name == "cvode-bdf-gmres" ? 1e-4 : 1e-6));
+    CHECK(diff <= 1e-6);
   }
 }
 

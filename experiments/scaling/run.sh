@@ -14,7 +14,8 @@
 # 3) of the three in turn (runs interleaved, so load drifts hit all three alike); default DIR
 # out/scaling-target.
 # --grids: cells per side to run instead of the mode's list; --solver: only the runs with this
-# label (cvode-bdf-ldl, cvode-bdf-klu, cvode-bdf-gmres, implicit-euler, static-eighth,
+# label (cvode-bdf-ldl, cvode-bdf-klu, cvode-bdf-gmres (its default preconditioner, the lagged
+# Schur LDL^T), cvode-bdf-gmres-bj (block-Jacobi), implicit-euler, static-eighth,
 # static-quarter, cvode-bdf-eighth), e.g. --solver static-eighth --grids "100 140 200" for the
 # reduced model on grids the full-grid solvers cannot reach in useful time.
 #
@@ -26,7 +27,7 @@
 # particle, so an unscaled c would add total damping under refinement and slow the settling
 # without changing the equilibrium). Each run is capped at --max-wall seconds of wall time
 # (status wall_limit then; default 1800 s, 60 s with --quick: enough for n = 40 on a quiet
-# machine, and cvode-bdf-gmres, which never settles, uses all of it; on a loaded machine raise
+# machine, and cvode-bdf-gmres-bj, which does not settle at n >= 20, uses all of it; on a loaded machine raise
 # it). Grids: n = 10 20 40 60 80 100
 # 140; --quick: 10 20 40.
 # Writes DIR/runs.csv (one row per run), DIR/manifest.json (with the binary's build stamp as
@@ -62,8 +63,8 @@ for g in $GRIDS_OPT; do
   case "$g" in '' | *[!0-9]* | 0 | 1) echo "scaling: --grids: $g is not an integer >= 2" >&2; exit 2 ;; esac
 done
 case "$SOLVER" in
-  '' | cvode-bdf-ldl | cvode-bdf-klu | cvode-bdf-gmres | implicit-euler | static-eighth | static-quarter | cvode-bdf-eighth) ;;
-  *) echo "scaling: --solver $SOLVER not in {cvode-bdf-ldl,cvode-bdf-klu,cvode-bdf-gmres,implicit-euler,static-eighth,static-quarter,cvode-bdf-eighth}" >&2; exit 2 ;;
+  '' | cvode-bdf-ldl | cvode-bdf-klu | cvode-bdf-gmres | cvode-bdf-gmres-bj | implicit-euler | static-eighth | static-quarter | cvode-bdf-eighth) ;;
+  *) echo "scaling: --solver $SOLVER not in {cvode-bdf-ldl,cvode-bdf-klu,cvode-bdf-gmres,cvode-bdf-gmres-bj,implicit-euler,static-eighth,static-quarter,cvode-bdf-eighth}" >&2; exit 2 ;;
 esac
 [ "$QUICK$TARGET" != 11 ] || { echo "scaling: --quick and --target exclude each other" >&2; exit 2; }
 if [ -z "$OUT" ]; then
@@ -129,6 +130,7 @@ else
     run "$n" cvode-bdf-ldl cvode-bdf --newton-solver ldl
     run "$n" cvode-bdf-klu cvode-bdf --newton-solver klu
     run "$n" cvode-bdf-gmres cvode-bdf-gmres
+    run "$n" cvode-bdf-gmres-bj cvode-bdf-gmres --gmres-preconditioner block-jacobi
     run "$n" implicit-euler implicit-euler
     run "$n" static-eighth static "${eighth[@]}"
   done
