@@ -509,10 +509,10 @@ std::unique_ptr<Integrator> make_cvode_bdf_dense() {
 
 std::unique_ptr<Integrator> make_cvode_bdf_gmres() {
   return std::make_unique<Cvode>(
-      CvodeMethod::BdfGmres,
-      IntegratorInfo{"cvode-bdf-gmres",
-                     "CVODE BDF, Newton-Krylov SPGMR, analytic J v, block-Jacobi preconditioner", 0,
-                     true, false});
+      CvodeMethod::BdfGmres, IntegratorInfo{"cvode-bdf-gmres",
+                                            "CVODE BDF, Newton-Krylov SPGMR, analytic J v, Schur "
+                                            "LDL^T preconditioner (--gmres-preconditioner)",
+                                            0, true, false});
 }
 
 std::unique_ptr<Integrator> make_cvode_adams() {
