@@ -81,9 +81,10 @@ void add_gmres_options(CLI::App* cmd, IntegratorOptions& o) {
   cmd->add_option("--krylov-dim", o.krylov_dim,
                   "cvode-bdf-gmres: Krylov dimension (0 = SUNDIALS' 5)")
       ->capture_default_str();
-  cmd->add_option("--eps-lin", o.krylov_eps_lin,
-                  "cvode-bdf-gmres: linear tolerance factor (CVodeSetEpsLin); the residual a run "
-                  "can reach is proportional to it")
+  cmd->add_option(
+         "--eps-lin", o.krylov_eps_lin,
+         "cvode-bdf-gmres: linear tolerance factor (CVodeSetEpsLin); with block-jacobi the "
+         "residual a run can reach is proportional to it")
       ->capture_default_str();
 }
 
