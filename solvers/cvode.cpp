@@ -11,9 +11,10 @@
 //                    comparison on small meshes only (refused above 2n = 3000).
 //   cvode-bdf-gmres  the same BDF/Newton, matrix-free SPGMR: analytic products
 //                    J w = [w_v; Ax w_x - Gamma w_v] (Ax refreshed in jtsetup at the Newton
-//                    iterate), optional left block-Jacobi preconditioner (below), Krylov
-//                    dimension IntegratorOptions::krylov_dim (0 = SUNDIALS' 5), linear
-//                    tolerance factor krylov_eps_lin (it sets the residual floor).
+//                    iterate), a left preconditioner (below; default the lagged Schur
+//                    LDL^T), Krylov dimension IntegratorOptions::krylov_dim (0 = SUNDIALS'
+//                    5), linear tolerance factor krylov_eps_lin (with block-Jacobi it sets
+//                    the residual floor).
 //   cvode-adams      Adams-Moulton orders 1..12 solved by fixed-point iteration (no Jacobian,
 //                    no linear solver): its step is bounded by stability, ~1/max|lambda|, so
 //                    on the drape (c/m ~ 1e5 /s) it costs like an explicit method.
