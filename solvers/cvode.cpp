@@ -77,6 +77,7 @@
 #include <sstream>
 
 #include "solvers/factories.hpp"
+#include "solvers/schur_matrix.hpp"
 #include "solvers/sundials_common.hpp"
 
 namespace knitsim::detail {
@@ -125,15 +126,7 @@ struct KrylovProblem final : OdeProblem {
       block_ax.assign(9 * particles, 0.0);
       block_inv.assign(9 * particles, 0.0);
     } else if (which != GmresPreconditioner::None) {
-      // S in the stiffness pattern: Eigen's compressed columns hold the same sorted rows, so
-      // S's values are filled in the pattern's order.
-      std::vector<Eigen::Triplet<double>> entries;
-      for (int c = 0; c < p.cols; ++c)
-        for (int e = p.colptr[c]; e < p.colptr[c + 1]; ++e)
-          entries.emplace_back(p.rowind[e], c, 0.0);
-      schur.resize(n, n);
-      schur.setFromTriplets(entries.begin(), entries.end());
-      schur.makeCompressed();
+      schur = schur_matrix(sys);
       ax_rx.assign(n, 0.0);
       rhs = Eigen::VectorXd::Zero(n);
     }
@@ -223,16 +216,7 @@ int block_jacobi_setup(KrylovProblem& k, double gamma) {
 // Schur set-up: S = M (I + gamma Gamma) - gamma^2 K with K = M Ax, then its incomplete
 // Cholesky (Eigen's, with its diagonal shift where S is not positive definite) or its LDL^T.
 int schur_setup(KrylovProblem& k, double gamma) {
-  const MechanicalSystem& sys = k.fo.mechanical();
-  const CscPattern& p = sys.stiffness_pattern();
-  const auto& m = sys.mass();
-  const auto& g = sys.damping_rate();
-  double* s = k.schur.valuePtr();
-  for (int c = 0; c < p.cols; ++c)
-    for (int e = p.colptr[c]; e < p.colptr[c + 1]; ++e) {
-      const int i = p.rowind[e];
-      s[e] = -gamma * gamma * m[i] * k.ax_scratch[e] + (i == c ? m[i] * (1.0 + gamma * g[i]) : 0.0);
-    }
+  fill_schur_values(k.fo.mechanical(), gamma, k.ax_scratch.data(), k.schur);
   if (k.preconditioner == GmresPreconditioner::SchurIc) {
     if (!k.analysed) k.ic.analyzePattern(k.schur);
     k.analysed = true;

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "solvers/factories.hpp"
+#include "solvers/schur_matrix.hpp"
 
 namespace knitsim::detail {
 
@@ -42,16 +43,7 @@ class ImplicitEuler final : public Integrator {
     tmp_.resize(n_);
     const CscPattern& p = sys.stiffness_pattern();
     ax_.resize(p.nnz());
-    // S has the stiffness pattern; build it once, then write values in CSC order.
-    std::vector<Eigen::Triplet<double>> trip;
-    trip.reserve(p.nnz());
-    for (int j = 0; j < n_; ++j)
-      for (int k = p.colptr[j]; k < p.colptr[j + 1]; ++k) trip.emplace_back(p.rowind[k], j, 1.0);
-    S_.resize(n_, n_);
-    S_.setFromTriplets(trip.begin(), trip.end());
-    S_.makeCompressed();
-    diag_.assign(n_, -1);
-    for (int j = 0; j < n_; ++j) diag_[j] = p.find(j, j);
+    S_ = schur_matrix(sys);  // the stiffness pattern, built once; values per step
     solver_.analyzePattern(S_);
   }
 
@@ -65,10 +57,7 @@ class ImplicitEuler final : public Integrator {
     sys_->stiffness_values(t1, x_.data(), ax_.data());
     ++rhs_;
     ++jac_;
-    // S = M + h C - h^2 K, with K = M Ax (row i of Ax scaled by m_i).
-    double* s = S_.valuePtr();
-    for (int k = 0; k < p.nnz(); ++k) s[k] = -h * h * m[p.rowind[k]] * ax_[k];
-    for (int j = 0; j < n_; ++j) s[diag_[j]] += m[j] * (1.0 + h * gamma[j]);
+    fill_schur_values(*sys_, h, ax_.data(), S_);  // S = M + h C - h^2 K
     // right side: h M (a_c - Gamma v + h Ax v)
     csc_multiply(p, ax_.data(), v_.data(), tmp_.data());
     for (int i = 0; i < n_; ++i) rhs_vec_[i] = h * m[i] * (a_[i] - gamma[i] * v_[i] + h * tmp_[i]);
@@ -113,7 +102,6 @@ class ImplicitEuler final : public Integrator {
   double t_ = 0.0, dt_ = 1.0;
   long steps_ = 0, rhs_ = 0, jac_ = 0, setups_ = 0;
   std::vector<double> x_, v_, a_, ax_, rhs_vec_, dv_, tmp_;
-  std::vector<int> diag_;
   Eigen::SparseMatrix<double> S_;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> solver_;
 };
