@@ -380,6 +380,7 @@ class Cvode final : public Integrator {
         break;
     }
     s_ = std::move(s);
+    carried_ = Counters{};
     t_ = t0;
     stop_time_ = std::numeric_limits<double>::quiet_NaN();
     max_order_used_ = last_order_ = 0;
@@ -399,13 +400,25 @@ class Cvode final : public Integrator {
     }
     s_->log.clear();  // a failure message names only this step's SUNDIALS messages
     const int flag = CVode(mem, t_stop, s_->y.get(), &t_, CV_ONE_STEP);
-    if (flag < 0) return {false, step_failure("CVode", flag, kName, t_, s_->log)};
+    if (flag < 0)  // CVODE has left y at its last accepted state, t_ at that time
+      return {false, step_failure("CVode", flag, kName, t_, s_->log),
+              flag == CV_ERR_FAILURE || flag == CV_CONV_FAILURE};
     int order = 0;
     const int got = CVodeGetLastOrder(mem, &order);
     if (got < 0) return {false, step_failure("CVodeGetLastOrder", got, kName, t_, s_->log)};
     last_order_ = order;
     max_order_used_ = std::max(max_order_used_, order);
     return {};
+  }
+
+  // CVodeReInit at (t_, y): order 1 and a fresh initial step, the linear solver and all options
+  // kept. ReInit zeroes CVODE's counters, so they are carried over first.
+  bool restart() override {
+    if (!s_) return false;
+    carried_ += counters();
+    if (CVodeReInit(s_->mem.get(), t_, s_->y.get()) < 0) return false;
+    stop_time_ = std::numeric_limits<double>::quiet_NaN();  // set again by the next step()
+    return true;
   }
 
   int last_order() const override { return last_order_; }
@@ -417,40 +430,67 @@ class Cvode final : public Integrator {
 
   void fill_stats(RunStats& st) const override {
     if (!s_) return;
-    void* mem = s_->mem.get();
-    long nfe = 0, nsetups = 0, netf = 0, nni = 0, nncf = 0;
-    check(CVodeGetNumSteps(mem, &st.steps), "CVodeGetNumSteps", kName);
-    check(CVodeGetNumRhsEvals(mem, &nfe), "CVodeGetNumRhsEvals", kName);
-    check(CVodeGetNumLinSolvSetups(mem, &nsetups), "CVodeGetNumLinSolvSetups", kName);
-    check(CVodeGetNumErrTestFails(mem, &netf), "CVodeGetNumErrTestFails", kName);
-    check(CVodeGetNonlinSolvStats(mem, &nni, &nncf), "CVodeGetNonlinSolvStats", kName);
-    long nfe_ls = 0, nje = 0, nli = 0;
-    if (s_->ls) {
-      check(CVodeGetNumLinRhsEvals(mem, &nfe_ls), "CVodeGetNumLinRhsEvals", kLsName);
-      check(CVodeGetNumLinIters(mem, &nli), "CVodeGetNumLinIters", kLsName);
-      if (method_ == CvodeMethod::BdfGmres) {
-        long njt = 0, npe = 0;
-        check(CVodeGetNumJTSetupEvals(mem, &njt), "CVodeGetNumJTSetupEvals", kLsName);
-        check(CVodeGetNumPrecEvals(mem, &npe), "CVodeGetNumPrecEvals", kLsName);
-        nje = njt + npe;
-      } else {
-        check(CVodeGetNumJacEvals(mem, &nje), "CVodeGetNumJacEvals", kLsName);
-      }
-    }
-    st.rhs_evals = nfe + nfe_ls;
-    st.jac_evals = nje;
-    st.lin_setups = nsetups;
-    st.lin_iters = nli;
-    st.nonlin_iters = nni;
-    st.nonlin_fails = nncf;
-    st.err_test_fails = netf;
-    add_newton_solver_counts(s_->ls.get(), st);
+    Counters c = counters();
+    c += carried_;
+    st.steps = c.steps;
+    st.rhs_evals = c.rhs_evals;
+    st.jac_evals = c.jac_evals;
+    st.lin_setups = c.lin_setups;
+    st.lin_iters = c.lin_iters;
+    st.nonlin_iters = c.nonlin_iters;
+    st.nonlin_fails = c.nonlin_fails;
+    st.err_test_fails = c.err_test_fails;
+    add_newton_solver_counts(s_->ls.get(), st);  // the solver's own counts survive a restart
     st.max_order_used = max_order_used_;
   }
 
  private:
   static constexpr FlagNameFn kName = CVodeGetReturnFlagName;
   static constexpr FlagNameFn kLsName = CVodeGetLinReturnFlagName;
+
+  // CVODE's counters (rhs_evals include the linear solver's difference-quotient RHS calls;
+  // gmres jac_evals = J v set-ups + preconditioner set-ups).
+  struct Counters {
+    long steps = 0, rhs_evals = 0, jac_evals = 0, lin_setups = 0, lin_iters = 0, nonlin_iters = 0,
+         nonlin_fails = 0, err_test_fails = 0;
+    Counters& operator+=(const Counters& o) {
+      steps += o.steps;
+      rhs_evals += o.rhs_evals;
+      jac_evals += o.jac_evals;
+      lin_setups += o.lin_setups;
+      lin_iters += o.lin_iters;
+      nonlin_iters += o.nonlin_iters;
+      nonlin_fails += o.nonlin_fails;
+      err_test_fails += o.err_test_fails;
+      return *this;
+    }
+  };
+
+  Counters counters() const {
+    void* mem = s_->mem.get();
+    Counters c;
+    long nfe_ls = 0;
+    check(CVodeGetNumSteps(mem, &c.steps), "CVodeGetNumSteps", kName);
+    check(CVodeGetNumRhsEvals(mem, &c.rhs_evals), "CVodeGetNumRhsEvals", kName);
+    check(CVodeGetNumLinSolvSetups(mem, &c.lin_setups), "CVodeGetNumLinSolvSetups", kName);
+    check(CVodeGetNumErrTestFails(mem, &c.err_test_fails), "CVodeGetNumErrTestFails", kName);
+    check(CVodeGetNonlinSolvStats(mem, &c.nonlin_iters, &c.nonlin_fails), "CVodeGetNonlinSolvStats",
+          kName);
+    if (s_->ls) {
+      check(CVodeGetNumLinRhsEvals(mem, &nfe_ls), "CVodeGetNumLinRhsEvals", kLsName);
+      check(CVodeGetNumLinIters(mem, &c.lin_iters), "CVodeGetNumLinIters", kLsName);
+      if (method_ == CvodeMethod::BdfGmres) {
+        long njt = 0, npe = 0;
+        check(CVodeGetNumJTSetupEvals(mem, &njt), "CVodeGetNumJTSetupEvals", kLsName);
+        check(CVodeGetNumPrecEvals(mem, &npe), "CVodeGetNumPrecEvals", kLsName);
+        c.jac_evals = njt + npe;
+      } else {
+        check(CVodeGetNumJacEvals(mem, &c.jac_evals), "CVodeGetNumJacEvals", kLsName);
+      }
+    }
+    c.rhs_evals += nfe_ls;
+    return c;
+  }
 
   // Everything SUNDIALS of one run, declared in creation order (destroyed in reverse).
   struct Session {
@@ -468,6 +508,7 @@ class Cvode final : public Integrator {
   CvodeMethod method_;
   IntegratorInfo info_;
   std::unique_ptr<Session> s_;
+  Counters carried_;  // counts of this run before its latest restart
   double t_ = 0.0;
   double stop_time_ = 0.0;
   int max_order_used_ = 0;

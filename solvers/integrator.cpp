@@ -76,6 +76,8 @@ void IntegratorOptions::validate() const {
     bad_option("check_every", static_cast<double>(check_every), "must be >= 0 (0 = automatic)");
   if (!(runaway_position > 0.0) || !std::isfinite(runaway_position))
     bad_option("runaway_position", runaway_position, "must be > 0 m and finite");
+  if (max_restarts < 0 || max_restarts > 1000)
+    bad_option("max_restarts", max_restarts, "must be in 0..1000 (0 = never restart)");
   if (krylov_dim < 0 || krylov_dim > 500)
     bad_option("krylov_dim", krylov_dim, "must be in 0..500 (0 = default)");
   if (!(krylov_eps_lin > 0.0 && krylov_eps_lin <= 1.0))
@@ -175,11 +177,13 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
   const bool cheap_steps = integ.info().explicit_method && !integ.info().adaptive;
   const long check_every = opt.check_every > 0 ? opt.check_every : (cheap_steps ? 1000 : 1);
   const double t_start_eq = sys.equilibrium_start_time();
+  long restarts = 0;
   auto finish = [&](RunStatus status, std::string message) {
     const double t = integ.time();
     std::copy_n(integ.positions(), n, x.begin());
     std::copy_n(integ.velocities(), n, v.begin());
     integ.fill_stats(stats);
+    stats.restarts = restarts;
     stats.status = status;
     stats.message = std::move(message);
     stats.t_final = t;
@@ -211,7 +215,13 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
     ++steps;
     if (!st.ok) {
       const bool diverged = !state_ok();
-      return finish(diverged ? RunStatus::Diverged : RunStatus::SolverFailure, st.message);
+      if (!diverged && st.recoverable && restarts < opt.max_restarts && integ.restart()) {
+        ++restarts;
+        continue;
+      }
+      std::string why = st.message;
+      if (restarts > 0) why += " (after " + std::to_string(restarts) + " restarts)";
+      return finish(diverged ? RunStatus::Diverged : RunStatus::SolverFailure, why);
     }
     const double t = integ.time();
     if (observer) observer->on_step(t, t - t_prev, integ.last_order());

@@ -55,6 +55,14 @@ struct IntegratorOptions {
   // methods (a check costs about one RHS), 1 (every step) for all others.
   long check_every = 0;
   double runaway_position = 1e3;  // |x_i| above this (m) counts as a blow-up
+  // Restarts per run after a recoverable step failure (Integrator::Step::recoverable: CVODE's
+  // repeated error-test or corrector failures): the method starts afresh from its last accepted
+  // state -- order 1, a new initial step, no step-size history -- instead of ending the run
+  // with solver_failure. 0 = never. Why: on two_corner, cvode-bdf-gmres at order 4, h ~ 130 s
+  // failed the error test seven times in a row (CVODE's limit) down to h ~ 2e-3 s at 4 of 6
+  // eps_lin values tried; the failing steps needed h ~ 1e-6 s, the time scale of the velocity
+  // relaxation m/c, and a restart gets there (README "Integrators").
+  int max_restarts = 10;
   // cvode-bdf-gmres: Krylov dimension (0 = SUNDIALS' default, 5) and CVODE's linear-solver
   // tolerance factor (CVodeSetEpsLin: GMRES stops at eps_lin x the Newton tolerance; SUNDIALS'
   // default 0.05). The static residual a GMRES run can reach is proportional to eps_lin:
@@ -126,6 +134,7 @@ struct RunStats {
   long nonlin_iters = 0;
   long nonlin_fails = 0;
   long err_test_fails = 0;
+  long restarts = 0;  // restarts after recoverable step failures (IntegratorOptions::max_restarts)
   int max_order_used = 0;
   double wall_seconds = 0.0;
   double cpu_seconds = 0.0;  // process CPU time during the run (robust on a loaded machine;
@@ -152,10 +161,16 @@ class Integrator {
 
   struct Step {
     bool ok = true;
-    std::string message;  // on failure: what went wrong
+    std::string message;       // on failure: what went wrong
+    bool recoverable = false;  // on failure: restart() from the last accepted state may cure it
   };
-  // Advance by one (internal) step, never beyond t_stop.
+  // Advance by one (internal) step, never beyond t_stop. On failure the state is the last
+  // accepted one.
   virtual Step step(double t_stop) = 0;
+
+  // Start the method afresh from its current state and time, forgetting its step-size and
+  // order history, keeping its counters; false if the method cannot (the default).
+  virtual bool restart() { return false; }
 
   // Method order of the step just taken: the controller's choice for variable-order methods
   // (cvode-bdf, cvode-adams), else info().order.

@@ -158,6 +158,7 @@ class StaticRelaxNewton final : public Integrator {
     return relax_->step(t_stop);
   }
 
+  bool restart() override { return relax_->restart(); }
   int last_order() const override { return relax_->last_order(); }  // polish attempts: unchanged
   double time() const override { return relax_->time(); }
   const double* positions() const override { return relax_->positions(); }

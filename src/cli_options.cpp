@@ -118,6 +118,7 @@ const std::vector<std::pair<std::string, std::string>>& run_option_names() {
       {"max_order", "--max-order"},
       {"max_steps", "--max-steps"},
       {"max_wall_seconds", "--max-wall"},
+      {"max_restarts", "--max-restarts"},
       {"krylov_dim", "--krylov-dim"},
       {"krylov_eps_lin", "--eps-lin"}};
   return names;

@@ -69,6 +69,7 @@ void run(const DrapeArgs& args) {
   scene.options.max_order = o.max_order;
   scene.options.max_steps = o.max_steps;
   scene.options.max_wall_seconds = o.max_wall_seconds;
+  scene.options.max_restarts = o.max_restarts;
   scene.options.newton_solver = o.newton_solver;
   scene.options.krylov_dim = o.krylov_dim;
   scene.options.krylov_eps_lin = o.krylov_eps_lin;
@@ -139,6 +140,10 @@ void register_drape_command(CLI::App& app) {
   cmd->add_option("--max-steps", args->options.max_steps, "Step cap")->capture_default_str();
   cmd->add_option("--max-wall", args->options.max_wall_seconds,
                   "Wall-clock cap, s (0 = none); the run then ends with status wall_limit")
+      ->capture_default_str();
+  cmd->add_option("--max-restarts", args->options.max_restarts,
+                  "Restarts from the last accepted state after CVODE's repeated error-test or "
+                  "corrector failures (0 = the run ends with solver_failure)")
       ->capture_default_str();
   add_newton_solver_option(cmd, args->options.newton_solver);
   add_gmres_options(cmd, args->options);

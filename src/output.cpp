@@ -270,6 +270,7 @@ nlohmann::json to_json(const IntegratorOptions& o) {
           {"max_wall_seconds", o.max_wall_seconds},
           {"check_every", o.check_every},
           {"runaway_position", o.runaway_position},
+          {"max_restarts", o.max_restarts},
           {"newton_solver", to_string(o.newton_solver)},
           {"krylov_dim", o.krylov_dim},
           {"krylov_eps_lin", o.krylov_eps_lin},
@@ -304,6 +305,7 @@ nlohmann::json to_json(const RunStats& s) {
           {"nonlin_iters", s.nonlin_iters},
           {"nonlin_fails", s.nonlin_fails},
           {"err_test_fails", s.err_test_fails},
+          {"restarts", s.restarts},
           {"max_order_used", s.max_order_used},
           {"wall_seconds", s.wall_seconds},
           {"cpu_seconds", s.cpu_seconds}};

@@ -39,6 +39,7 @@ TEST_CASE("bad input: exit 2, one stderr line naming the field, --out not create
       {"--gmres-preconditioner ilu", "--gmres-preconditioner: ilu not in {none,block-jacobi"},
       {"--eps-lin 0", "--eps-lin = 0: must be in (0, 1]"},
       {"--krylov-dim 501", "--krylov-dim = 501: must be in 0..500"},
+      {"--max-restarts -1", "--max-restarts = -1: must be in 0..1000"},
       {"--bogus", "--bogus"},
   };
   for (const Case& c : cases) {

@@ -6,6 +6,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <map>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -415,6 +416,96 @@ TEST_CASE("driver statuses: time, step and wall limits, divergence, bad options"
     CHECK_THROWS_WITH(
         make_integrator("no-such-method"),
         Catch::Contains("integrator = no-such-method") && Catch::Contains("implicit-euler"));
+  }
+}
+
+namespace {
+
+// implicit-euler with injected step failures: the calls listed in `fail_at` (1-based) fail
+// without stepping, `recoverable` as given; restart() succeeds unless `can_restart` is false.
+class FlakyIntegrator final : public Integrator {
+ public:
+  FlakyIntegrator(std::vector<long> fail_at, bool recoverable, bool can_restart = true)
+      : inner_(make_integrator("implicit-euler")),
+        fail_at_(std::move(fail_at)),
+        recoverable_(recoverable),
+        can_restart_(can_restart) {}
+  const IntegratorInfo& info() const override { return inner_->info(); }
+  void start(const MechanicalSystem& sys, double t0, const double* x0, const double* v0,
+             const IntegratorOptions& opt) override {
+    inner_->start(sys, t0, x0, v0, opt);
+  }
+  Step step(double t_stop) override {
+    ++calls_;
+    if (std::find(fail_at_.begin(), fail_at_.end(), calls_) != fail_at_.end())
+      return {false, "injected failure", recoverable_};
+    return inner_->step(t_stop);
+  }
+  bool restart() override {
+    ++restarts_;
+    return can_restart_;
+  }
+  double time() const override { return inner_->time(); }
+  const double* positions() const override { return inner_->positions(); }
+  const double* velocities() const override { return inner_->velocities(); }
+  void fill_stats(RunStats& st) const override { inner_->fill_stats(st); }
+  long restarts() const { return restarts_; }
+
+ private:
+  std::unique_ptr<Integrator> inner_;
+  std::vector<long> fail_at_;
+  bool recoverable_, can_restart_;
+  long calls_ = 0, restarts_ = 0;
+};
+
+}  // namespace
+
+TEST_CASE("driver restarts after recoverable step failures, up to max_restarts") {
+  const SpringNetwork net(build_chain(hanging(2)));
+  std::vector<double> x, v;
+  RunStats clean_stats;
+  const auto clean = equilibrium(net, "implicit-euler", IntegratorOptions{}, clean_stats);
+  REQUIRE(clean_stats.status == RunStatus::Equilibrium);
+
+  SECTION("recoverable failures within the cap: the run goes on to the same equilibrium") {
+    FlakyIntegrator flaky({2, 3, 5}, true);
+    const RunStats s = run_to_equilibrium(net, flaky, IntegratorOptions{}, x, v);
+    INFO(s.message);
+    CHECK(s.status == RunStatus::Equilibrium);
+    CHECK(s.restarts == 3);
+    CHECK(flaky.restarts() == 3);
+    CHECK(max_abs_difference(x, clean) == 0.0);
+  }
+  SECTION("more failures in a row than max_restarts: solver_failure, saying how many") {
+    IntegratorOptions opt;
+    opt.max_restarts = 2;
+    FlakyIntegrator flaky({2, 3, 4}, true);
+    const RunStats s = run_to_equilibrium(net, flaky, opt, x, v);
+    CHECK(s.status == RunStatus::SolverFailure);
+    CHECK(s.restarts == 2);
+    CHECK_THAT(s.message, Catch::Equals("injected failure (after 2 restarts)"));
+  }
+  SECTION("max_restarts 0, an unrecoverable failure or a method that cannot restart: no restart") {
+    IntegratorOptions off;
+    off.max_restarts = 0;
+    FlakyIntegrator a({2}, true), b({2}, false), c({2}, true, false);
+    for (auto [integ, opt] : {std::pair<FlakyIntegrator*, IntegratorOptions>{&a, off},
+                              {&b, IntegratorOptions{}},
+                              {&c, IntegratorOptions{}}}) {
+      x.clear();
+      const RunStats s = run_to_equilibrium(net, *integ, opt, x, v);
+      CHECK(s.status == RunStatus::SolverFailure);
+      CHECK(s.restarts == 0);
+      CHECK(s.message == "injected failure");
+    }
+    CHECK(a.restarts() == 0);
+    CHECK(b.restarts() == 0);
+    CHECK(c.restarts() == 1);  // asked, refused
+  }
+  SECTION("max_restarts out of range names the field") {
+    IntegratorOptions opt;
+    opt.max_restarts = -1;
+    CHECK_THROWS_WITH(opt.validate(), Catch::StartsWith("max_restarts = -1: must be in 0..1000"));
   }
 }
 

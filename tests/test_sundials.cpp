@@ -208,6 +208,68 @@ TEST_CASE(
   CHECK(iters[2] * 2 < iters[1]);
 }
 
+TEST_CASE("cvode-bdf restart: order 1 from the same state and time, counters carried over") {
+  const DrapeGrid grid = coarse_grid(DrapeParams{}.damping);
+  const MechanicalSystem& sys = grid.network;
+  const int n = sys.dof();
+  std::vector<double> x0(n), v0(n);
+  sys.initial_state(x0.data(), v0.data());
+  const IntegratorOptions opt;
+  auto integ = make_integrator("cvode-bdf");
+  integ->start(sys, 0.0, x0.data(), v0.data(), opt);
+  double h_before = 0.0;
+  for (int i = 0; i < 2000 && integ->time() < 10.0; ++i) {  // h grows to ~1 s by t = 10 s
+    const double t = integ->time();
+    REQUIRE(integ->step(opt.t_max).ok);
+    h_before = integ->time() - t;
+  }
+  REQUIRE(integ->last_order() > 1);
+  RunStats before, carried, after;
+  integ->fill_stats(before);
+  const double t = integ->time();
+  const std::vector<double> x(integ->positions(), integ->positions() + n);
+  REQUIRE(integ->restart());
+  integ->fill_stats(carried);
+  CHECK(integ->time() == t);
+  CHECK(max_abs_difference(std::vector<double>(integ->positions(), integ->positions() + n), x) ==
+        0.0);
+  CHECK(carried.steps == before.steps);
+  CHECK(carried.rhs_evals == before.rhs_evals);
+  CHECK(carried.lin_setups == before.lin_setups);
+  CHECK(carried.nonlin_iters == before.nonlin_iters);
+  REQUIRE(integ->step(opt.t_max).ok);
+  integ->fill_stats(after);
+  CHECK(integ->last_order() == 1);
+  CHECK(after.steps == before.steps + 1);
+  CHECK(after.rhs_evals > before.rhs_evals);
+  CHECK(integ->time() - t < 1e-3 * h_before);  // a fresh initial step, not the old history's
+}
+
+TEST_CASE("restarts carry cvode-bdf-gmres through two_corner's repeated error-test failures") {
+  // Measured (README "Integrators"): without restarts, schur-ldl GMRES fails CVODE's error
+  // test seven times in a row (order 4, h 130 s -> 2e-3 s) at eps_lin 5e-3, 5e-5 and 5e-6; a
+  // restart from the last accepted state settles each. If a change moves this knife edge so
+  // that none of the three needs a restart, pick failing values again with `knitsim drape
+  // --scene two_corner --integrator cvode-bdf-gmres --eps-lin E --max-restarts 0`.
+  DrapeParams p;
+  p.layout = PinLayout::TwoCorner;
+  const DrapeGrid grid = build_drape_grid(p);
+  const Drape ref = drape(grid.network, "cvode-bdf", IntegratorOptions{});
+  REQUIRE(ref.stats.status == RunStatus::Equilibrium);
+  long restarts = 0;
+  for (const double eps_lin : {5e-3, 5e-5, 5e-6}) {
+    IntegratorOptions opt;
+    opt.krylov_eps_lin = eps_lin;
+    const Drape d = drape(grid.network, "cvode-bdf-gmres", opt);
+    INFO("eps_lin " << eps_lin << ": " << d.stats.message << ", " << d.stats.restarts
+                    << " restarts");
+    CHECK(d.stats.status == RunStatus::Equilibrium);
+    CHECK(max_abs_difference(d.x, ref.x) <= kAgreement);
+    restarts += d.stats.restarts;
+  }
+  CHECK(restarts >= 1);
+}
+
 TEST_CASE("the block-Jacobi preconditioner cuts GMRES iterations") {
   const DrapeGrid grid = coarse_grid(DrapeParams{}.damping);
   IntegratorOptions opt;
