@@ -46,6 +46,11 @@
 // byte (tests/test_synthetic_targets.cpp) and the repro numbers, and the robust answer to the
 // plateau at rtol 1e-6 is `static` (40 of 40 settle, same CPU) or rtol 1e-8.
 //
+// Restarts (Integrator::restart, used by the driver up to IntegratorOptions::max_restarts):
+// CV_ERR_FAILURE and CV_CONV_FAILURE are reported as recoverable; restart() re-initialises
+// CVODE at the last accepted state (CVodeReInit: order 1, a new initial step from cvHin, the
+// linear solver and every option kept) and carries CVODE's counters, which ReInit zeroes.
+//
 // Preconditioners of cvode-bdf-gmres (IntegratorOptions::gmres_preconditioner), all of the
 // form P = [[I, -gamma I], [-gamma B, D]], D = I + gamma Gamma, with B the Jacobian block Ax
 // (or part of it) at the latest Jacobian refresh (psetup with jok false); P^-1 through the

@@ -60,8 +60,8 @@ struct IntegratorOptions {
   // state -- order 1, a new initial step, no step-size history -- instead of ending the run
   // with solver_failure. 0 = never. Why: on two_corner, cvode-bdf-gmres at order 4, h ~ 130 s
   // failed the error test seven times in a row (CVODE's limit) down to h ~ 2e-3 s at 4 of 6
-  // eps_lin values tried; the failing steps needed h ~ 1e-6 s, the time scale of the velocity
-  // relaxation m/c, and a restart gets there (README "Integrators").
+  // eps_lin values tried; those steps pass only below ~1e-6 s (a tenth of the velocity
+  // relaxation time m/c), and a restart gets there (README "Integrators", "Restarts").
   int max_restarts = 10;
   // cvode-bdf-gmres: Krylov dimension (0 = SUNDIALS' default, 5) and CVODE's linear-solver
   // tolerance factor (CVodeSetEpsLin: GMRES stops at eps_lin x the Newton tolerance; SUNDIALS'
