@@ -207,10 +207,24 @@ class Arkode final : public Integrator {
     s_->log.clear();  // a failure message names only this step's SUNDIALS messages
     const int flag = erk ? ERKStepEvolve(mem, t_stop, s_->y.get(), &t_, ARK_ONE_STEP)
                          : ARKStepEvolve(mem, t_stop, s_->y.get(), &t_, ARK_ONE_STEP);
-    if (flag < 0)
-      return {false,
-              step_failure(erk ? "ERKStepEvolve" : "ARKStepEvolve", flag, name, t_, s_->log)};
+    if (flag < 0)  // y and t_ are the last accepted state
+      return {false, step_failure(erk ? "ERKStepEvolve" : "ARKStepEvolve", flag, name, t_, s_->log),
+              flag == ARK_ERR_FAILURE || flag == ARK_CONV_FAILURE};
     return {};
+  }
+
+  // *StepReset at (t_, y) with the initial step re-estimated (SetInitStep 0; Reset alone keeps
+  // the last step size). Counters and options are kept.
+  bool restart() override {
+    if (!s_) return false;
+    const bool erk = method_ == ArkMethod::Erk;
+    void* mem = erk ? s_->erk.get() : s_->ark.get();
+    const int init = erk ? ERKStepSetInitStep(mem, 0.0) : ARKStepSetInitStep(mem, 0.0);
+    if (init < 0) return false;
+    const int reset = erk ? ERKStepReset(mem, t_, s_->y.get()) : ARKStepReset(mem, t_, s_->y.get());
+    if (reset < 0) return false;
+    stop_time_ = std::numeric_limits<double>::quiet_NaN();  // set again by the next step()
+    return true;
   }
 
   double time() const override { return t_; }

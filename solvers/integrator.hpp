@@ -56,11 +56,11 @@ struct IntegratorOptions {
   long check_every = 0;
   double runaway_position = 1e3;  // |x_i| above this (m) counts as a blow-up
   // Restarts per run after a recoverable step failure (Integrator::Step::recoverable: CVODE's
-  // repeated error-test or corrector failures): the method starts afresh from its last accepted
-  // state -- order 1, a new initial step, no step-size history -- instead of ending the run
-  // with solver_failure. 0 = never. Why: on two_corner, cvode-bdf-gmres at order 4, h ~ 130 s
-  // failed the error test seven times in a row (CVODE's limit) down to h ~ 2e-3 s at 4 of 6
-  // eps_lin values tried; those steps pass only below ~1e-6 s (a tenth of the velocity
+  // or ARKODE's repeated error-test or corrector failures): the method starts afresh from its
+  // last accepted state -- a new initial step, no step-size history (CVODE: order 1) -- instead
+  // of ending the run with solver_failure. 0 = never. Why: on two_corner, cvode-bdf-gmres at order
+  // 4, h ~ 130 s failed the error test seven times in a row (CVODE's limit) down to h ~ 2e-3 s at 4
+  // of 6 eps_lin values tried; those steps pass only below ~1e-6 s (a tenth of the velocity
   // relaxation time m/c), and a restart gets there (README "Integrators", "Restarts").
   int max_restarts = 10;
   // cvode-bdf-gmres: Krylov dimension (0 = SUNDIALS' default, 5) and CVODE's linear-solver

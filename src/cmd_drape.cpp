@@ -142,8 +142,8 @@ void register_drape_command(CLI::App& app) {
                   "Wall-clock cap, s (0 = none); the run then ends with status wall_limit")
       ->capture_default_str();
   cmd->add_option("--max-restarts", args->options.max_restarts,
-                  "Restarts from the last accepted state after CVODE's repeated error-test or "
-                  "corrector failures (0 = the run ends with solver_failure)")
+                  "Restarts from the last accepted state after CVODE's or ARKODE's repeated "
+                  "error-test or corrector failures (0 = the run ends with solver_failure)")
       ->capture_default_str();
   add_newton_solver_option(cmd, args->options.newton_solver);
   add_gmres_options(cmd, args->options);
