@@ -385,7 +385,7 @@ class Cvode final : public Integrator {
         break;
     }
     s_ = std::move(s);
-    carried_ = Counters{};
+    carried_ = RunStats{};
     t_ = t0;
     stop_time_ = std::numeric_limits<double>::quiet_NaN();
     max_order_used_ = last_order_ = 0;
@@ -420,7 +420,9 @@ class Cvode final : public Integrator {
   // kept. ReInit zeroes CVODE's counters, so they are carried over first.
   bool restart() override {
     if (!s_) return false;
-    carried_ += counters();
+    RunStats now;
+    cvode_counters(now);
+    add_counters(carried_, now);
     if (CVodeReInit(s_->mem.get(), t_, s_->y.get()) < 0) return false;
     stop_time_ = std::numeric_limits<double>::quiet_NaN();  // set again by the next step()
     return true;
@@ -435,16 +437,8 @@ class Cvode final : public Integrator {
 
   void fill_stats(RunStats& st) const override {
     if (!s_) return;
-    Counters c = counters();
-    c += carried_;
-    st.steps = c.steps;
-    st.rhs_evals = c.rhs_evals;
-    st.jac_evals = c.jac_evals;
-    st.lin_setups = c.lin_setups;
-    st.lin_iters = c.lin_iters;
-    st.nonlin_iters = c.nonlin_iters;
-    st.nonlin_fails = c.nonlin_fails;
-    st.err_test_fails = c.err_test_fails;
+    cvode_counters(st);
+    add_counters(st, carried_);
     add_newton_solver_counts(s_->ls.get(), st);  // the solver's own counts survive a restart
     st.max_order_used = max_order_used_;
   }
@@ -453,48 +447,31 @@ class Cvode final : public Integrator {
   static constexpr FlagNameFn kName = CVodeGetReturnFlagName;
   static constexpr FlagNameFn kLsName = CVodeGetLinReturnFlagName;
 
-  // CVODE's counters (rhs_evals include the linear solver's difference-quotient RHS calls;
-  // gmres jac_evals = J v set-ups + preconditioner set-ups).
-  struct Counters {
-    long steps = 0, rhs_evals = 0, jac_evals = 0, lin_setups = 0, lin_iters = 0, nonlin_iters = 0,
-         nonlin_fails = 0, err_test_fails = 0;
-    Counters& operator+=(const Counters& o) {
-      steps += o.steps;
-      rhs_evals += o.rhs_evals;
-      jac_evals += o.jac_evals;
-      lin_setups += o.lin_setups;
-      lin_iters += o.lin_iters;
-      nonlin_iters += o.nonlin_iters;
-      nonlin_fails += o.nonlin_fails;
-      err_test_fails += o.err_test_fails;
-      return *this;
-    }
-  };
-
-  Counters counters() const {
+  // CVODE's counters since the last (Re)Init into st (rhs_evals include the linear solver's
+  // difference-quotient RHS calls; gmres jac_evals = J v set-ups + preconditioner set-ups).
+  void cvode_counters(RunStats& st) const {
     void* mem = s_->mem.get();
-    Counters c;
-    long nfe_ls = 0;
-    check(CVodeGetNumSteps(mem, &c.steps), "CVodeGetNumSteps", kName);
-    check(CVodeGetNumRhsEvals(mem, &c.rhs_evals), "CVodeGetNumRhsEvals", kName);
-    check(CVodeGetNumLinSolvSetups(mem, &c.lin_setups), "CVodeGetNumLinSolvSetups", kName);
-    check(CVodeGetNumErrTestFails(mem, &c.err_test_fails), "CVodeGetNumErrTestFails", kName);
-    check(CVodeGetNonlinSolvStats(mem, &c.nonlin_iters, &c.nonlin_fails), "CVodeGetNonlinSolvStats",
-          kName);
+    long nfe = 0, nfe_ls = 0;
+    check(CVodeGetNumSteps(mem, &st.steps), "CVodeGetNumSteps", kName);
+    check(CVodeGetNumRhsEvals(mem, &nfe), "CVodeGetNumRhsEvals", kName);
+    check(CVodeGetNumLinSolvSetups(mem, &st.lin_setups), "CVodeGetNumLinSolvSetups", kName);
+    check(CVodeGetNumErrTestFails(mem, &st.err_test_fails), "CVodeGetNumErrTestFails", kName);
+    check(CVodeGetNonlinSolvStats(mem, &st.nonlin_iters, &st.nonlin_fails),
+          "CVodeGetNonlinSolvStats", kName);
+    st.jac_evals = st.lin_iters = 0;
     if (s_->ls) {
       check(CVodeGetNumLinRhsEvals(mem, &nfe_ls), "CVodeGetNumLinRhsEvals", kLsName);
-      check(CVodeGetNumLinIters(mem, &c.lin_iters), "CVodeGetNumLinIters", kLsName);
+      check(CVodeGetNumLinIters(mem, &st.lin_iters), "CVodeGetNumLinIters", kLsName);
       if (method_ == CvodeMethod::BdfGmres) {
         long njt = 0, npe = 0;
         check(CVodeGetNumJTSetupEvals(mem, &njt), "CVodeGetNumJTSetupEvals", kLsName);
         check(CVodeGetNumPrecEvals(mem, &npe), "CVodeGetNumPrecEvals", kLsName);
-        c.jac_evals = njt + npe;
+        st.jac_evals = njt + npe;
       } else {
-        check(CVodeGetNumJacEvals(mem, &c.jac_evals), "CVodeGetNumJacEvals", kLsName);
+        check(CVodeGetNumJacEvals(mem, &st.jac_evals), "CVodeGetNumJacEvals", kLsName);
       }
     }
-    c.rhs_evals += nfe_ls;
-    return c;
+    st.rhs_evals = nfe + nfe_ls;
   }
 
   // Everything SUNDIALS of one run, declared in creation order (destroyed in reverse).
@@ -513,7 +490,7 @@ class Cvode final : public Integrator {
   CvodeMethod method_;
   IntegratorInfo info_;
   std::unique_ptr<Session> s_;
-  Counters carried_;  // counts of this run before its latest restart
+  RunStats carried_;  // CVODE's counts of this run before its latest restart
   double t_ = 0.0;
   double stop_time_ = 0.0;
   int max_order_used_ = 0;

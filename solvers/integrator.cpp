@@ -128,6 +128,19 @@ const char* to_string(RunStatus s) {
   return "unknown";
 }
 
+void add_counters(RunStats& total, const RunStats& part) {
+  total.steps += part.steps;
+  total.rhs_evals += part.rhs_evals;
+  total.jac_evals += part.jac_evals;
+  total.lin_setups += part.lin_setups;
+  total.factorisations += part.factorisations;
+  total.lin_iters += part.lin_iters;
+  total.nonlin_iters += part.nonlin_iters;
+  total.nonlin_fails += part.nonlin_fails;
+  total.err_test_fails += part.err_test_fails;
+  total.max_order_used = std::max(total.max_order_used, part.max_order_used);
+}
+
 const std::vector<IntegratorInfo>& integrator_catalog() {
   static const std::vector<IntegratorInfo> infos = [] {
     std::vector<IntegratorInfo> v;

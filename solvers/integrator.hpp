@@ -141,6 +141,10 @@ struct RunStats {
                              // counts all threads of the process)
 };
 
+// Adds part's work counters (steps ... err_test_fails, factorisations) to total's and takes the
+// larger max_order_used: the counts of a run made of several integrator sessions.
+void add_counters(RunStats& total, const RunStats& part);
+
 struct IntegratorInfo {
   std::string name;
   std::string description;

@@ -166,16 +166,14 @@ class StaticRelaxNewton final : public Integrator {
 
   void fill_stats(RunStats& st) const override {
     relax_->fill_stats(st);
-    st.steps += finished_.steps + attempts_;
-    st.rhs_evals += finished_.rhs_evals + newton_fevals_;
-    st.jac_evals += finished_.jac_evals + newton_jevals_;
-    st.lin_setups += finished_.lin_setups + newton_jevals_;
-    st.factorisations += finished_.factorisations + newton_jevals_;
-    st.lin_iters += finished_.lin_iters;
-    st.nonlin_iters += finished_.nonlin_iters + newton_iters_;
-    st.nonlin_fails += finished_.nonlin_fails + rejected_;
-    st.err_test_fails += finished_.err_test_fails;
-    st.max_order_used = std::max(st.max_order_used, finished_.max_order_used);
+    add_counters(st, finished_);
+    st.steps += attempts_;
+    st.rhs_evals += newton_fevals_;
+    st.jac_evals += newton_jevals_;
+    st.lin_setups += newton_jevals_;
+    st.factorisations += newton_jevals_;
+    st.nonlin_iters += newton_iters_;
+    st.nonlin_fails += rejected_;
   }
 
  private:
@@ -225,23 +223,10 @@ class StaticRelaxNewton final : public Integrator {
     // The state becomes (x*, 0) at t: restart the relaxation integrator there.
     RunStats done;
     relax_->fill_stats(done);
-    accumulate(done);
+    add_counters(finished_, done);
     relax_->start(*sys_, t, x, zeros_.data(), opt_);
     polished_ = true;
     return {};
-  }
-
-  void accumulate(const RunStats& s) {
-    finished_.steps += s.steps;
-    finished_.rhs_evals += s.rhs_evals;
-    finished_.jac_evals += s.jac_evals;
-    finished_.lin_setups += s.lin_setups;
-    finished_.factorisations += s.factorisations;
-    finished_.lin_iters += s.lin_iters;
-    finished_.nonlin_iters += s.nonlin_iters;
-    finished_.nonlin_fails += s.nonlin_fails;
-    finished_.err_test_fails += s.err_test_fails;
-    finished_.max_order_used = std::max(finished_.max_order_used, s.max_order_used);
   }
 
   static constexpr FlagNameFn kName = KINGetReturnFlagName;
