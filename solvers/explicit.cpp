@@ -41,6 +41,7 @@ class FixedStepExplicit : public Integrator {
     v_.assign(v0, v0 + n_);
     a_.assign(n_, 0.0);
     dt_predicted_ = predict_stable_dt(info_.name, sys, t0, x0);
+    dt_estimated_ = estimate_stable_dt(info_.name, sys, t0, x0);
     dt_ = opt.dt > 0.0 ? opt.dt : opt.dt_safety * dt_predicted_;
     if (!(dt_ > 0.0) || !std::isfinite(dt_)) {
       std::ostringstream os;
@@ -60,6 +61,7 @@ class FixedStepExplicit : public Integrator {
     s.rhs_evals = rhs_;
     s.dt = dt_;
     s.dt_predicted = dt_predicted_;
+    s.dt_estimated = dt_estimated_;
     s.max_order_used = info_.order;
   }
 
@@ -76,7 +78,7 @@ class FixedStepExplicit : public Integrator {
   IntegratorInfo info_;
   const MechanicalSystem* sys_ = nullptr;
   int n_ = 0;
-  double t_ = 0.0, dt_ = 0.0, dt_predicted_ = 0.0, runaway_ = 1e3;
+  double t_ = 0.0, dt_ = 0.0, dt_predicted_ = 0.0, dt_estimated_ = 0.0, runaway_ = 1e3;
   long steps_ = 0, rhs_ = 0;
   std::vector<double> x_, v_, a_;
 };

@@ -1,5 +1,6 @@
 #include "solvers/integrator.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -306,26 +307,105 @@ double verlet_limit(double w2, double g) {
   return lo;
 }
 
+// Largest eigenvalue of D^-1/2 S D^-1/2, S = -(K + K^T)/2, K = M Ax (Ax in the pattern `p`),
+// D = diag(d) > 0: `steps` Lanczos steps with full reorthogonalisation from a fixed start; returns
+// the top Ritz value plus its residual norm |beta_k s_k|, or +inf if d has a non-positive entry.
+double lanczos_largest(const CscPattern& p, const std::vector<double>& ax,
+                       const std::vector<double>& m, const std::vector<double>& d, int steps) {
+  const int n = p.cols;
+  std::vector<double> scale(n);
+  for (int i = 0; i < n; ++i) {
+    if (!(d[i] > 0.0)) return std::numeric_limits<double>::infinity();
+    scale[i] = 1.0 / std::sqrt(d[i]);
+  }
+  auto apply = [&](const double* in, double* out) {
+    std::fill_n(out, n, 0.0);
+    for (int j = 0; j < n; ++j)
+      for (int k = p.colptr[j]; k < p.colptr[j + 1]; ++k) {
+        const int i = p.rowind[k];
+        const double kij = -0.5 * m[i] * ax[k] * scale[i] * scale[j];
+        out[i] += kij * in[j];
+        out[j] += kij * in[i];
+      }
+  };
+  const int k_max = std::max(1, std::min(steps, n));
+  std::vector<std::vector<double>> q;
+  std::vector<double> alpha, beta, w(n), v(n);
+  for (int i = 0; i < n; ++i) v[i] = 1.0 + 0.5 * std::sin(1.0 + 7.0 * i);  // fixed, generic start
+  double norm = 0.0;
+  for (double vi : v) norm += vi * vi;
+  for (double& vi : v) vi /= std::sqrt(norm);
+  for (int k = 0; k < k_max; ++k) {
+    q.push_back(v);
+    apply(v.data(), w.data());
+    double a = 0.0;
+    for (int i = 0; i < n; ++i) a += w[i] * v[i];
+    alpha.push_back(a);
+    for (const auto& qj : q) {  // full reorthogonalisation (k_max is small)
+      double c = 0.0;
+      for (int i = 0; i < n; ++i) c += w[i] * qj[i];
+      for (int i = 0; i < n; ++i) w[i] -= c * qj[i];
+    }
+    double b = 0.0;
+    for (double wi : w) b += wi * wi;
+    b = std::sqrt(b);
+    beta.push_back(b);
+    if (!(b > 1e-12 * std::abs(a))) break;  // invariant subspace: the Ritz values are exact
+    for (int i = 0; i < n; ++i) v[i] = w[i] / b;
+  }
+  const int k = static_cast<int>(alpha.size());
+  Eigen::MatrixXd T = Eigen::MatrixXd::Zero(k, k);
+  for (int i = 0; i < k; ++i) {
+    T(i, i) = alpha[i];
+    if (i + 1 < k) T(i, i + 1) = T(i + 1, i) = beta[i];
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(T);
+  return eig.eigenvalues()(k - 1) + std::abs(beta[k - 1] * eig.eigenvectors()(k - 1, k - 1));
+}
+
+constexpr int kLanczosSteps = 40;
+
+// predict_stable_dt (sharp = false) and estimate_stable_dt (sharp = true).
+double stable_dt(const std::string& method, const MechanicalSystem& sys, double t, const double* x,
+                 bool sharp) {
+  if (method != "euler" && method != "verlet")
+    throw std::invalid_argument(std::string(sharp ? "estimate" : "predict") +
+                                "_stable_dt: method = " + method + ": must be euler or verlet");
+  const CscPattern& p = sys.stiffness_pattern();
+  std::vector<double> values(p.nnz());
+  sys.stiffness_values(t, x, values.data());
+  const int n = sys.dof();
+  std::vector<double> w2(n, 0.0);  // Gershgorin: omega_i^2 <= sum_j |Ax_ij|
+  for (int k = 0; k < p.nnz(); ++k) w2[p.rowind[k]] += std::abs(values[k]);
+  const auto& gamma = sys.damping_rate();
+  if (sharp) {
+    const auto& m = sys.mass();
+    std::vector<double> c(n);
+    for (int i = 0; i < n; ++i) c[i] = gamma[i] * m[i];
+    const double omega2_max = lanczos_largest(p, values, m, m, kLanczosSteps);
+    const double rate_max = lanczos_largest(p, values, m, c, kLanczosSteps);
+    for (int i = 0; i < n; ++i) {
+      w2[i] = std::min(w2[i], omega2_max);
+      if (std::isfinite(rate_max)) w2[i] = std::min(w2[i], gamma[i] * rate_max);  // all c_i > 0
+    }
+  }
+  double best = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < n; ++i)
+    best = std::min(
+        best, method == "euler" ? euler_limit(w2[i], gamma[i]) : verlet_limit(w2[i], gamma[i]));
+  return best;
+}
+
 }  // namespace
 
 double predict_stable_dt(const std::string& method, const MechanicalSystem& sys, double t,
                          const double* x) {
-  if (method != "euler" && method != "verlet")
-    throw std::invalid_argument("predict_stable_dt: method = " + method +
-                                ": must be euler or verlet");
-  const CscPattern& p = sys.stiffness_pattern();
-  std::vector<double> values(p.nnz());
-  sys.stiffness_values(t, x, values.data());
-  std::vector<double> row_sum(sys.dof(), 0.0);
-  for (int k = 0; k < p.nnz(); ++k) row_sum[p.rowind[k]] += std::abs(values[k]);
-  const auto& gamma = sys.damping_rate();
-  double best = std::numeric_limits<double>::infinity();
-  for (int i = 0; i < sys.dof(); ++i) {
-    const double h =
-        method == "euler" ? euler_limit(row_sum[i], gamma[i]) : verlet_limit(row_sum[i], gamma[i]);
-    best = std::min(best, h);
-  }
-  return best;
+  return stable_dt(method, sys, t, x, false);
+}
+
+double estimate_stable_dt(const std::string& method, const MechanicalSystem& sys, double t,
+                          const double* x) {
+  return stable_dt(method, sys, t, x, true);
 }
 
 }  // namespace knitsim

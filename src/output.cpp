@@ -296,6 +296,7 @@ nlohmann::json to_json(const RunStats& s) {
           {"residual_floor", s.residual_floor},
           {"dt", s.dt},
           {"dt_predicted", s.dt_predicted},
+          {"dt_estimated", s.dt_estimated},
           {"steps", s.steps},
           {"rhs_evals", s.rhs_evals},
           {"jac_evals", s.jac_evals},

@@ -2,7 +2,8 @@
 """Plots of experiments/stability from its CSV files only:
   map.png     per method (euler, verlet): the dt x stiffness map (colour = log10 max position
               error vs cvode-bdf at t_end, x = unstable) with the limit lines of limits.csv
-              (predicted = Gershgorin, exact = linear analysis, measured = bisection);
+              (predicted = Gershgorin, estimated = Lanczos-capped, exact = linear analysis,
+              measured = bisection);
   limits.png  measured / predicted and measured / exact for every case and method.
 Usage: plot.py OUT (reads OUT/limits.csv, OUT/map.csv; writes the PNGs into OUT)."""
 import csv
@@ -32,7 +33,8 @@ for ax, method in zip(axes, ("euler", "verlet")):
     line = sorted((r for r in limits if r["method"] == method and r["group"] in ("base", "stiffness")),
                   key=lambda r: f(r, "stiffness"))
     k = [f(r, "stiffness") for r in line]
-    for key, style in (("predicted", "k--"), ("exact", "k-"), ("measured", "wo")):
+    for key, style in (("predicted", "k--"), ("estimated", "k:"), ("exact", "k-"),
+                       ("measured", "wo")):
         ax.plot(k, [f(r, key) for r in line], style, mec="k", label=key + " limit")
     ax.set_xscale("log"); ax.set_yscale("log")
     ax.set_xlabel("stiffness k (N/m)")
@@ -50,6 +52,7 @@ labels = []
 for i, r in enumerate(limits):
     labels.append("%s %s" % (r["case"], r["method"]))
     for key, mk, col in (("measured_over_predicted", "v", "tab:orange"),
+                         ("measured_over_estimated", "^", "tab:green"),
                          ("measured_over_exact", "o", "tab:blue")):
         v = f(r, key)
         if math.isfinite(v):
@@ -60,7 +63,8 @@ ax.set_xticks(range(len(labels)))
 ax.set_xticklabels(labels, rotation=90, fontsize=5)
 ax.set_ylabel("measured / linear-analysis limit")
 ax.legend(fontsize=8)
-ax.set_title("Stability limits: measured vs predict_stable_dt (Gershgorin) and exact linear analysis",
+ax.set_title("Stability limits: measured vs predict_stable_dt (Gershgorin), estimate_stable_dt "
+             "(Lanczos-capped) and exact linear analysis",
              fontsize=9)
 fig.tight_layout()
 fig.savefig(os.path.join(out, "limits.png"), dpi=110)
