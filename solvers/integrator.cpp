@@ -313,6 +313,7 @@ double verlet_limit(double w2, double g) {
 double lanczos_largest(const CscPattern& p, const std::vector<double>& ax,
                        const std::vector<double>& m, const std::vector<double>& d, int steps) {
   const int n = p.cols;
+  if (n == 0) return 0.0;  // no mode at all
   std::vector<double> scale(n);
   for (int i = 0; i < n; ++i) {
     if (!(d[i] > 0.0)) return std::numeric_limits<double>::infinity();
