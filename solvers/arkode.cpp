@@ -178,7 +178,7 @@ class Arkode final : public Integrator {
       s->newton = std::make_unique<NewtonMatrix>(*s->fo, MatrixKind::SparseCsc, ctx);
       s->problem->newton = s->newton.get();
       SUNMatrix A = s->newton->get();
-      s->ls = make_newton_solver(opt.newton_solver, *s->fo, y, A, ctx);
+      s->ls = make_newton_solver(opt, *s->fo, y, A, ctx);
       check(ARKStepSetLinearSolver(mem, s->ls.get(), A), "ARKStepSetLinearSolver", kArkLs, log);
       check(ARKStepSetLinSysFn(mem, arkode_linsys), "ARKStepSetLinSysFn", kArkLs, log);
       // Only valid once the linear solver is attached (ARKLS memory exists).

@@ -74,7 +74,6 @@
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
 #include <Eigen/IterativeLinearSolvers>
-#include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
@@ -84,6 +83,7 @@
 #include "solvers/factories.hpp"
 #include "solvers/schur_matrix.hpp"
 #include "solvers/sundials_common.hpp"
+#include "solvers/symmetric_factor.hpp"
 
 namespace knitsim::detail {
 
@@ -115,8 +115,9 @@ int cvode_linsys(double t, N_Vector y, N_Vector /*fy*/, SUNMatrix /*A*/, sunbool
 using GmresPreconditioner = IntegratorOptions::GmresPreconditioner;
 
 struct KrylovProblem final : OdeProblem {
-  KrylovProblem(const FirstOrderSystem& system, GmresPreconditioner which)
-      : OdeProblem(system), preconditioner(which) {
+  KrylovProblem(const FirstOrderSystem& system, GmresPreconditioner which,
+                IntegratorOptions::Factorization factorization)
+      : OdeProblem(system), preconditioner(which), ldl(factorization) {
     const MechanicalSystem& sys = system.mechanical();
     const CscPattern& p = sys.stiffness_pattern();
     const int n = sys.dof();
@@ -134,6 +135,7 @@ struct KrylovProblem final : OdeProblem {
       schur = schur_matrix(sys);
       ax_rx.assign(n, 0.0);
       rhs = Eigen::VectorXd::Zero(n);
+      z_v = Eigen::VectorXd::Zero(n);
     }
   }
   GmresPreconditioner preconditioner;
@@ -146,7 +148,7 @@ struct KrylovProblem final : OdeProblem {
   // SchurIc, SchurLdl
   Eigen::SparseMatrix<double> schur;  // S = M (I + gamma Gamma) - gamma^2 K at the latest psetup
   Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>> ic;
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> ldlt;
+  SymmetricFactor ldl;
   bool analysed = false;
   std::vector<double> ax_rx;
   Eigen::VectorXd rhs, z_v;
@@ -228,10 +230,9 @@ int schur_setup(KrylovProblem& k, double gamma) {
     k.ic.factorize(k.schur);
     return k.ic.info() == Eigen::Success ? 0 : 1;
   }
-  if (!k.analysed) k.ldlt.analyzePattern(k.schur);
+  if (!k.analysed) k.ldl.analyze(k.schur);
   k.analysed = true;
-  k.ldlt.factorize(k.schur);
-  return k.ldlt.info() == Eigen::Success ? 0 : 1;
+  return k.ldl.factorize(k.schur) ? 0 : 1;
 }
 
 int cvode_psetup(double t, N_Vector y, N_Vector /*fy*/, sunbooleantype jok, sunbooleantype* jcur,
@@ -280,7 +281,7 @@ int cvode_psolve(double /*t*/, N_Vector /*y*/, N_Vector /*fy*/, N_Vector r, N_Ve
       if (k.preconditioner == GmresPreconditioner::SchurIc)
         k.z_v = k.ic.solve(k.rhs);
       else
-        k.z_v = k.ldlt.solve(k.rhs);
+        k.ldl.solve(k.rhs, k.z_v);
       std::copy_n(k.z_v.data(), n, zv);
     }
     for (int i = 0; i < n; ++i) zx[i] = rx[i] + gamma * zv[i];
@@ -326,7 +327,8 @@ class Cvode final : public Integrator {
     SUNContext ctx = s->ctx.get();
     s->fo = std::make_unique<FirstOrderSystem>(sys);
     if (method_ == CvodeMethod::BdfGmres)
-      s->problem = std::make_unique<KrylovProblem>(*s->fo, opt.gmres_preconditioner);
+      s->problem =
+          std::make_unique<KrylovProblem>(*s->fo, opt.gmres_preconditioner, opt.factorization);
     else
       s->problem = std::make_unique<OdeProblem>(*s->fo);
     s->y = make_state(x0, v0, n, ctx);
@@ -358,7 +360,7 @@ class Cvode final : public Integrator {
         s->problem->newton = s->newton.get();
         SUNMatrix A = s->newton->get();
         s->ls = sparse
-                    ? make_newton_solver(opt.newton_solver, *s->fo, y, A, ctx)
+                    ? make_newton_solver(opt, *s->fo, y, A, ctx)
                     : LinearSolverPtr(check_created(SUNLinSol_Dense(y, A, ctx), "SUNLinSol_Dense"));
         check(CVodeSetLinearSolver(mem, s->ls.get(), A), "CVodeSetLinearSolver", kLsName, log);
         check(CVodeSetLinSysFn(mem, cvode_linsys), "CVodeSetLinSysFn", kLsName, log);
@@ -440,6 +442,13 @@ class Cvode final : public Integrator {
     cvode_counters(st);
     add_counters(st, carried_);
     add_newton_solver_counts(s_->ls.get(), st);  // the solver's own counts survive a restart
+    if (method_ == CvodeMethod::BdfGmres) {
+      const auto& k = static_cast<const KrylovProblem&>(*s_->problem);
+      if (k.preconditioner == GmresPreconditioner::SchurLdl) {
+        st.factorization = to_string(k.ldl.backend());
+        st.ldl_fallbacks = k.ldl.ldl_fallbacks();
+      }
+    }
     st.max_order_used = max_order_used_;
   }
 

@@ -4,20 +4,22 @@
 //     dv = h [ a_c(x_k) + h Ax (v_k + dv) - Gamma (v_k + dv) ]
 //   Multiplying by M (M Ax = K = dF/dx is symmetric) gives a symmetric 3n x 3n system
 //     (M + h C - h^2 K) dv = h M (a_c - Gamma v_k + h Ax v_k),   C = M Gamma,
-//   solved by a sparse LDL^T (Eigen SimplicialLDLT: K is indefinite when springs are
-//   compressed, so no LL^T). The pattern is the model's stiffness pattern, analysed once;
+//   solved by a SymmetricFactor (symmetric_factor.hpp: LDL^T, since K is indefinite when
+//   springs are compressed; supernodal LL^T where S allows it on large grids). The pattern is
+//   the model's stiffness pattern, analysed once;
 //   values are refilled and refactored every step. Then v_{k+1} = v_k + dv,
 //   x_{k+1} = x_k + h v_{k+1}. Forces and Jacobian are taken at t_{k+1} (moving pins).
 //   First order, L-stable; its fixed point is the exact equilibrium, so large steps are
 //   allowed when only the equilibrium is wanted. Default h = 1 s.
-#include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <cmath>
+#include <memory>
 #include <sstream>
 #include <vector>
 
 #include "solvers/factories.hpp"
 #include "solvers/schur_matrix.hpp"
+#include "solvers/symmetric_factor.hpp"
 
 namespace knitsim::detail {
 
@@ -44,7 +46,8 @@ class ImplicitEuler final : public Integrator {
     const CscPattern& p = sys.stiffness_pattern();
     ax_.resize(p.nnz());
     S_ = schur_matrix(sys);  // the stiffness pattern, built once; values per step
-    solver_.analyzePattern(S_);
+    factor_ = std::make_unique<SymmetricFactor>(opt.factorization);
+    factor_->analyze(S_);
   }
 
   Step step(double t_stop) override {
@@ -61,15 +64,15 @@ class ImplicitEuler final : public Integrator {
     // right side: h M (a_c - Gamma v + h Ax v)
     csc_multiply(p, ax_.data(), v_.data(), tmp_.data());
     for (int i = 0; i < n_; ++i) rhs_vec_[i] = h * m[i] * (a_[i] - gamma[i] * v_[i] + h * tmp_[i]);
-    solver_.factorize(S_);
     ++setups_;
-    if (solver_.info() != Eigen::Success) {
+    if (!factor_->factorize(S_)) {
       std::ostringstream os;
-      os << "implicit-euler: LDL^T factorisation failed at t = " << t_ << " s (h = " << h << ")";
+      os << "implicit-euler: factorisation of the reduced matrix failed at t = " << t_
+         << " s (h = " << h << ")";
       return {false, os.str()};
     }
     Eigen::Map<const Eigen::VectorXd> b(rhs_vec_.data(), n_);
-    Eigen::Map<Eigen::VectorXd>(dv_.data(), n_) = solver_.solve(b);
+    factor_->solve(b, Eigen::Map<Eigen::VectorXd>(dv_.data(), n_));
     for (int i = 0; i < n_; ++i) {
       v_[i] += dv_[i];
       x_[i] += h * v_[i];
@@ -88,6 +91,10 @@ class ImplicitEuler final : public Integrator {
     s.jac_evals = jac_;
     s.lin_setups = setups_;
     s.factorisations = setups_;
+    if (factor_) {
+      s.factorization = to_string(factor_->backend());
+      s.ldl_fallbacks = factor_->ldl_fallbacks();
+    }
     s.dt = dt_;
     s.max_order_used = 1;
   }
@@ -103,7 +110,7 @@ class ImplicitEuler final : public Integrator {
   long steps_ = 0, rhs_ = 0, jac_ = 0, setups_ = 0;
   std::vector<double> x_, v_, a_, ax_, rhs_vec_, dv_, tmp_;
   Eigen::SparseMatrix<double> S_;
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> solver_;
+  std::unique_ptr<SymmetricFactor> factor_;
 };
 
 }  // namespace

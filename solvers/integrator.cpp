@@ -97,6 +97,18 @@ const char* to_string(IntegratorOptions::NewtonSolver s) {
   return "?";
 }
 
+const char* to_string(IntegratorOptions::Factorization f) {
+  switch (f) {
+    case IntegratorOptions::Factorization::Automatic:
+      return "auto";
+    case IntegratorOptions::Factorization::Simplicial:
+      return "simplicial";
+    case IntegratorOptions::Factorization::Supernodal:
+      return "supernodal";
+  }
+  return "?";
+}
+
 const char* to_string(IntegratorOptions::GmresPreconditioner p) {
   switch (p) {
     case IntegratorOptions::GmresPreconditioner::None:
@@ -139,6 +151,8 @@ void add_counters(RunStats& total, const RunStats& part) {
   total.nonlin_iters += part.nonlin_iters;
   total.nonlin_fails += part.nonlin_fails;
   total.err_test_fails += part.err_test_fails;
+  total.ldl_fallbacks += part.ldl_fallbacks;
+  if (total.factorization.empty()) total.factorization = part.factorization;
   total.max_order_used = std::max(total.max_order_used, part.max_order_used);
 }
 

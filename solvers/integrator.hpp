@@ -97,6 +97,14 @@ struct IntegratorOptions {
   // Measured in experiments/scaling and README "Integrators".
   enum class GmresPreconditioner { None, BlockJacobi, SchurIc, SchurLdl };
   GmresPreconditioner gmres_preconditioner = GmresPreconditioner::SchurLdl;
+  // Sparse factorisation of the symmetric reduced matrix S (implicit-euler, the ldl / cg-ldl
+  // Newton solvers, the schur-ldl preconditioner; solvers/symmetric_factor.hpp):
+  //   Simplicial  Eigen's simplicial LDL^T;
+  //   Supernodal  CHOLMOD's supernodal LL^T, falling back to LDL^T where S is not positive
+  //               definite;
+  //   Automatic   supernodal from 4000 unknowns on (measured crossover, README "Performance").
+  enum class Factorization { Automatic, Simplicial, Supernodal };
+  Factorization factorization = Factorization::Automatic;
 
   // Throws std::invalid_argument naming the bad field and its accepted range.
   void validate() const;
@@ -114,6 +122,8 @@ const char* to_string(RunStatus s);
 // "klu", "ldl", "cg-ldl": the names of --newton-solver and of summary.json's options.
 const char* to_string(IntegratorOptions::NewtonSolver s);
 const char* to_string(IntegratorOptions::GmresPreconditioner p);
+// "auto", "simplicial", "supernodal": the names of --factorization and of summary.json.
+const char* to_string(IntegratorOptions::Factorization f);
 
 struct RunStats {
   std::string integrator;
@@ -131,7 +141,12 @@ struct RunStats {
   long jac_evals = 0;
   long lin_setups = 0;
   long factorisations = 0;  // numeric factorisations of the Newton matrix (<= lin_setups)
-  long lin_iters = 0;       // Krylov iterations (GMRES, or CG inside SchurCgLdl)
+  // The back end the run factorises S with ("simplicial" or "supernodal"; empty if the
+  // integrator has none) and its supernodal factorisations redone as LDL^T (S not positive
+  // definite).
+  std::string factorization;
+  long ldl_fallbacks = 0;
+  long lin_iters = 0;  // Krylov iterations (GMRES, or CG inside SchurCgLdl)
   long nonlin_iters = 0;
   long nonlin_fails = 0;
   long err_test_fails = 0;
@@ -142,8 +157,9 @@ struct RunStats {
                              // counts all threads of the process)
 };
 
-// Adds part's work counters (steps ... err_test_fails, factorisations) to total's and takes the
-// larger max_order_used: the counts of a run made of several integrator sessions.
+// Adds part's work counters (steps ... err_test_fails, factorisations, ldl_fallbacks) to total's,
+// takes the larger max_order_used and part's factorization if total has none: the counts of a
+// run made of several integrator sessions.
 void add_counters(RunStats& total, const RunStats& part);
 
 struct IntegratorInfo {

@@ -3,26 +3,28 @@
 #include <nvector/nvector_serial.h>
 #include <sunmatrix/sunmatrix_sparse.h>
 
-#include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <cmath>
 #include <stdexcept>
 #include <vector>
+
+#include "solvers/symmetric_factor.hpp"
 
 namespace knitsim::detail {
 
 namespace {
 
 struct SchurLdl {
+  explicit SchurLdl(const SchurOptions& o) : options(o), factor(o.factorization) {}
+  SchurOptions options;
   const FirstOrderSystem* sys = nullptr;
   int n = 0;                    // dof (half the first-order size)
   std::vector<int> ax_begin;    // column j < n: first Ax entry of A's column j
   std::vector<int> diag;        // reduced matrix: position of (j, j)
   std::vector<double> rhs, x2;  // length n
   Eigen::SparseMatrix<double> S;
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> ldlt;
+  SymmetricFactor factor;
   double gamma = 0.0;
-  SchurOptions options;
   bool factorised = false;               // this setup's S has been factorised
   bool try_cg = false;                   // this setup's S passed the radius test
   double radius = -1.0;                  // its Gershgorin radius (D^-1 S), when try_cg
@@ -38,9 +40,8 @@ SUNLinearSolver_ID get_id(SUNLinearSolver) { return SUNLINEARSOLVER_CUSTOM; }
 int initialize(SUNLinearSolver) { return SUNLS_SUCCESS; }
 
 int factorise(SchurLdl& c) {
-  c.ldlt.factorize(c.S);
+  c.factorised = c.factor.factorize(c.S);
   ++c.counts.factorisations;
-  c.factorised = c.ldlt.info() == Eigen::Success;
   return c.factorised ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_REC;
 }
 
@@ -139,7 +140,7 @@ int solve(SUNLinearSolver LS, SUNMatrix A, N_Vector x, N_Vector b, realtype /*to
     ++c.counts.cg_solves;
   } else {
     if (!c.factorised && factorise(c) != SUNLS_SUCCESS) return c.last_flag = SUNLS_PACKAGE_FAIL_REC;
-    x2 = c.ldlt.solve(r);
+    c.factor.solve(r, x2);
   }
   for (int i = 0; i < n; ++i) {
     xx[n + i] = c.x2[i];
@@ -165,7 +166,13 @@ bool is_schur_ldl_solver(SUNLinearSolver LS) {
   return LS && LS->ops && LS->ops->solve == solve && LS->content;
 }
 
-SchurCounts schur_counts(SUNLinearSolver LS) { return content(LS)->counts; }
+SchurCounts schur_counts(SUNLinearSolver LS) {
+  const SchurLdl& c = *content(LS);
+  SchurCounts counts = c.counts;
+  counts.ldl_fallbacks = c.factor.ldl_fallbacks();
+  counts.backend = c.factor.backend();
+  return counts;
+}
 
 SUNLinearSolver make_schur_ldl_solver(SUNContext ctx, const FirstOrderSystem& sys,
                                       const SchurOptions& options) {
@@ -173,7 +180,7 @@ SUNLinearSolver make_schur_ldl_solver(SUNContext ctx, const FirstOrderSystem& sy
     throw std::invalid_argument("SchurOptions::cg_max_radius must be in [0, 1)");
   SUNLinearSolver LS = SUNLinSolNewEmpty(ctx);
   if (!LS) return nullptr;
-  auto* c = new SchurLdl;
+  auto* c = new SchurLdl(options);
   c->sys = &sys;
   c->n = sys.size() / 2;
   const int n = c->n;
@@ -181,7 +188,6 @@ SUNLinearSolver make_schur_ldl_solver(SUNContext ctx, const FirstOrderSystem& sy
   const CscPattern& kp = sys.mechanical().stiffness_pattern();
   c->ax_begin.resize(n);
   for (int j = 0; j < n; ++j) c->ax_begin[j] = jp.colptr[j] + 1;  // after the zero diagonal
-  c->options = options;
   c->rhs.resize(n);
   c->x2.resize(n);
   for (Eigen::VectorXd* v : {&c->inv_diag, &c->r, &c->z, &c->p, &c->q}) v->resize(n);
@@ -201,7 +207,7 @@ SUNLinearSolver make_schur_ldl_solver(SUNContext ctx, const FirstOrderSystem& sy
     }
   c->diag.resize(n);
   for (int j = 0; j < n; ++j) c->diag[j] = kp.find(j, j);
-  c->ldlt.analyzePattern(c->S);
+  c->factor.analyze(c->S);
 
   LS->content = c;
   LS->ops->gettype = get_type;

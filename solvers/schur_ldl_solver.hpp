@@ -10,9 +10,10 @@
 //     x1 = b1 + gamma x2,
 //     M (A_vv + gamma A_vx) x2 = M (b2 - A_vx b1),
 // where M (A_vv + gamma A_vx) = M (I + gamma Gamma) - gamma^2 K, K = M Ax = dF/dx symmetric.
-// This reduced matrix has the model's stiffness pattern; it is analysed once (AMD ordering,
-// Eigen SimplicialLDLT) and factorised numerically at each setup. LDL^T, not LL^T: K is
-// indefinite when springs are compressed.
+// This reduced matrix has the model's stiffness pattern; it is analysed once and factorised
+// numerically at each setup by a SymmetricFactor (symmetric_factor.hpp: Eigen's simplicial
+// LDL^T, or CHOLMOD's supernodal LL^T on large grids with LDL^T where S is not positive
+// definite -- K is indefinite when springs are compressed).
 //
 // Small steps: Jacobi-preconditioned CG instead of the factorisation. When gamma is small
 // the reduced matrix S = M (I + gamma Gamma) - gamma^2 K is close to its diagonal (S ~ M
@@ -45,6 +46,7 @@
 #include <sundials/sundials_context.h>
 #include <sundials/sundials_linearsolver.h>
 
+#include "solvers/integrator.hpp"
 #include "src/first_order.hpp"
 
 namespace knitsim::detail {
@@ -55,14 +57,18 @@ struct SchurOptions {
   double cg_max_radius = 0.8;
   int cg_max_iterations = 40;  // per solve, then LDL^T
   double cg_rel_tol = 1e-6;    // bound on |x - x_cg|_D / |x|_D
+  IntegratorOptions::Factorization factorization = IntegratorOptions::Factorization::Automatic;
 };
 
 // Work done since creation.
 struct SchurCounts {
   long setups = 0;
-  long factorisations = 0;  // numeric LDL^T factorisations
-  long cg_solves = 0;       // solves finished by CG
-  long cg_iterations = 0;   // CG iterations, including those of solves CG gave up on
+  long factorisations = 0;  // numeric factorisations of S
+  long ldl_fallbacks = 0;   // supernodal LL^T factorisations redone as LDL^T
+  // The factorisation back end (SymmetricFactor::backend: Simplicial or Supernodal).
+  IntegratorOptions::Factorization backend = IntegratorOptions::Factorization::Simplicial;
+  long cg_solves = 0;      // solves finished by CG
+  long cg_iterations = 0;  // CG iterations, including those of solves CG gave up on
 };
 
 // The returned solver owns its workspace; free it with SUNLinSolFree. `sys` must outlive it.

@@ -143,12 +143,12 @@ LinearSolverPtr make_klu(N_Vector y, SUNMatrix A, SUNContext ctx) {
   return ls;
 }
 
-LinearSolverPtr make_newton_solver(IntegratorOptions::NewtonSolver which,
-                                   const FirstOrderSystem& fo, N_Vector y, SUNMatrix A,
-                                   SUNContext ctx) {
-  if (which == IntegratorOptions::NewtonSolver::Klu) return make_klu(y, A, ctx);
+LinearSolverPtr make_newton_solver(const IntegratorOptions& opt, const FirstOrderSystem& fo,
+                                   N_Vector y, SUNMatrix A, SUNContext ctx) {
+  if (opt.newton_solver == IntegratorOptions::NewtonSolver::Klu) return make_klu(y, A, ctx);
   knitsim::detail::SchurOptions options;
-  if (which == IntegratorOptions::NewtonSolver::SchurLdl) options.cg_max_radius = 0.0;
+  if (opt.newton_solver == IntegratorOptions::NewtonSolver::SchurLdl) options.cg_max_radius = 0.0;
+  options.factorization = opt.factorization;
   return LinearSolverPtr(check_created(knitsim::detail::make_schur_ldl_solver(ctx, fo, options),
                                        "make_schur_ldl_solver"));
 }
@@ -159,6 +159,8 @@ void add_newton_solver_counts(SUNLinearSolver ls, RunStats& st) {
   const knitsim::detail::SchurCounts c = knitsim::detail::schur_counts(ls);
   st.factorisations = c.factorisations;
   st.lin_iters += c.cg_iterations;
+  st.factorization = to_string(c.backend);
+  st.ldl_fallbacks = c.ldl_fallbacks;
 }
 
 NewtonMatrix::NewtonMatrix(const FirstOrderSystem& fo, MatrixKind kind, SUNContext ctx)

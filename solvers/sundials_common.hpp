@@ -163,13 +163,14 @@ MatrixPtr make_csc_matrix(const CscPattern& pattern, SUNContext ctx);
 // instructions than SUNDIALS' default COLAMD on four_corner with cvode-bdf. The symbolic
 // analysis is done at the first set-up and kept; later set-ups refactor numerically.
 LinearSolverPtr make_klu(N_Vector y, SUNMatrix A, SUNContext ctx);
-// The Newton linear solver chosen by IntegratorOptions::newton_solver for A = I - gamma J in
-// `fo`'s pattern: KLU, or the symmetric Schur-complement LDL^T (schur_ldl_solver.hpp).
-LinearSolverPtr make_newton_solver(IntegratorOptions::NewtonSolver which,
-                                   const FirstOrderSystem& fo, N_Vector y, SUNMatrix A,
-                                   SUNContext ctx);
+// The Newton linear solver chosen by opt.newton_solver for A = I - gamma J in `fo`'s pattern:
+// KLU, or the symmetric Schur-complement solver (schur_ldl_solver.hpp) factorising with
+// opt.factorization.
+LinearSolverPtr make_newton_solver(const IntegratorOptions& opt, const FirstOrderSystem& fo,
+                                   N_Vector y, SUNMatrix A, SUNContext ctx);
 // After lin_setups and lin_iters are filled: sets st.factorisations (= lin_setups, or the
-// Schur solver's own count) and adds the Schur solver's CG iterations to lin_iters.
+// Schur solver's own count), adds the Schur solver's CG iterations to lin_iters and sets
+// st.factorization and st.ldl_fallbacks from it.
 void add_newton_solver_counts(SUNLinearSolver ls, RunStats& st);
 
 // ---- Newton matrix of the first-order system ------------------------------------------

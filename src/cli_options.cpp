@@ -71,6 +71,15 @@ void add_newton_solver_option(CLI::App* cmd, IntegratorOptions::NewtonSolver& wh
                    "Jacobi-CG instead of the factorisation at small steps)");
 }
 
+void add_factorization_option(CLI::App* cmd, IntegratorOptions::Factorization& which) {
+  using F = IntegratorOptions::Factorization;
+  static const F all[] = {F::Automatic, F::Simplicial, F::Supernodal};
+  add_named_option(cmd, "--factorization", which, all,
+                   "sparse factorisation of the 3n symmetric matrix (implicit-euler, ldl, cg-ldl, "
+                   "schur-ldl): simplicial (Eigen LDL^T), supernodal (CHOLMOD LL^T, LDL^T where "
+                   "not positive definite) or auto (supernodal from 4000 unknowns)");
+}
+
 void add_gmres_options(CLI::App* cmd, IntegratorOptions& o) {
   using GP = IntegratorOptions::GmresPreconditioner;
   static const GP all[] = {GP::None, GP::BlockJacobi, GP::SchurIc, GP::SchurLdl};

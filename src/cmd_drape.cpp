@@ -71,6 +71,7 @@ void run(const DrapeArgs& args) {
   scene.options.max_wall_seconds = o.max_wall_seconds;
   scene.options.max_restarts = o.max_restarts;
   scene.options.newton_solver = o.newton_solver;
+  scene.options.factorization = o.factorization;
   scene.options.krylov_dim = o.krylov_dim;
   scene.options.krylov_eps_lin = o.krylov_eps_lin;
   scene.options.gmres_preconditioner = o.gmres_preconditioner;
@@ -146,6 +147,7 @@ void register_drape_command(CLI::App& app) {
                   "error-test or corrector failures (0 = the run ends with solver_failure)")
       ->capture_default_str();
   add_newton_solver_option(cmd, args->options.newton_solver);
+  add_factorization_option(cmd, args->options.factorization);
   add_gmres_options(cmd, args->options);
   cmd->add_option("--out", args->out,
                   "Output folder (default: a fresh out/drape-<scene>-<YYYYmmdd-HHMMSS>)");

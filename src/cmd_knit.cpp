@@ -78,6 +78,7 @@ struct KnitArgs {
   double dt = IntegratorOptions{}.dt;
   int max_order = IntegratorOptions{}.max_order;
   IntegratorOptions::NewtonSolver newton_solver = IntegratorOptions{}.newton_solver;
+  IntegratorOptions::Factorization factorization = IntegratorOptions{}.factorization;
   int frames = 4;
   std::string out;
   bool step_history = false;
@@ -399,6 +400,7 @@ void run(const KnitArgs& args) {
   opt.dt = args.dt;
   opt.max_order = args.max_order;
   opt.newton_solver = args.newton_solver;
+  opt.factorization = args.factorization;
   try {
     opt.validate();
   } catch (const std::invalid_argument& e) {
@@ -480,6 +482,7 @@ void register_knit_command(CLI::App& app) {
   cmd->add_option("--max-order", args->max_order, "Cap on the method order (0 = default)")
       ->capture_default_str();
   add_newton_solver_option(cmd, args->newton_solver);
+  add_factorization_option(cmd, args->factorization);
   cmd->add_option("--frames", args->frames,
                   "Captured frames (the start to the last residual check), >= 1")
       ->capture_default_str();

@@ -274,7 +274,8 @@ nlohmann::json to_json(const IntegratorOptions& o) {
           {"newton_solver", to_string(o.newton_solver)},
           {"krylov_dim", o.krylov_dim},
           {"krylov_eps_lin", o.krylov_eps_lin},
-          {"gmres_preconditioner", to_string(o.gmres_preconditioner)}};
+          {"gmres_preconditioner", to_string(o.gmres_preconditioner)},
+          {"factorization", to_string(o.factorization)}};
 }
 
 nlohmann::json to_json(const DrapeLmOptions& o) {
@@ -302,6 +303,8 @@ nlohmann::json to_json(const RunStats& s) {
           {"jac_evals", s.jac_evals},
           {"lin_setups", s.lin_setups},
           {"factorisations", s.factorisations},
+          {"factorization", s.factorization},
+          {"ldl_fallbacks", s.ldl_fallbacks},
           {"lin_iters", s.lin_iters},
           {"nonlin_iters", s.nonlin_iters},
           {"nonlin_fails", s.nonlin_fails},

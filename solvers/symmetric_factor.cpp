@@ -1,0 +1,134 @@
+#include "solvers/symmetric_factor.hpp"
+
+#include <cholmod.h>
+
+#include <Eigen/SparseCholesky>
+#include <stdexcept>
+
+namespace knitsim::detail {
+
+namespace {
+
+// A CHOLMOD view of S's lower triangle (no copy): S's arrays, stype -1.
+cholmod_sparse view_lower(const Eigen::SparseMatrix<double>& S) {
+  cholmod_sparse A{};
+  A.nrow = static_cast<size_t>(S.rows());
+  A.ncol = static_cast<size_t>(S.cols());
+  A.nzmax = static_cast<size_t>(S.nonZeros());
+  A.p = const_cast<int*>(S.outerIndexPtr());
+  A.i = const_cast<int*>(S.innerIndexPtr());
+  A.x = const_cast<double*>(S.valuePtr());
+  A.stype = -1;
+  A.itype = CHOLMOD_INT;
+  A.xtype = CHOLMOD_REAL;
+  A.dtype = CHOLMOD_DOUBLE;
+  A.sorted = 1;
+  A.packed = 1;
+  return A;
+}
+
+}  // namespace
+
+struct SymmetricFactor::Impl {
+  Backend requested = Backend::Automatic;
+  Backend chosen = Backend::Simplicial;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> ldlt;
+  bool ldlt_analysed = false;
+  bool latest_is_ldlt = true;  // which back end holds the latest factor
+  long fallbacks = 0;
+  // CHOLMOD (supernodal only)
+  cholmod_common cm{};
+  bool cm_started = false;
+  cholmod_factor* L = nullptr;
+  cholmod_dense *X = nullptr, *Y = nullptr, *E = nullptr;  // cholmod_solve2's reused arrays
+
+  ~Impl() {
+    if (!cm_started) return;
+    cholmod_free_dense(&X, &cm);
+    cholmod_free_dense(&Y, &cm);
+    cholmod_free_dense(&E, &cm);
+    cholmod_free_factor(&L, &cm);
+    cholmod_finish(&cm);
+  }
+
+  bool factorize_ldlt(const Eigen::SparseMatrix<double>& S) {
+    if (!ldlt_analysed) ldlt.analyzePattern(S);
+    ldlt_analysed = true;
+    ldlt.factorize(S);
+    latest_is_ldlt = true;
+    return ldlt.info() == Eigen::Success;
+  }
+};
+
+SymmetricFactor::SymmetricFactor(Backend which) : impl_(std::make_unique<Impl>()) {
+  impl_->requested = which;
+}
+
+SymmetricFactor::~SymmetricFactor() = default;
+
+void SymmetricFactor::analyze(const Eigen::SparseMatrix<double>& S) {
+  Impl& c = *impl_;
+  if (!S.isCompressed() || S.rows() != S.cols())
+    throw std::invalid_argument("SymmetricFactor: S must be square and compressed");
+  const bool large = S.rows() >= supernodal_min_dof;
+  c.chosen = c.requested == Backend::Supernodal || (c.requested == Backend::Automatic && large)
+                 ? Backend::Supernodal
+                 : Backend::Simplicial;
+  if (c.chosen == Backend::Simplicial) {
+    c.ldlt.analyzePattern(S);
+    c.ldlt_analysed = true;
+    return;
+  }
+  if (!c.cm_started) {
+    cholmod_start(&c.cm);
+    c.cm_started = true;
+    c.cm.print = 0;  // a matrix that is not positive definite is handled here, not printed
+    c.cm.supernodal = CHOLMOD_SUPERNODAL;
+    c.cm.final_asis = 1;
+  }
+  cholmod_free_factor(&c.L, &c.cm);
+  cholmod_sparse A = view_lower(S);
+  c.L = cholmod_analyze(&A, &c.cm);
+  if (!c.L) throw std::runtime_error("SymmetricFactor: CHOLMOD analysis failed");
+  c.ldlt_analysed = false;  // the fallback analyses S's pattern when first needed
+}
+
+bool SymmetricFactor::factorize(const Eigen::SparseMatrix<double>& S) {
+  Impl& c = *impl_;
+  if (c.chosen == Backend::Simplicial) return c.factorize_ldlt(S);
+  cholmod_sparse A = view_lower(S);
+  const int ok = cholmod_factorize(&A, c.L, &c.cm);
+  if (ok && c.cm.status == CHOLMOD_OK && c.L->minor == c.L->n) {
+    c.latest_is_ldlt = false;
+    return true;
+  }
+  ++c.fallbacks;  // not positive definite (CHOLMOD_NOT_POSDEF): LDL^T handles indefinite S
+  return c.factorize_ldlt(S);
+}
+
+void SymmetricFactor::solve(const Eigen::Ref<const Eigen::VectorXd>& b,
+                            Eigen::Ref<Eigen::VectorXd> x) {
+  Impl& c = *impl_;
+  if (x.size() != b.size()) throw std::invalid_argument("SymmetricFactor::solve: size mismatch");
+  if (c.latest_is_ldlt) {
+    x = c.ldlt.solve(b);
+    return;
+  }
+  cholmod_dense B{};
+  B.nrow = static_cast<size_t>(b.size());
+  B.ncol = 1;
+  B.nzmax = B.nrow;
+  B.d = B.nrow;
+  B.x = const_cast<double*>(b.data());
+  B.xtype = CHOLMOD_REAL;
+  B.dtype = CHOLMOD_DOUBLE;
+  if (!cholmod_solve2(CHOLMOD_A, c.L, &B, nullptr, &c.X, nullptr, &c.Y, &c.E, &c.cm))
+    throw std::runtime_error("SymmetricFactor: CHOLMOD solve failed (out of memory)");
+  x = Eigen::Map<const Eigen::VectorXd>(static_cast<const double*>(c.X->x), b.size());
+}
+
+SymmetricFactor::Backend SymmetricFactor::backend() const { return impl_->chosen; }
+
+long SymmetricFactor::ldl_fallbacks() const { return impl_->fallbacks; }
+
+}  // namespace knitsim::detail
