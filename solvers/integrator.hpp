@@ -102,7 +102,8 @@ struct IntegratorOptions {
   //   Simplicial  Eigen's simplicial LDL^T;
   //   Supernodal  CHOLMOD's supernodal LL^T, falling back to LDL^T where S is not positive
   //               definite;
-  //   Automatic   supernodal from 4000 unknowns on (measured crossover, README "Performance").
+  //   Automatic   supernodal from 8000 unknowns on (above the measured tie, README
+  //               "Performance").
   enum class Factorization { Automatic, Simplicial, Supernodal };
   Factorization factorization = Factorization::Automatic;
 

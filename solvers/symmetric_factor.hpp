@@ -16,13 +16,17 @@
 //               for that set-up (counted in ldl_fallbacks()).
 // `automatic` takes the supernodal back end from supernodal_min_dof unknowns on. Measured on
 // the four_corner Schur matrix at h = 100 s, OpenBLAS 0.3.21 serial, one factorisation / one
-// solve (README "Performance", "Factorisation back end"):
+// solve (scratch harness, 2026-11-23):
 //   dof     simplicial          supernodal
 //   1311    3.0 ms / 0.12 ms    5.7 ms / 0.07 ms
 //   5031    33 ms / 0.79 ms     30 ms / 0.35 ms
+//   11151   122 ms / 3.4 ms     80 ms / 0.90 ms
 //   19671   381 ms / 8.5 ms     177 ms / 3.5 ms
-// With Debian's reference BLAS (libblas3) the supernodal back end is no faster (19671 dof:
-// 389 ms per factorisation).
+// Whole drapes (README "Performance"): at 5031 dof both take 2.8 s, at 30 591 dof the
+// supernodal back end halves the time. The threshold sits above the tie, where a run whose S is
+// often indefinite (the knit chart tucks40, 4851 dof: 10 of 13 factorisations fall back) would
+// lose by trying LL^T first. With Debian's reference BLAS (libblas3) the supernodal back end is
+// no faster (19671 dof: 389 ms per factorisation).
 #pragma once
 
 #include <Eigen/SparseCore>
@@ -36,7 +40,7 @@ class SymmetricFactor {
  public:
   using Backend = IntegratorOptions::Factorization;
   // Below this many unknowns `automatic` means simplicial.
-  static constexpr int supernodal_min_dof = 4000;
+  static constexpr int supernodal_min_dof = 8000;
 
   explicit SymmetricFactor(Backend which = Backend::Automatic);
   ~SymmetricFactor();

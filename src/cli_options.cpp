@@ -77,7 +77,7 @@ void add_factorization_option(CLI::App* cmd, IntegratorOptions::Factorization& w
   add_named_option(cmd, "--factorization", which, all,
                    "sparse factorisation of the 3n symmetric matrix (implicit-euler, ldl, cg-ldl, "
                    "schur-ldl): simplicial (Eigen LDL^T), supernodal (CHOLMOD LL^T, LDL^T where "
-                   "not positive definite) or auto (supernodal from 4000 unknowns)");
+                   "not positive definite) or auto (supernodal from 8000 unknowns)");
 }
 
 void add_gmres_options(CLI::App* cmd, IntegratorOptions& o) {

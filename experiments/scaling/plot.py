@@ -54,7 +54,8 @@ def main(out):
     rows = medians(list(csv.DictReader(open(out + "/runs.csv"))))
     with open(out + "/median.csv", "w", newline="") as f:
         keys = ["solver", "n", "particles", "integrated_dof", "status", "steps", "factorisations",
-                "rounds", "cpu_median", "cpu_min", "cpu_max", "centre_sag_m", "residual"]
+                "rounds", "cpu_median", "cpu_min", "cpu_max", "centre_sag_m", "residual",
+                "factorization"]
         w = csv.DictWriter(f, fieldnames=keys, extrasaction="ignore")
         w.writeheader()
         w.writerows(rows)

@@ -14,7 +14,9 @@
 # 3) of the three in turn (runs interleaved, so load drifts hit all three alike); default DIR
 # out/scaling-target.
 # --grids: cells per side to run instead of the mode's list; --solver: only the runs with this
-# label (cvode-bdf-ldl, cvode-bdf-klu, cvode-bdf-gmres (its default preconditioner, the lagged
+# label (cvode-bdf-ldl, cvode-bdf-ldl-simplicial (the same with --factorization simplicial: run
+# only at n >= 60, where the automatic back end is CHOLMOD's supernodal one), cvode-bdf-klu,
+# cvode-bdf-gmres (its default preconditioner, the lagged
 # Schur LDL^T), cvode-bdf-gmres-bj (block-Jacobi), implicit-euler, static-eighth,
 # static-quarter, cvode-bdf-eighth), e.g. --solver static-eighth --grids "100 140 200" for the
 # reduced model on grids the full-grid solvers cannot reach in useful time.
@@ -63,8 +65,8 @@ for g in $GRIDS_OPT; do
   case "$g" in '' | *[!0-9]* | 0 | 1) echo "scaling: --grids: $g is not an integer >= 2" >&2; exit 2 ;; esac
 done
 case "$SOLVER" in
-  '' | cvode-bdf-ldl | cvode-bdf-klu | cvode-bdf-gmres | cvode-bdf-gmres-bj | implicit-euler | static-eighth | static-quarter | cvode-bdf-eighth) ;;
-  *) echo "scaling: --solver $SOLVER not in {cvode-bdf-ldl,cvode-bdf-klu,cvode-bdf-gmres,cvode-bdf-gmres-bj,implicit-euler,static-eighth,static-quarter,cvode-bdf-eighth}" >&2; exit 2 ;;
+  '' | cvode-bdf-ldl | cvode-bdf-ldl-simplicial | cvode-bdf-klu | cvode-bdf-gmres | cvode-bdf-gmres-bj | implicit-euler | static-eighth | static-quarter | cvode-bdf-eighth) ;;
+  *) echo "scaling: --solver $SOLVER not in {cvode-bdf-ldl,cvode-bdf-ldl-simplicial,cvode-bdf-klu,cvode-bdf-gmres,cvode-bdf-gmres-bj,implicit-euler,static-eighth,static-quarter,cvode-bdf-eighth}" >&2; exit 2 ;;
 esac
 [ "$QUICK$TARGET" != 11 ] || { echo "scaling: --quick and --target exclude each other" >&2; exit 2; }
 if [ -z "$OUT" ]; then
@@ -78,7 +80,7 @@ else GRIDS="10 20 40 60 80 100 140"; MAX_WALL=${MAX_WALL:-1800}; fi
 [ -z "$GRIDS_OPT" ] || GRIDS=$GRIDS_OPT
 mkdir -p "$OUT/runs"
 runs_csv=$OUT/runs.csv
-echo "n,particles,dof,natural_length_m,damping_Ns_per_m,solver,status,t_final,steps,rhs_evals,jac_evals,lin_setups,nonlin_iters,residual,centre_sag_m,cpu_seconds,wall_seconds,max_rss_kb,integrated_dof,factorisations,round" > "$runs_csv"
+echo "n,particles,dof,natural_length_m,damping_Ns_per_m,solver,status,t_final,steps,rhs_evals,jac_evals,lin_setups,nonlin_iters,residual,centre_sag_m,cpu_seconds,wall_seconds,max_rss_kb,integrated_dof,factorisations,round,factorization" > "$runs_csv"
 
 # One drape: run n solver integrator [knitsim options...]; appends a row to runs.csv (ROUND:
 # the repeat, in the folder name and the last column).
@@ -105,13 +107,14 @@ except (OSError, ValueError):
 n = int(n)
 if s is None:  # the run failed before writing its summary (e.g. out of memory): keep a row
     print(",".join([str(n), str((n + 1) ** 2), "", L0, c, solver, "failed"] + [""] * 10 +
-                   [rss.group(1) if rss else "", "", "", rnd]))
+                   [rss.group(1) if rss else "", "", "", rnd, ""]))
 else:
     print(",".join(str(v) for v in [n, s["grid"]["particles"], s["grid"]["dof"],
           L0, c, solver, s["status"], repr(s["t_final"]), s["steps"], s["rhs_evals"],
           s["jac_evals"], s["lin_setups"], s["nonlin_iters"], repr(s["residual"]),
           repr(s["centre_sag_m"]), repr(s["cpu_seconds"]), repr(s["wall_seconds"]),
-          rss.group(1) if rss else "", s["grid"]["integrated_dof"], s["factorisations"], rnd]))
+          rss.group(1) if rss else "", s["grid"]["integrated_dof"], s["factorisations"], rnd,
+          s.get("factorization", "")]))
 PY
   tail -n 1 "$runs_csv"
 }
@@ -128,6 +131,9 @@ if [ "$TARGET" = 1 ]; then
 else
   for n in $GRIDS; do
     run "$n" cvode-bdf-ldl cvode-bdf --newton-solver ldl
+    # From 8000 unknowns (n >= 52) --factorization auto is supernodal: the simplicial one beside it.
+    [ "$n" -lt 60 ] || run "$n" cvode-bdf-ldl-simplicial cvode-bdf --newton-solver ldl \
+      --factorization simplicial
     run "$n" cvode-bdf-klu cvode-bdf --newton-solver klu
     run "$n" cvode-bdf-gmres cvode-bdf-gmres
     run "$n" cvode-bdf-gmres-bj cvode-bdf-gmres --gmres-preconditioner block-jacobi
