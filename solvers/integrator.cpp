@@ -342,12 +342,15 @@ double lanczos_largest(const CscPattern& p, const std::vector<double>& ax,
     }
   auto apply = [&](const double* in, double* out) {
     std::fill_n(out, n, 0.0);
-    for (int j = 0; j < n; ++j)
+    for (int j = 0; j < n; ++j) {
+      double out_j = 0.0;  // in a register: out[j] += ... would be a store per entry
       for (int k = p.colptr[j]; k < p.colptr[j + 1]; ++k) {
         const int i = p.rowind[k];
         out[i] += half[k] * in[j];
-        out[j] += half[k] * in[i];
+        out_j += half[k] * in[i];
       }
+      out[j] += out_j;
+    }
   };
   const int k_max = std::max(1, std::min(steps, n));
   std::vector<std::vector<double>> q;
