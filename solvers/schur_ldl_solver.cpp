@@ -5,6 +5,7 @@
 
 #include <Eigen/SparseCore>
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 #include <vector>
 
@@ -140,7 +141,11 @@ int solve(SUNLinearSolver LS, SUNMatrix A, N_Vector x, N_Vector b, realtype /*to
     ++c.counts.cg_solves;
   } else {
     if (!c.factorised && factorise(c) != SUNLS_SUCCESS) return c.last_flag = SUNLS_PACKAGE_FAIL_REC;
-    c.factor.solve(r, x2);
+    try {
+      c.factor.solve(r, x2);
+    } catch (const std::exception&) {  // CHOLMOD out of memory: not through SUNDIALS' C frames
+      return c.last_flag = SUNLS_PACKAGE_FAIL_UNREC;
+    }
   }
   for (int i = 0; i < n; ++i) {
     xx[n + i] = c.x2[i];
@@ -178,9 +183,8 @@ SUNLinearSolver make_schur_ldl_solver(SUNContext ctx, const FirstOrderSystem& sy
                                       const SchurOptions& options) {
   if (!(options.cg_max_radius >= 0.0 && options.cg_max_radius < 1.0))
     throw std::invalid_argument("SchurOptions::cg_max_radius must be in [0, 1)");
-  SUNLinearSolver LS = SUNLinSolNewEmpty(ctx);
-  if (!LS) return nullptr;
-  auto* c = new SchurLdl(options);
+  // The content first, the SUNDIALS object last: nothing leaks if a step throws or fails.
+  auto c = std::make_unique<SchurLdl>(options);
   c->sys = &sys;
   c->n = sys.size() / 2;
   const int n = c->n;
@@ -200,16 +204,14 @@ SUNLinearSolver make_schur_ldl_solver(SUNContext ctx, const FirstOrderSystem& sy
   c->S.makeCompressed();
   // The value array of S is filled in kp's order: the two patterns must coincide.
   for (int k = 0; k < kp.nnz(); ++k)
-    if (c->S.innerIndexPtr()[k] != kp.rowind[k]) {
-      delete c;
-      SUNLinSolFreeEmpty(LS);
-      return nullptr;
-    }
+    if (c->S.innerIndexPtr()[k] != kp.rowind[k]) return nullptr;
   c->diag.resize(n);
   for (int j = 0; j < n; ++j) c->diag[j] = kp.find(j, j);
   c->factor.analyze(c->S);
 
-  LS->content = c;
+  SUNLinearSolver LS = SUNLinSolNewEmpty(ctx);
+  if (!LS) return nullptr;
+  LS->content = c.release();
   LS->ops->gettype = get_type;
   LS->ops->getid = get_id;
   LS->ops->initialize = initialize;
