@@ -104,6 +104,8 @@ const char* to_string(IntegratorOptions::Factorization f) {
       return "auto";
     case IntegratorOptions::Factorization::Simplicial:
       return "simplicial";
+    case IntegratorOptions::Factorization::Block:
+      return "block";
     case IntegratorOptions::Factorization::Supernodal:
       return "supernodal";
   }

@@ -99,12 +99,14 @@ struct IntegratorOptions {
   GmresPreconditioner gmres_preconditioner = GmresPreconditioner::SchurLdl;
   // Sparse factorisation of the symmetric reduced matrix S (implicit-euler, the ldl / cg-ldl
   // Newton solvers, the schur-ldl preconditioner; solvers/symmetric_factor.hpp):
-  //   Simplicial  Eigen's simplicial LDL^T;
-  //   Supernodal  CHOLMOD's supernodal LL^T, falling back to LDL^T where S is not positive
-  //               definite;
-  //   Automatic   supernodal from 8000 unknowns on (above the measured tie, README
-  //               "Performance").
-  enum class Factorization { Automatic, Simplicial, Supernodal };
+  //   Simplicial  Eigen's simplicial LDL^T, scalar by scalar;
+  //   Block       the same LDL^T in 3 x 3 node blocks (solvers/block_ldlt.hpp), where S is made
+  //               of them (spring networks without symmetry planes), else Simplicial;
+  //   Supernodal  CHOLMOD's supernodal LL^T, falling back to LDL^T (Block where it applies)
+  //               where S is not positive definite;
+  //   Automatic   Block (or Simplicial) below SymmetricFactor::supernodal_min_dof unknowns,
+  //               Supernodal from there (above the measured tie, README "Performance").
+  enum class Factorization { Automatic, Simplicial, Block, Supernodal };
   Factorization factorization = Factorization::Automatic;
 
   // Throws std::invalid_argument naming the bad field and its accepted range.
@@ -123,7 +125,7 @@ const char* to_string(RunStatus s);
 // "klu", "ldl", "cg-ldl": the names of --newton-solver and of summary.json's options.
 const char* to_string(IntegratorOptions::NewtonSolver s);
 const char* to_string(IntegratorOptions::GmresPreconditioner p);
-// "auto", "simplicial", "supernodal": the names of --factorization and of summary.json.
+// "auto", "simplicial", "block", "supernodal": the names of --factorization and of summary.json.
 const char* to_string(IntegratorOptions::Factorization f);
 
 struct RunStats {

@@ -5,6 +5,8 @@
 #include <Eigen/SparseCholesky>
 #include <stdexcept>
 
+#include "solvers/block_ldlt.hpp"
+
 namespace knitsim::detail {
 
 namespace {
@@ -32,7 +34,11 @@ cholmod_sparse view_lower(const Eigen::SparseMatrix<double>& S) {
 struct SymmetricFactor::Impl {
   Backend requested = Backend::Automatic;
   Backend chosen = Backend::Simplicial;
+  // The LDL^T back end, used alone or as the supernodal one's fallback: Block where S is made
+  // of 3 x 3 node blocks, else Simplicial.
+  Backend ldlt_kind = Backend::Simplicial;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> ldlt;
+  BlockLdlt block;
   bool ldlt_analysed = false;
   bool latest_is_ldlt = true;  // which back end holds the latest factor
   long fallbacks = 0;
@@ -51,11 +57,19 @@ struct SymmetricFactor::Impl {
     cholmod_finish(&cm);
   }
 
-  bool factorize_ldlt(const Eigen::SparseMatrix<double>& S) {
-    if (!ldlt_analysed) ldlt.analyzePattern(S);
+  void analyze_ldlt(const Eigen::SparseMatrix<double>& S) {
+    if (ldlt_kind == Backend::Block)
+      block.analyze(S);
+    else
+      ldlt.analyzePattern(S);
     ldlt_analysed = true;
-    ldlt.factorize(S);
+  }
+
+  bool factorize_ldlt(const Eigen::SparseMatrix<double>& S) {
+    if (!ldlt_analysed) analyze_ldlt(S);
     latest_is_ldlt = true;
+    if (ldlt_kind == Backend::Block) return block.factorize(S);
+    ldlt.factorize(S);
     return ldlt.info() == Eigen::Success;
   }
 };
@@ -71,12 +85,13 @@ void SymmetricFactor::analyze(const Eigen::SparseMatrix<double>& S) {
   if (!S.isCompressed() || S.rows() != S.cols())
     throw std::invalid_argument("SymmetricFactor: S must be square and compressed");
   const bool large = S.rows() >= supernodal_min_dof;
+  c.ldlt_kind = c.requested != Backend::Simplicial && BlockLdlt::blocked(S) ? Backend::Block
+                                                                            : Backend::Simplicial;
   c.chosen = c.requested == Backend::Supernodal || (c.requested == Backend::Automatic && large)
                  ? Backend::Supernodal
-                 : Backend::Simplicial;
-  if (c.chosen == Backend::Simplicial) {
-    c.ldlt.analyzePattern(S);
-    c.ldlt_analysed = true;
+                 : c.ldlt_kind;
+  if (c.chosen != Backend::Supernodal) {
+    c.analyze_ldlt(S);
     return;
   }
   if (!c.cm_started) {
@@ -95,7 +110,7 @@ void SymmetricFactor::analyze(const Eigen::SparseMatrix<double>& S) {
 
 bool SymmetricFactor::factorize(const Eigen::SparseMatrix<double>& S) {
   Impl& c = *impl_;
-  if (c.chosen == Backend::Simplicial) return c.factorize_ldlt(S);
+  if (c.chosen != Backend::Supernodal) return c.factorize_ldlt(S);
   cholmod_sparse A = view_lower(S);
   const int ok = cholmod_factorize(&A, c.L, &c.cm);
   if (ok && c.cm.status == CHOLMOD_OK && c.L->minor == c.L->n) {
@@ -110,6 +125,10 @@ void SymmetricFactor::solve(const Eigen::Ref<const Eigen::VectorXd>& b,
                             Eigen::Ref<Eigen::VectorXd> x) {
   Impl& c = *impl_;
   if (x.size() != b.size()) throw std::invalid_argument("SymmetricFactor::solve: size mismatch");
+  if (c.latest_is_ldlt && c.ldlt_kind == Backend::Block) {
+    c.block.solve(b.data(), x.data());
+    return;
+  }
   if (c.latest_is_ldlt) {
     x = c.ldlt.solve(b);
     return;

@@ -4,29 +4,33 @@
 // of cvode-bdf / arkode-dirk / arkode-imex (schur_ldl_solver.hpp) and cvode-bdf-gmres's Schur
 // LDL^T preconditioner.
 //
-// Two back ends:
+// Three back ends:
 //   simplicial  Eigen's SimplicialLDLT (AMD ordering, column by column, scalar loops). LDL^T,
 //               so it also factors an indefinite S (K is indefinite when springs are
-//               compressed). The cheapest below a few thousand dof: on the 11 x 11 drapes one
-//               factorisation costs ~0.3 ms, CHOLMOD's supernodal one ~0.9 ms.
+//               compressed).
+//   block       the same up-looking LDL^T in 3 x 3 particle blocks (solvers/block_ldlt.hpp):
+//               same fill, one index per block instead of nine, unrolled 3 x 3 kernels. Used
+//               where S is made of such blocks (every spring network; not the mirror-reduced
+//               drapes, whose particles on a plane keep 1 or 2 coordinates: there simplicial).
 //   supernodal  CHOLMOD's supernodal LL^T (AMD or METIS ordering, dense BLAS kernels on the
-//               supernodes). Faster on large grids with an optimised BLAS (Debian's
+//               supernodes). Fastest on large grids with an optimised BLAS (Debian's
 //               libopenblas0-serial, which run.sh installs); LL^T needs S positive definite,
-//               and a factorisation that finds it is not falls back to the simplicial LDL^T
-//               for that set-up (counted in ldl_fallbacks()).
-// `automatic` takes the supernodal back end from supernodal_min_dof unknowns on. Measured on
-// the four_corner Schur matrix at h = 100 s, OpenBLAS 0.3.21 serial, one factorisation / one
-// solve (scratch harness, 2026-11-23):
-//   dof     simplicial          supernodal
-//   1311    3.0 ms / 0.12 ms    5.7 ms / 0.07 ms
-//   5031    33 ms / 0.79 ms     30 ms / 0.35 ms
-//   11151   122 ms / 3.4 ms     80 ms / 0.90 ms
-//   19671   381 ms / 8.5 ms     177 ms / 3.5 ms
-// Whole drapes (README "Performance"): at 5031 dof both take 2.8 s, at 30 591 dof the
-// supernodal back end halves the time. The threshold sits above the tie, where a run whose S is
-// often indefinite (the knit chart tucks40, 4851 dof: 10 of 13 factorisations fall back) would
-// lose by trying LL^T first. With Debian's reference BLAS (libblas3) the supernodal back end is
-// no faster (19671 dof: 389 ms per factorisation).
+//               and a factorisation that finds it is not falls back to LDL^T (block where it
+//               applies) for that set-up (counted in ldl_fallbacks()).
+// `automatic` takes the supernodal back end from supernodal_min_dof unknowns on, below that
+// block (or simplicial where S is not blocked). Measured on the four_corner Schur matrix at
+// h = 100 s, OpenBLAS 0.3.21 serial, median of 7 (scratch harness, 2026-11-23), one
+// factorisation / one solve:
+//   dof     simplicial           block                supernodal
+//   351     0.32 ms / 0.020 ms   0.12 ms / 0.011 ms   0.90 ms / 0.013 ms
+//   5031    33 ms / 0.80 ms      15 ms / 0.47 ms      30 ms / 0.40 ms
+//   11151   124 ms / 3.2 ms      66 ms / 1.4 ms       75 ms / 1.2 ms
+//   19671   386 ms / 8.5 ms      211 ms / 5.1 ms      172 ms / 4.3 ms
+//   30591   653 ms / 13 ms       366 ms / 8.8 ms      267 ms / 6.8 ms
+// Whole drapes (README "Performance"): block and supernodal tie at 19 671 dof, hence the
+// threshold; at 11 151 dof block takes 7.7 s against supernodal's 10.7-12.1 s. With Debian's
+// reference BLAS (libblas3) the supernodal back end is no faster than simplicial (19 671 dof:
+// 389 ms per factorisation).
 #pragma once
 
 #include <Eigen/SparseCore>
@@ -39,8 +43,8 @@ namespace knitsim::detail {
 class SymmetricFactor {
  public:
   using Backend = IntegratorOptions::Factorization;
-  // Below this many unknowns `automatic` means simplicial.
-  static constexpr int supernodal_min_dof = 8000;
+  // Below this many unknowns `automatic` means block (or simplicial where S is not blocked).
+  static constexpr int supernodal_min_dof = 33000;
 
   explicit SymmetricFactor(Backend which = Backend::Automatic);
   ~SymmetricFactor();
@@ -55,7 +59,7 @@ class SymmetricFactor {
   // x = S^-1 b for the latest successful factorisation; b and x must not overlap.
   void solve(const Eigen::Ref<const Eigen::VectorXd>& b, Eigen::Ref<Eigen::VectorXd> x);
 
-  // The back end analyze() chose (Simplicial or Supernodal).
+  // The back end analyze() chose (Simplicial, Block or Supernodal).
   Backend backend() const;
   // Factorisations the supernodal back end handed to LDL^T because S was not positive definite.
   long ldl_fallbacks() const;

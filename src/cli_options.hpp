@@ -30,7 +30,7 @@ CLI::Option* add_atol_options(CLI::App* cmd, double& atol, double& velocity_atol
 // --newton-solver {klu, ldl, cg-ldl} of drape and knit, bound to `which`
 // (IntegratorOptions::newton_solver).
 void add_newton_solver_option(CLI::App* cmd, IntegratorOptions::NewtonSolver& which);
-// --factorization {auto, simplicial, supernodal} of drape and knit, bound to `which`
+// --factorization {auto, simplicial, block, supernodal} of drape and knit, bound to `which`
 // (IntegratorOptions::factorization).
 void add_factorization_option(CLI::App* cmd, IntegratorOptions::Factorization& which);
 // --gmres-preconditioner, --krylov-dim and --eps-lin (cvode-bdf-gmres) into `o`.

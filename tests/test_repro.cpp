@@ -222,10 +222,20 @@ TEST_CASE("repro on the eighth: the same fits and Tables 4 and 6 as on the whole
     INFO(table);
     // The same ICA path: the same country (to the restriction's round-off), the same topology
     // and evaluation count, the same error to 1e-6 relative.
-    for (const char* p : {"stiffness", "damping", "elongation_limit", "natural_length", "error"})
-      CHECK(std::stod(b[1][col(h, p)]) ==
-            Approx(std::stod(a[1][col(h, p)])).epsilon(std::string(p) == "error" ? 1e-6 : 1e-9));
+    for (const char* p : {"stiffness", "damping", "elongation_limit", "natural_length", "error"}) {
+      const std::string& x = a[1][col(h, p)];
+      const std::string& y = b[1][col(h, p)];
+      INFO(p << ": " << x << " vs " << y);
+      // Table 6's error is empty where its two_corner drape did not settle (drape_status says
+      // why); that drape does not depend on four_corner's symmetry, so both tables agree.
+      REQUIRE(x.empty() == y.empty());
+      if (!x.empty())
+        CHECK(std::stod(y) ==
+              Approx(std::stod(x)).epsilon(std::string(p) == "error" ? 1e-6 : 1e-9));
+    }
     CHECK(b[1][col(h, "topology")] == a[1][col(h, "topology")]);
+    if (std::string(table) == "table6.csv")
+      CHECK(b[1][col(h, "drape_status")] == a[1][col(h, "drape_status")]);
     if (std::string(table) == "table4.csv")
       CHECK(b[1][col(h, "evaluations")] == a[1][col(h, "evaluations")]);
   }

@@ -1,10 +1,13 @@
-// SymmetricFactor (solvers/symmetric_factor.hpp): Eigen's simplicial LDL^T and CHOLMOD's
-// supernodal LL^T with its LDL^T fallback, against dense solves, and the integrators that use it.
+// SymmetricFactor (solvers/symmetric_factor.hpp): Eigen's simplicial LDL^T, the 3 x 3 block
+// LDL^T (solvers/block_ldlt.hpp) and CHOLMOD's supernodal LL^T with its LDL^T fallback, against
+// dense solves, and the integrators that use them.
 #include <Eigen/Dense>
 #include <catch2/catch.hpp>
 #include <random>
 
 #include "models/drape_grid.hpp"
+#include "models/mirror_reduced.hpp"
+#include "solvers/block_ldlt.hpp"
 #include "solvers/integrator.hpp"
 #include "solvers/schur_matrix.hpp"
 #include "solvers/symmetric_factor.hpp"
@@ -44,7 +47,7 @@ double relative_error(const Eigen::SparseMatrix<double>& S, const Eigen::VectorX
 }  // namespace
 
 TEST_CASE(
-    "SymmetricFactor: both back ends solve S, the supernodal one falls back where S is "
+    "SymmetricFactor: every back end solves S, the supernodal one falls back where S is "
     "indefinite") {
   // h = 100 s: at rest S0 is positive definite; with 1 cm noise the compressed springs make S1
   // indefinite. Same pattern.
@@ -57,7 +60,7 @@ TEST_CASE(
     REQUIRE((S == &S0 ? lowest > 0.0 : lowest < 0.0));
   }
 
-  const Backend which = GENERATE(Backend::Simplicial, Backend::Supernodal);
+  const Backend which = GENERATE(Backend::Simplicial, Backend::Block, Backend::Supernodal);
   detail::SymmetricFactor f(which);
   f.analyze(S0);
   CHECK(f.backend() == which);
@@ -113,13 +116,13 @@ TEST_CASE("SymmetricFactor: automatic takes the supernodal back end from superno
   }
 }
 
-TEST_CASE("Integrators reach the same equilibrium in the same steps with either back end") {
+TEST_CASE("Integrators reach the same equilibrium in the same steps with every back end") {
   const DrapeGrid g = build_drape_grid(DrapeParams{});  // four_corner, 351 dof
   const char* integrator = GENERATE("cvode-bdf", "implicit-euler", "cvode-bdf-gmres");
-  RunStats s[2];
-  std::vector<double> x[2];
-  const Backend which[2] = {Backend::Simplicial, Backend::Supernodal};
-  for (int k = 0; k < 2; ++k) {
+  RunStats s[3];
+  std::vector<double> x[3];
+  const Backend which[3] = {Backend::Simplicial, Backend::Block, Backend::Supernodal};
+  for (int k = 0; k < 3; ++k) {
     IntegratorOptions opt;
     opt.factorization = which[k];
     if (std::string(integrator) == "implicit-euler") opt.dt = 100.0;
@@ -131,10 +134,130 @@ TEST_CASE("Integrators reach the same equilibrium in the same steps with either 
     // definite.
     CHECK(s[k].ldl_fallbacks <= (which[k] == Backend::Supernodal ? s[k].factorisations / 4 : 0));
   }
-  INFO(integrator << ": " << s[0].steps << " vs " << s[1].steps << " steps");
-  CHECK(s[0].steps == s[1].steps);
-  CHECK(s[0].factorisations == s[1].factorisations);
-  double diff = 0.0;
-  for (size_t i = 0; i < x[0].size(); ++i) diff = std::max(diff, std::abs(x[0][i] - x[1][i]));
-  CHECK(diff < 1e-10);
+  for (int k = 1; k < 3; ++k) {
+    INFO(integrator << ", " << to_string(which[k]) << ": " << s[0].steps << " vs " << s[k].steps
+                    << " steps");
+    CHECK(s[0].steps == s[k].steps);
+    CHECK(s[0].factorisations == s[k].factorisations);
+    double diff = 0.0;
+    for (size_t i = 0; i < x[0].size(); ++i) diff = std::max(diff, std::abs(x[0][i] - x[k][i]));
+    CHECK(diff < 1e-10);
+  }
+}
+
+namespace {
+
+// A symmetric matrix of dense 3 x 3 blocks on a random node graph (each node joined to about
+// `links` others), indefinite: diagonal blocks of either sign, dominant enough to keep every
+// pivot block well away from singular.
+Eigen::SparseMatrix<double> random_block_matrix(int nodes, int links, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::uniform_int_distribution<int> pick(0, nodes - 1);
+  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(3 * nodes, 3 * nodes);
+  for (int I = 0; I < nodes; ++I)
+    for (int l = 0; l < links; ++l) {
+      const int J = pick(rng);
+      if (J == I) continue;
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) {
+          const double v = u(rng);
+          dense(3 * I + r, 3 * J + c) = v;
+          dense(3 * J + c, 3 * I + r) = v;
+        }
+    }
+  for (int I = 0; I < nodes; ++I) {
+    const double sign = I % 2 == 0 ? 1.0 : -1.0;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c <= r; ++c) {
+        const double v = r == c ? sign * (3.0 * links + 3.0) : 0.3 * u(rng);
+        dense(3 * I + r, 3 * I + c) = v;
+        dense(3 * I + c, 3 * I + r) = v;
+      }
+  }
+  // Keep every entry of each touched block, zeros included: the pattern is blocked.
+  Eigen::SparseMatrix<double> S(3 * nodes, 3 * nodes);
+  std::vector<Eigen::Triplet<double>> t;
+  for (int J = 0; J < nodes; ++J)
+    for (int I = 0; I < nodes; ++I)
+      if (dense.block<3, 3>(3 * I, 3 * J).cwiseAbs().maxCoeff() > 0.0)
+        for (int r = 0; r < 3; ++r)
+          for (int c = 0; c < 3; ++c)
+            t.emplace_back(3 * I + r, 3 * J + c, dense(3 * I + r, 3 * J + c));
+  S.setFromTriplets(t.begin(), t.end());
+  S.makeCompressed();
+  return S;
+}
+
+}  // namespace
+
+TEST_CASE("BlockLdlt: solves indefinite block matrices, refuses singular pivots and recovers") {
+  const unsigned seed = GENERATE(1u, 2u, 3u);
+  const Eigen::SparseMatrix<double> S = random_block_matrix(60, 3, seed);
+  const int n = static_cast<int>(S.rows());
+  REQUIRE(detail::BlockLdlt::blocked(S));
+  REQUIRE(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(Eigen::MatrixXd(S)).eigenvalues()[0] <
+          0.0);
+  detail::BlockLdlt f;
+  f.analyze(S);
+  CHECK(f.nonzeros_l() >= (S.nonZeros() - n) / 2);  // L holds at least S's strict lower part
+  Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(n, -2.0, 3.0), x(n);
+  REQUIRE(f.factorize(S));
+  f.solve(b.data(), x.data());
+  CHECK(relative_error(S, b, x) < 1e-12);
+
+  // Node 7's coordinates zeroed: its pivot block (eliminated wherever AMD puts it) is
+  // singular, whatever came before it.
+  Eigen::SparseMatrix<double> singular = S;
+  for (int j = 0; j < n; ++j)
+    for (int k = singular.outerIndexPtr()[j]; k < singular.outerIndexPtr()[j + 1]; ++k)
+      if (j / 3 == 7 || singular.innerIndexPtr()[k] / 3 == 7) singular.valuePtr()[k] = 0.0;
+  CHECK_FALSE(f.factorize(singular));
+  REQUIRE(f.factorize(S));  // nothing left over from the failed factorisation
+  f.solve(b.data(), x.data());
+  CHECK(relative_error(S, b, x) < 1e-12);
+}
+
+TEST_CASE(
+    "BlockLdlt: only patterns of whole, symmetric 3 x 3 blocks; the block back end falls "
+    "back to simplicial on the others") {
+  Eigen::SparseMatrix<double> S = random_block_matrix(10, 2, 4);
+  REQUIRE(detail::BlockLdlt::blocked(S));
+  const int n = static_cast<int>(S.rows());
+  auto with_entries = [&](std::vector<Eigen::Triplet<double>> extra, bool drop_first_offdiag) {
+    std::vector<Eigen::Triplet<double>> t;
+    bool dropped = false;
+    for (int j = 0; j < S.outerSize(); ++j)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(S, j); it; ++it) {
+        if (drop_first_offdiag && !dropped && it.row() / 3 != it.col() / 3) {
+          dropped = true;  // one entry of an off-diagonal block (and not its mirror)
+          continue;
+        }
+        t.emplace_back(it.row(), it.col(), it.value());
+      }
+    t.insert(t.end(), extra.begin(), extra.end());
+    Eigen::SparseMatrix<double> m(n, n);
+    m.setFromTriplets(t.begin(), t.end());
+    m.makeCompressed();
+    return m;
+  };
+  CHECK_FALSE(detail::BlockLdlt::blocked(with_entries({}, true)));  // a block with a hole
+  // One entry outside every block, without its mirror: the node pattern is not symmetric.
+  int far = 0;
+  while (S.coeff(0, 3 * far) != 0.0 || far == 0) ++far;
+  CHECK_FALSE(detail::BlockLdlt::blocked(with_entries({{0, 3 * far, 0.0}}, false)));
+  Eigen::SparseMatrix<double> odd(4, 4);  // not a multiple of 3
+  odd.setIdentity();
+  odd.makeCompressed();
+  CHECK_FALSE(detail::BlockLdlt::blocked(odd));
+  CHECK_THROWS_AS(detail::BlockLdlt().analyze(odd), std::invalid_argument);
+
+  // The eighth-symmetry drape: particles on a mirror plane keep fewer than 3 coordinates.
+  const DrapeGrid g = build_drape_grid(DrapeParams{});
+  const MirrorReduced reduced = make_drape_reduced(g, DrapeSymmetry::Eighth);
+  const Eigen::SparseMatrix<double> eighth = detail::schur_matrix(reduced);
+  CHECK_FALSE(detail::BlockLdlt::blocked(eighth));
+  detail::SymmetricFactor f(Backend::Block);
+  f.analyze(eighth);
+  CHECK(f.backend() == Backend::Simplicial);
 }

@@ -14,8 +14,9 @@
 # 3) of the three in turn (runs interleaved, so load drifts hit all three alike); default DIR
 # out/scaling-target.
 # --grids: cells per side to run instead of the mode's list; --solver: only the runs with this
-# label (cvode-bdf-ldl, cvode-bdf-ldl-simplicial (the same with --factorization simplicial: run
-# only at n >= 60, where the automatic back end is CHOLMOD's supernodal one), cvode-bdf-klu,
+# label (cvode-bdf-ldl (--factorization auto: block below 20 000 unknowns, supernodal from
+# there), cvode-bdf-ldl-simplicial, -block, -supernodal (the same with that --factorization:
+# run only at n >= 60, where the back ends part ways), cvode-bdf-klu,
 # cvode-bdf-gmres (its default preconditioner, the lagged
 # Schur LDL^T), cvode-bdf-gmres-bj (block-Jacobi), implicit-euler, static-eighth,
 # static-quarter, cvode-bdf-eighth), e.g. --solver static-eighth --grids "100 140 200" for the
@@ -65,8 +66,8 @@ for g in $GRIDS_OPT; do
   case "$g" in '' | *[!0-9]* | 0 | 1) echo "scaling: --grids: $g is not an integer >= 2" >&2; exit 2 ;; esac
 done
 case "$SOLVER" in
-  '' | cvode-bdf-ldl | cvode-bdf-ldl-simplicial | cvode-bdf-klu | cvode-bdf-gmres | cvode-bdf-gmres-bj | implicit-euler | static-eighth | static-quarter | cvode-bdf-eighth) ;;
-  *) echo "scaling: --solver $SOLVER not in {cvode-bdf-ldl,cvode-bdf-ldl-simplicial,cvode-bdf-klu,cvode-bdf-gmres,cvode-bdf-gmres-bj,implicit-euler,static-eighth,static-quarter,cvode-bdf-eighth}" >&2; exit 2 ;;
+  '' | cvode-bdf-ldl | cvode-bdf-ldl-simplicial | cvode-bdf-ldl-block | cvode-bdf-ldl-supernodal | cvode-bdf-klu | cvode-bdf-gmres | cvode-bdf-gmres-bj | implicit-euler | static-eighth | static-quarter | cvode-bdf-eighth) ;;
+  *) echo "scaling: --solver $SOLVER not in {cvode-bdf-ldl,cvode-bdf-ldl-simplicial,cvode-bdf-ldl-block,cvode-bdf-ldl-supernodal,cvode-bdf-klu,cvode-bdf-gmres,cvode-bdf-gmres-bj,implicit-euler,static-eighth,static-quarter,cvode-bdf-eighth}" >&2; exit 2 ;;
 esac
 [ "$QUICK$TARGET" != 11 ] || { echo "scaling: --quick and --target exclude each other" >&2; exit 2; }
 if [ -z "$OUT" ]; then
@@ -131,9 +132,12 @@ if [ "$TARGET" = 1 ]; then
 else
   for n in $GRIDS; do
     run "$n" cvode-bdf-ldl cvode-bdf --newton-solver ldl
-    # From 8000 unknowns (n >= 52) --factorization auto is supernodal: the simplicial one beside it.
-    [ "$n" -lt 60 ] || run "$n" cvode-bdf-ldl-simplicial cvode-bdf --newton-solver ldl \
-      --factorization simplicial
+    # The three factorisation back ends side by side where they part ways (11 151 unknowns on).
+    if [ "$n" -ge 60 ]; then
+      for f in simplicial block supernodal; do
+        run "$n" "cvode-bdf-ldl-$f" cvode-bdf --newton-solver ldl --factorization "$f"
+      done
+    fi
     run "$n" cvode-bdf-klu cvode-bdf --newton-solver klu
     run "$n" cvode-bdf-gmres cvode-bdf-gmres
     run "$n" cvode-bdf-gmres-bj cvode-bdf-gmres --gmres-preconditioner block-jacobi

@@ -1,0 +1,227 @@
+#include "solvers/block_ldlt.hpp"
+
+#include <Eigen/OrderingMethods>
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace knitsim::detail {
+
+namespace {
+
+// 3 x 3 blocks are row-major arrays of 9.
+
+// Y -= A B
+inline void sub_product(double* Y, const double* A, const double* B) {
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      Y[3 * r + c] -= A[3 * r] * B[c] + A[3 * r + 1] * B[3 + c] + A[3 * r + 2] * B[6 + c];
+}
+
+// C = A^T B
+inline void transposed_product(double* C, const double* A, const double* B) {
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      C[3 * r + c] = A[r] * B[c] + A[3 + r] * B[3 + c] + A[6 + r] * B[6 + c];
+}
+
+// inv = A^-1 by cofactors; false if A is singular or not finite.
+bool invert(const double* a, double* inv) {
+  const double c00 = a[4] * a[8] - a[5] * a[7];
+  const double c01 = a[5] * a[6] - a[3] * a[8];
+  const double c02 = a[3] * a[7] - a[4] * a[6];
+  const double det = a[0] * c00 + a[1] * c01 + a[2] * c02;
+  if (!std::isfinite(det) || det == 0.0) return false;
+  const double s = 1.0 / det;
+  inv[0] = c00 * s;
+  inv[1] = (a[2] * a[7] - a[1] * a[8]) * s;
+  inv[2] = (a[1] * a[5] - a[2] * a[4]) * s;
+  inv[3] = c01 * s;
+  inv[4] = (a[0] * a[8] - a[2] * a[6]) * s;
+  inv[5] = (a[2] * a[3] - a[0] * a[5]) * s;
+  inv[6] = c02 * s;
+  inv[7] = (a[1] * a[6] - a[0] * a[7]) * s;
+  inv[8] = (a[0] * a[4] - a[1] * a[3]) * s;
+  return std::all_of(inv, inv + 9, [](double v) { return std::isfinite(v); });
+}
+
+// The node pattern of a blocked S: for node column J, the node rows of its blocks in order
+// (empty result if S is not blocked).
+std::vector<std::vector<int>> node_pattern(const Eigen::SparseMatrix<double>& S) {
+  const int n = static_cast<int>(S.rows());
+  if (S.cols() != n || n % 3 != 0 || n == 0 || !S.isCompressed()) return {};
+  const int* cp = S.outerIndexPtr();
+  const int* ri = S.innerIndexPtr();
+  const int nb = n / 3;
+  std::vector<std::vector<int>> rows(nb);
+  for (int J = 0; J < nb; ++J) {
+    const int len = cp[3 * J + 1] - cp[3 * J];
+    if (len % 3 != 0) return {};
+    for (int c = 1; c < 3; ++c)  // the node's three columns hold the same rows
+      if (cp[3 * J + c + 1] - cp[3 * J + c] != len ||
+          !std::equal(ri + cp[3 * J], ri + cp[3 * J + 1], ri + cp[3 * J + c]))
+        return {};
+    for (int k = cp[3 * J]; k < cp[3 * J + 1]; k += 3) {
+      const int r = ri[k];
+      if (r % 3 != 0 || ri[k + 1] != r + 1 || ri[k + 2] != r + 2) return {};
+      rows[J].push_back(r / 3);
+    }
+  }
+  // Structurally symmetric: the factorisation reads each node column's upper part only.
+  std::vector<int> count(nb, 0);
+  for (int J = 0; J < nb; ++J)
+    for (int I : rows[J]) ++count[I];
+  for (int J = 0; J < nb; ++J)
+    if (count[J] != static_cast<int>(rows[J].size())) return {};
+  for (int J = 0; J < nb; ++J)
+    for (int I : rows[J])
+      if (!std::binary_search(rows[I].begin(), rows[I].end(), J)) return {};
+  return rows;
+}
+
+}  // namespace
+
+bool BlockLdlt::blocked(const Eigen::SparseMatrix<double>& S) { return !node_pattern(S).empty(); }
+
+void BlockLdlt::analyze(const Eigen::SparseMatrix<double>& S) {
+  const std::vector<std::vector<int>> rows = node_pattern(S);
+  if (rows.empty())
+    throw std::invalid_argument("BlockLdlt: S is not made of dense, symmetric 3 x 3 blocks");
+  nb_ = static_cast<int>(rows.size());
+
+  // AMD on the node graph; Eigen's ordering returns the node eliminated k-th at position k.
+  std::vector<Eigen::Triplet<double>> entries;
+  for (int J = 0; J < nb_; ++J)
+    for (int I : rows[J]) entries.emplace_back(I, J, 1.0);
+  Eigen::SparseMatrix<double> graph(nb_, nb_);
+  graph.setFromTriplets(entries.begin(), entries.end());
+  Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> order;
+  Eigen::AMDOrdering<int>()(graph, order);
+  perm_.assign(order.indices().data(), order.indices().data() + nb_);
+  std::vector<int> pinv(nb_);
+  for (int k = 0; k < nb_; ++k) pinv[perm_[k]] = k;
+
+  // Column k of P S P^T, rows i <= k, with where each block's columns start in S's values.
+  const int* cp = S.outerIndexPtr();
+  ap_.assign(nb_ + 1, 0);
+  ai_.clear();
+  at_.clear();
+  for (int k = 0; k < nb_; ++k) {
+    const int J = perm_[k];
+    for (std::size_t t = 0; t < rows[J].size(); ++t) {
+      const int i = pinv[rows[J][t]];
+      if (i > k) continue;
+      ai_.push_back(i);
+      const int offset = 3 * static_cast<int>(t);
+      at_.push_back({cp[3 * J] + offset, cp[3 * J + 1] + offset, cp[3 * J + 2] + offset});
+    }
+    ap_[k + 1] = static_cast<int>(ai_.size());
+  }
+
+  // Elimination tree and column counts of L (ldl_symbolic).
+  parent_.assign(nb_, -1);
+  lnz_.assign(nb_, 0);
+  flag_.assign(nb_, -1);
+  for (int k = 0; k < nb_; ++k) {
+    flag_[k] = k;
+    for (int p = ap_[k]; p < ap_[k + 1]; ++p)
+      for (int i = ai_[p]; flag_[i] != k; i = parent_[i]) {
+        if (parent_[i] == -1) parent_[i] = k;
+        ++lnz_[i];
+        flag_[i] = k;
+      }
+  }
+  lp_.assign(nb_ + 1, 0);
+  for (int k = 0; k < nb_; ++k) lp_[k + 1] = lp_[k] + lnz_[k];
+  li_.resize(lp_[nb_]);
+  lx_.resize(9 * static_cast<std::size_t>(lp_[nb_]));
+  dinv_.resize(9 * static_cast<std::size_t>(nb_));
+  work_.assign(9 * static_cast<std::size_t>(nb_), 0.0);
+  stack_.resize(nb_);
+}
+
+bool BlockLdlt::factorize(const Eigen::SparseMatrix<double>& S) {
+  if (nb_ == 0) throw std::logic_error("BlockLdlt::factorize before analyze");
+  const double* s = S.valuePtr();
+  std::fill(lnz_.begin(), lnz_.end(), 0);
+  std::fill(flag_.begin(), flag_.end(), -1);
+  std::fill(work_.begin(), work_.end(), 0.0);  // clean even after a failed factorisation
+  for (int k = 0; k < nb_; ++k) {
+    // Scatter column k of P S P^T into work_ and find row k's pattern: the tree paths from
+    // each entry's row up to k, in topological order at stack_[top..nb_).
+    int top = nb_;
+    flag_[k] = k;
+    for (int p = ap_[k]; p < ap_[k + 1]; ++p) {
+      double* y = &work_[9 * static_cast<std::size_t>(ai_[p])];
+      for (int c = 0; c < 3; ++c)
+        for (int r = 0; r < 3; ++r) y[3 * r + c] += s[at_[p][c] + r];
+      int len = 0;
+      for (int i = ai_[p]; flag_[i] != k; i = parent_[i]) {
+        stack_[len++] = i;
+        flag_[i] = k;
+      }
+      while (len > 0) stack_[--top] = stack_[--len];
+    }
+    double d[9];
+    double* yk = &work_[9 * static_cast<std::size_t>(k)];
+    std::copy(yk, yk + 9, d);
+    std::fill(yk, yk + 9, 0.0);
+    // Row k of L: solve L(0:k, 0:k) y = column k along the pattern; L(k, i) = y_i^T D_i^-1,
+    // D_k = S_kk - sum_i L(k, i) y_i.
+    for (; top < nb_; ++top) {
+      const int i = stack_[top];
+      double* wi = &work_[9 * static_cast<std::size_t>(i)];
+      double y[9];
+      std::copy(wi, wi + 9, y);
+      std::fill(wi, wi + 9, 0.0);
+      const int end = lp_[i] + lnz_[i];
+      for (int p = lp_[i]; p < end; ++p)
+        sub_product(&work_[9 * static_cast<std::size_t>(li_[p])],
+                    &lx_[9 * static_cast<std::size_t>(p)], y);
+      double* l = &lx_[9 * static_cast<std::size_t>(end)];
+      transposed_product(l, y, &dinv_[9 * static_cast<std::size_t>(i)]);
+      sub_product(d, l, y);
+      li_[end] = k;
+      ++lnz_[i];
+    }
+    if (!invert(d, &dinv_[9 * static_cast<std::size_t>(k)])) return false;
+  }
+  return true;
+}
+
+void BlockLdlt::solve(const double* b, double* x) {
+  double* w = work_.data();  // 3 per node, in elimination order
+  for (int k = 0; k < nb_; ++k)
+    for (int r = 0; r < 3; ++r) w[3 * k + r] = b[3 * perm_[k] + r];
+  for (int j = 0; j < nb_; ++j) {  // L z = P b
+    const double* wj = &w[3 * j];
+    for (int p = lp_[j]; p < lp_[j + 1]; ++p) {
+      const double* l = &lx_[9 * static_cast<std::size_t>(p)];
+      double* wr = &w[3 * li_[p]];
+      for (int r = 0; r < 3; ++r)
+        wr[r] -= l[3 * r] * wj[0] + l[3 * r + 1] * wj[1] + l[3 * r + 2] * wj[2];
+    }
+  }
+  for (int j = 0; j < nb_; ++j) {  // D^-1
+    const double* di = &dinv_[9 * static_cast<std::size_t>(j)];
+    double* wj = &w[3 * j];
+    const double t0 = di[0] * wj[0] + di[1] * wj[1] + di[2] * wj[2];
+    const double t1 = di[3] * wj[0] + di[4] * wj[1] + di[5] * wj[2];
+    const double t2 = di[6] * wj[0] + di[7] * wj[1] + di[8] * wj[2];
+    wj[0] = t0;
+    wj[1] = t1;
+    wj[2] = t2;
+  }
+  for (int j = nb_ - 1; j >= 0; --j) {  // L^T
+    double* wj = &w[3 * j];
+    for (int p = lp_[j]; p < lp_[j + 1]; ++p) {
+      const double* l = &lx_[9 * static_cast<std::size_t>(p)];
+      const double* wr = &w[3 * li_[p]];
+      for (int c = 0; c < 3; ++c) wj[c] -= l[c] * wr[0] + l[3 + c] * wr[1] + l[6 + c] * wr[2];
+    }
+  }
+  for (int k = 0; k < nb_; ++k)
+    for (int r = 0; r < 3; ++r) x[3 * perm_[k] + r] = w[3 * k + r];
+}
+
+}  // namespace knitsim::detail

@@ -1,0 +1,54 @@
+// Sparse LDL^T in 3 x 3 node blocks, for symmetric matrices whose pattern is made of dense
+// 3 x 3 blocks: S = M (I + h Gamma) - h^2 K of a spring network (solvers/schur_matrix.hpp),
+// where every particle's three coordinates couple to the same neighbours.
+//
+//   S = P^T L D L^T P,  L unit block lower triangular (3 x 3 blocks), D block diagonal.
+//
+// The up-looking algorithm of Davis's LDL (ACM TOMS 31(4), 2005), applied to nodes instead of
+// scalars: an AMD ordering and an elimination tree of the node graph (one-ninth the size of the
+// scalar one), then row k of L by a sparse triangular solve along the tree. The arithmetic is
+// that of the scalar LDL^T, in 3 x 3 block products with one index per block instead of nine,
+// so the compiler unrolls it: on the 11 x 11 drape (351 dof) a factorisation costs ~0.12 ms
+// against ~0.33 ms for Eigen's scalar SimplicialLDLT with the same fill (symmetric_factor.hpp).
+//
+// No pivoting, like the scalar LDL^T: each 3 x 3 pivot block D_k is inverted explicitly, and a
+// singular or non-finite one ends the factorisation (factorize returns false). An indefinite S
+// (compressed springs) is fine as long as its pivot blocks are not singular.
+#pragma once
+
+#include <Eigen/SparseCore>
+#include <array>
+#include <vector>
+
+namespace knitsim::detail {
+
+class BlockLdlt {
+ public:
+  // True if S (square, compressed, full symmetric pattern with sorted rows) is made of dense
+  // 3 x 3 blocks: its size is a multiple of 3, and each stored entry's 3 x 3 node block is
+  // stored whole.
+  static bool blocked(const Eigen::SparseMatrix<double>& S);
+
+  // Ordering and symbolic factorisation of S's pattern; throws std::invalid_argument if
+  // !blocked(S). Every later S must have this pattern.
+  void analyze(const Eigen::SparseMatrix<double>& S);
+  // Numeric factorisation; false if a pivot block is singular or not finite.
+  bool factorize(const Eigen::SparseMatrix<double>& S);
+  // x = S^-1 b for the latest successful factorisation; b and x must not overlap.
+  void solve(const double* b, double* x);
+
+  // Stored entries of L (3 x 3 blocks, counted as scalars).
+  long nonzeros_l() const { return 9L * lp_.back(); }
+
+ private:
+  int nb_ = 0;                          // nodes (blocks per side)
+  std::vector<int> perm_;               // perm_[k]: node eliminated k-th
+  std::vector<int> ap_, ai_;            // upper block pattern of P S P^T by column (rows i <= k)
+  std::vector<std::array<int, 3>> at_;  // for each: S's value index of the block's column c, row 0
+  std::vector<int> parent_, lp_, lnz_, li_, flag_, stack_;  // elimination tree, L's pattern
+  std::vector<double> lx_;                                  // L's blocks, 9 per entry (row-major)
+  std::vector<double> dinv_;                                // D_k^-1, 9 per node (row-major)
+  std::vector<double> work_;  // 9 per node: the row of L being formed; 3 per node in solve
+};
+
+}  // namespace knitsim::detail
