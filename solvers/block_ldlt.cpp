@@ -18,31 +18,39 @@ inline void sub_product(double* Y, const double* A, const double* B) {
       Y[3 * r + c] -= A[3 * r] * B[c] + A[3 * r + 1] * B[3 + c] + A[3 * r + 2] * B[6 + c];
 }
 
-// C = A^T B
-inline void transposed_product(double* C, const double* A, const double* B) {
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c)
-      C[3 * r + c] = A[r] * B[c] + A[3 + r] * B[3 + c] + A[6 + r] * B[6 + c];
+// A pivot block D (symmetric, row-major; its lower triangle is read) as D = l d l^T, l unit
+// lower triangular, d diagonal: the scalar LDL^T's own arithmetic inside the block, so the block
+// factorisation is as accurate as the scalar one (an explicit cofactor inverse is not: its
+// determinant cancels when the block's eigenvalues spread over many decades, as they do at
+// large steps, where h^2 K dwarfs M). f = {d0, d1, d2, l10, l20, l21}; false if a pivot is 0
+// or not finite.
+bool factor_pivot(const double* a, double* f) {
+  const double d0 = a[0];
+  const double l10 = a[3] / d0, l20 = a[6] / d0;
+  const double d1 = a[4] - l10 * l10 * d0;
+  const double l21 = (a[7] - l20 * l10 * d0) / d1;
+  const double d2 = a[8] - l20 * l20 * d0 - l21 * l21 * d1;
+  const double v[6] = {d0, d1, d2, l10, l20, l21};
+  for (int q = 0; q < 6; ++q) {
+    if (!std::isfinite(v[q]) || (q < 3 && v[q] == 0.0)) return false;
+    f[q] = v[q];
+  }
+  return true;
 }
 
-// inv = A^-1 by cofactors; false if A is singular or not finite.
-bool invert(const double* a, double* inv) {
-  const double c00 = a[4] * a[8] - a[5] * a[7];
-  const double c01 = a[5] * a[6] - a[3] * a[8];
-  const double c02 = a[3] * a[7] - a[4] * a[6];
-  const double det = a[0] * c00 + a[1] * c01 + a[2] * c02;
-  if (!std::isfinite(det) || det == 0.0) return false;
-  const double s = 1.0 / det;
-  inv[0] = c00 * s;
-  inv[1] = (a[2] * a[7] - a[1] * a[8]) * s;
-  inv[2] = (a[1] * a[5] - a[2] * a[4]) * s;
-  inv[3] = c01 * s;
-  inv[4] = (a[0] * a[8] - a[2] * a[6]) * s;
-  inv[5] = (a[2] * a[3] - a[0] * a[5]) * s;
-  inv[6] = c02 * s;
-  inv[7] = (a[1] * a[6] - a[0] * a[7]) * s;
-  inv[8] = (a[0] * a[4] - a[1] * a[3]) * s;
-  return std::all_of(inv, inv + 9, [](double v) { return std::isfinite(v); });
+// v = D^-1 v (3 entries) for the pivot block f (factor_pivot).
+inline void apply_pivot_inverse(const double* f, double* v) {
+  double w0 = v[0];
+  double w1 = v[1] - f[3] * w0;
+  double w2 = v[2] - f[4] * w0 - f[5] * w1;
+  w0 /= f[0];
+  w1 /= f[1];
+  w2 /= f[2];
+  w1 -= f[5] * w2;
+  w0 -= f[3] * w1 + f[4] * w2;
+  v[0] = w0;
+  v[1] = w1;
+  v[2] = w2;
 }
 
 // The node pattern of a blocked S: for node column J, the node rows of its blocks in order
@@ -135,7 +143,7 @@ void BlockLdlt::analyze(const Eigen::SparseMatrix<double>& S) {
   for (int k = 0; k < nb_; ++k) lp_[k + 1] = lp_[k] + lnz_[k];
   li_.resize(lp_[nb_]);
   lx_.resize(9 * static_cast<std::size_t>(lp_[nb_]));
-  dinv_.resize(9 * static_cast<std::size_t>(nb_));
+  pivot_.resize(6 * static_cast<std::size_t>(nb_));
   work_.assign(9 * static_cast<std::size_t>(nb_), 0.0);
   stack_.resize(nb_);
 }
@@ -178,13 +186,18 @@ bool BlockLdlt::factorize(const Eigen::SparseMatrix<double>& S) {
       for (int p = lp_[i]; p < end; ++p)
         sub_product(&work_[9 * static_cast<std::size_t>(li_[p])],
                     &lx_[9 * static_cast<std::size_t>(p)], y);
+      // L(k, i) = y^T D_i^-1: its row r is D_i^-1 times y's column r (D_i symmetric).
       double* l = &lx_[9 * static_cast<std::size_t>(end)];
-      transposed_product(l, y, &dinv_[9 * static_cast<std::size_t>(i)]);
+      for (int r = 0; r < 3; ++r) {
+        double col[3] = {y[r], y[3 + r], y[6 + r]};
+        apply_pivot_inverse(&pivot_[6 * static_cast<std::size_t>(i)], col);
+        std::copy(col, col + 3, l + 3 * r);
+      }
       sub_product(d, l, y);
       li_[end] = k;
       ++lnz_[i];
     }
-    if (!invert(d, &dinv_[9 * static_cast<std::size_t>(k)])) return false;
+    if (!factor_pivot(d, &pivot_[6 * static_cast<std::size_t>(k)])) return false;
   }
   return true;
 }
@@ -202,16 +215,8 @@ void BlockLdlt::solve(const double* b, double* x) {
         wr[r] -= l[3 * r] * wj[0] + l[3 * r + 1] * wj[1] + l[3 * r + 2] * wj[2];
     }
   }
-  for (int j = 0; j < nb_; ++j) {  // D^-1
-    const double* di = &dinv_[9 * static_cast<std::size_t>(j)];
-    double* wj = &w[3 * j];
-    const double t0 = di[0] * wj[0] + di[1] * wj[1] + di[2] * wj[2];
-    const double t1 = di[3] * wj[0] + di[4] * wj[1] + di[5] * wj[2];
-    const double t2 = di[6] * wj[0] + di[7] * wj[1] + di[8] * wj[2];
-    wj[0] = t0;
-    wj[1] = t1;
-    wj[2] = t2;
-  }
+  for (int j = 0; j < nb_; ++j)  // D^-1
+    apply_pivot_inverse(&pivot_[6 * static_cast<std::size_t>(j)], &w[3 * j]);
   for (int j = nb_ - 1; j >= 0; --j) {  // L^T
     double* wj = &w[3 * j];
     for (int p = lp_[j]; p < lp_[j + 1]; ++p) {

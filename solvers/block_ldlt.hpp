@@ -11,9 +11,11 @@
 // so the compiler unrolls it: on the 11 x 11 drape (351 dof) a factorisation costs ~0.12 ms
 // against ~0.33 ms for Eigen's scalar SimplicialLDLT with the same fill (symmetric_factor.hpp).
 //
-// No pivoting, like the scalar LDL^T: each 3 x 3 pivot block D_k is inverted explicitly, and a
-// singular or non-finite one ends the factorisation (factorize returns false). An indefinite S
-// (compressed springs) is fine as long as its pivot blocks are not singular.
+// No pivoting, like the scalar LDL^T: each 3 x 3 pivot block D_k is factorised in turn as
+// l d l^T (the scalar LDL^T's arithmetic inside the block; an explicit cofactor inverse loses
+// accuracy when the block's eigenvalues spread over many decades, as h^2 K's and M's do at large
+// steps), and a zero or non-finite pivot ends the factorisation (factorize returns false). An
+// indefinite S (compressed springs) is fine as long as no pivot vanishes.
 #pragma once
 
 #include <Eigen/SparseCore>
@@ -47,8 +49,8 @@ class BlockLdlt {
   std::vector<std::array<int, 3>> at_;  // for each: S's value index of the block's column c, row 0
   std::vector<int> parent_, lp_, lnz_, li_, flag_, stack_;  // elimination tree, L's pattern
   std::vector<double> lx_;                                  // L's blocks, 9 per entry (row-major)
-  std::vector<double> dinv_;                                // D_k^-1, 9 per node (row-major)
-  std::vector<double> work_;  // 9 per node: the row of L being formed; 3 per node in solve
+  std::vector<double> pivot_;  // D_k = l d l^T, 6 per node: d0, d1, d2, l10, l20, l21
+  std::vector<double> work_;   // 9 per node: the row of L being formed; 3 per node in solve
 };
 
 }  // namespace knitsim::detail

@@ -218,6 +218,29 @@ TEST_CASE("BlockLdlt: solves indefinite block matrices, refuses singular pivots 
   CHECK(relative_error(S, b, x) < 1e-12);
 }
 
+TEST_CASE("BlockLdlt: a pivot block whose eigenvalues span many decades is solved to cond x eps") {
+  // One node, D = R diag(s, s / 2, 1) R^T: the shape of S = M (1 + h gamma) - h^2 K at large h
+  // (stiff stretch directions, soft bending one), not aligned with the axes.
+  const double spread = GENERATE(1e6, 1e10, 1e13);
+  const Eigen::Matrix3d R =
+      Eigen::AngleAxisd(0.7, Eigen::Vector3d(1.0, 2.0, 3.0).normalized()).toRotationMatrix();
+  const Eigen::Matrix3d D =
+      R * Eigen::Vector3d(spread, 0.5 * spread, 1.0).asDiagonal() * R.transpose();
+  Eigen::SparseMatrix<double> S = D.sparseView(0.0, 0.0);
+  S.makeCompressed();
+  REQUIRE(S.nonZeros() == 9);
+  detail::BlockLdlt f;
+  f.analyze(S);
+  REQUIRE(f.factorize(S));
+  const Eigen::Vector3d b(1.0, -2.0, 0.5);
+  Eigen::Vector3d x;
+  f.solve(b.data(), x.data());
+  const Eigen::Vector3d ref = D.fullPivLu().solve(b);
+  INFO("spread " << spread);
+  CHECK((x - ref).norm() / ref.norm() < 10.0 * spread * 2.2e-16);
+  CHECK((D * x - b).norm() / (D.norm() * x.norm()) < 1e-15);
+}
+
 TEST_CASE(
     "BlockLdlt: only patterns of whole, symmetric 3 x 3 blocks; the block back end falls "
     "back to simplicial on the others") {
