@@ -19,8 +19,9 @@
 //               applies) for that set-up (counted in ldl_fallbacks()).
 // `automatic` takes the supernodal back end from supernodal_min_dof unknowns on, below that
 // block (or simplicial where S is not blocked). Measured on the four_corner Schur matrix at
-// h = 100 s, OpenBLAS 0.3.21 serial, median of 7 (scratch harness, 2026-11-23), one
-// factorisation / one solve:
+// h = 100 s, OpenBLAS 0.3.21 serial, median of 7 (scratch harness, 2026-11-23; block measured
+// with its first version, which inverted the pivot blocks by cofactors: the l d l^T pivots of
+// commit 3164cb3 took 0.126 ms at 351 dof on a busier machine), one factorisation / one solve:
 //   dof     simplicial           block                supernodal
 //   351     0.32 ms / 0.020 ms   0.12 ms / 0.011 ms   0.90 ms / 0.013 ms
 //   5031    33 ms / 0.80 ms      15 ms / 0.47 ms      30 ms / 0.40 ms
