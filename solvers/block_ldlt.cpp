@@ -92,9 +92,13 @@ std::vector<std::vector<int>> node_pattern(const Eigen::SparseMatrix<double>& S)
 bool BlockLdlt::blocked(const Eigen::SparseMatrix<double>& S) { return !node_pattern(S).empty(); }
 
 void BlockLdlt::analyze(const Eigen::SparseMatrix<double>& S) {
-  const std::vector<std::vector<int>> rows = node_pattern(S);
-  if (rows.empty())
+  if (!try_analyze(S))
     throw std::invalid_argument("BlockLdlt: S is not made of dense, symmetric 3 x 3 blocks");
+}
+
+bool BlockLdlt::try_analyze(const Eigen::SparseMatrix<double>& S) {
+  const std::vector<std::vector<int>> rows = node_pattern(S);
+  if (rows.empty()) return false;
   nb_ = static_cast<int>(rows.size());
 
   // AMD on the node graph; Eigen's ordering returns the node eliminated k-th at position k.
@@ -146,6 +150,7 @@ void BlockLdlt::analyze(const Eigen::SparseMatrix<double>& S) {
   pivot_.resize(6 * static_cast<std::size_t>(nb_));
   work_.assign(9 * static_cast<std::size_t>(nb_), 0.0);
   stack_.resize(nb_);
+  return true;
 }
 
 bool BlockLdlt::factorize(const Eigen::SparseMatrix<double>& S) {

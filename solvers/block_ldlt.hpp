@@ -34,6 +34,8 @@ class BlockLdlt {
   // Ordering and symbolic factorisation of S's pattern; throws std::invalid_argument if
   // !blocked(S). Every later S must have this pattern.
   void analyze(const Eigen::SparseMatrix<double>& S);
+  // The same, returning false (and analysing nothing) if !blocked(S).
+  bool try_analyze(const Eigen::SparseMatrix<double>& S);
   // Numeric factorisation; false if a pivot block is singular or not finite.
   bool factorize(const Eigen::SparseMatrix<double>& S);
   // x = S^-1 b for the latest successful factorisation; b and x must not overlap.

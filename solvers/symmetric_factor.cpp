@@ -57,11 +57,12 @@ struct SymmetricFactor::Impl {
     cholmod_finish(&cm);
   }
 
+  // Analyses S's pattern for LDL^T, in 3 x 3 blocks where S has them (unless simplicial was
+  // requested), and records which.
   void analyze_ldlt(const Eigen::SparseMatrix<double>& S) {
-    if (ldlt_kind == Backend::Block)
-      block.analyze(S);
-    else
-      ldlt.analyzePattern(S);
+    const bool blocks = requested != Backend::Simplicial && block.try_analyze(S);
+    ldlt_kind = blocks ? Backend::Block : Backend::Simplicial;
+    if (!blocks) ldlt.analyzePattern(S);
     ldlt_analysed = true;
   }
 
@@ -85,15 +86,12 @@ void SymmetricFactor::analyze(const Eigen::SparseMatrix<double>& S) {
   if (!S.isCompressed() || S.rows() != S.cols())
     throw std::invalid_argument("SymmetricFactor: S must be square and compressed");
   const bool large = S.rows() >= supernodal_min_dof;
-  c.ldlt_kind = c.requested != Backend::Simplicial && BlockLdlt::blocked(S) ? Backend::Block
-                                                                            : Backend::Simplicial;
-  c.chosen = c.requested == Backend::Supernodal || (c.requested == Backend::Automatic && large)
-                 ? Backend::Supernodal
-                 : c.ldlt_kind;
-  if (c.chosen != Backend::Supernodal) {
+  if (c.requested != Backend::Supernodal && !(c.requested == Backend::Automatic && large)) {
     c.analyze_ldlt(S);
+    c.chosen = c.ldlt_kind;
     return;
   }
+  c.chosen = Backend::Supernodal;
   if (!c.cm_started) {
     cholmod_start(&c.cm);
     c.cm_started = true;
