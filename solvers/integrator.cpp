@@ -136,6 +136,8 @@ const char* to_string(RunStatus s) {
       return "step_limit";
     case RunStatus::WallLimit:
       return "wall_limit";
+    case RunStatus::Interrupted:
+      return "interrupted";
     case RunStatus::SolverFailure:
       return "solver_failure";
     case RunStatus::Diverged:
@@ -283,6 +285,8 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
       }
       if (opt.max_wall_seconds > 0.0 && wall() > opt.max_wall_seconds)
         return finish(RunStatus::WallLimit, "wall-clock cap reached");
+      if (opt.interrupt && opt.interrupt->load(std::memory_order_relaxed))
+        return finish(RunStatus::Interrupted, "interrupted before equilibrium");
     }
     if (t >= opt.t_max) return finish(RunStatus::TimeLimit, "t_max reached before equilibrium");
     if (steps >= opt.max_steps)

@@ -11,10 +11,11 @@
 // residual_roundoff) when that is larger, reported in RunStats.message and residual_floor --
 // (checked every `check_every` steps, and only from the model's
 // equilibrium_start_time() on), or at t_max, the
-// step cap or the wall-clock cap -- and RunStats.status says which. Numerical failure (a
+// step cap, the wall-clock cap or an interrupt request -- and RunStats.status says which. Numerical failure (a
 // SUNDIALS error, a non-finite or runaway state) is a status, never an exception.
 #pragma once
 
+#include <atomic>
 #include <memory>
 #include <string>
 #include <vector>
@@ -51,6 +52,10 @@ struct IntegratorOptions {
   double t_max = 1e7;             // s, physical end time if no equilibrium is reached
   double equilibrium_tol = 1e-8;  // static residual at which the run stops (dimensionless)
   double max_wall_seconds = 0.0;  // wall-clock cap per run, s; 0 = none
+  // A request to stop from outside (e.g. the CLI's SIGINT/SIGTERM handler, src/interrupt.hpp):
+  // when it reads true the run ends with status Interrupted and its state so far. Read at each
+  // residual check (every `check_every` steps), like the wall-clock cap. nullptr = none.
+  const std::atomic<bool>* interrupt = nullptr;
   // Residual check interval in steps; 0 = automatic: 1000 for the fixed-step explicit
   // methods (a check costs about one RHS), 1 (every step) for all others.
   long check_every = 0;
@@ -118,6 +123,7 @@ enum class RunStatus {
   TimeLimit,      // reached t_max first
   StepLimit,      // reached max_steps first
   WallLimit,      // reached max_wall_seconds first
+  Interrupted,    // IntegratorOptions::interrupt was set (e.g. Ctrl-C) before the end
   SolverFailure,  // the integrator reported an error (e.g. a SUNDIALS flag)
   Diverged,       // non-finite or runaway state
 };

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <limits>
 
 namespace knitsim {
@@ -152,6 +153,18 @@ size_t edit_distance(const std::string& a, const std::string& b) {
 }
 
 }  // namespace
+
+void exit_with_run_status(const char* command, const RunStats& stats,
+                          const InterruptScope& interrupt, const std::string& dir) {
+  if (stats.status == RunStatus::Equilibrium) return;
+  if (stats.status == RunStatus::Interrupted) {
+    std::cerr << "knitsim " << command << ": interrupted by " << interrupt.signal_name()
+              << " at t = " << stats.t_final << " s; outputs written to " << dir << "/"
+              << std::endl;
+    throw CLI::RuntimeError(interrupt.exit_code());
+  }
+  throw CLI::RuntimeError(3);
+}
 
 std::string printable(const std::string& text) {
   std::string out;

@@ -9,6 +9,7 @@
 
 #include "solvers/integrator.hpp"
 #include "src/ica.hpp"
+#include "src/interrupt.hpp"
 
 namespace CLI {
 class App;
@@ -47,6 +48,13 @@ void add_gmres_options(CLI::App* cmd, IntegratorOptions& o);
 // run.t_max and run.equilibrium_tol (scene files, drape/knit --set) and the flags --rtol, --atol,
 // --velocity-atol, --dt, --max-order, --max-steps, --max-wall.
 const std::vector<std::pair<std::string, std::string>>& run_option_names();
+
+// The end of drape and knit once their outputs are written (src/main.cpp's exit contract):
+// returns at equilibrium; a run stopped by `interrupt`'s signal prints one line on stderr
+// ("knitsim <command>: interrupted by SIGINT at t = ... s; outputs written to DIR/") and exits
+// 128 + the signal; any other status exits 3.
+void exit_with_run_status(const char* command, const RunStats& stats,
+                          const InterruptScope& interrupt, const std::string& dir);
 
 // `text` as it may appear in a one-line message: control bytes (newline, tab, ...) and DEL as
 // \xNN, everything else unchanged.

@@ -3,7 +3,8 @@
 // Order of work: parse, load the scene and apply --set, check the run options and the
 // integrator name, create and probe --out; only then run and write. Bad input therefore writes
 // nothing (exit 2); a run that ends in any status but equilibrium still writes its outputs and
-// exits 3.
+// exits 3 -- or 128 + the signal (130, 143) when Ctrl-C or SIGTERM stopped it (status
+// interrupted, src/interrupt.hpp).
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <iostream>
@@ -12,6 +13,7 @@
 
 #include "src/cli_options.hpp"
 #include "src/commands.hpp"
+#include "src/interrupt.hpp"
 #include "src/output.hpp"
 #include "src/scene.hpp"
 #include "src/step_log.hpp"
@@ -96,6 +98,8 @@ void run(const DrapeArgs& args) {
   }
 
   const std::filesystem::path dir = make_output_dir(args.out, "drape-" + scene.name);
+  const InterruptScope interrupt;
+  scene.options.interrupt = interrupt.flag();
   std::string steps_csv;
   DrapeResult result = [&] {
     ProgressLine progress(scene.name + " " + integrator, scene.options.equilibrium_tol,
@@ -109,7 +113,7 @@ void run(const DrapeArgs& args) {
   write_drape_outputs(dir, scene, result, args.target.empty() ? nullptr : &target_edges);
   if (args.step_history) write_file_atomic(dir / "steps.csv", steps_csv);
   if (!args.quiet) std::cout << human_summary(scene, result, dir.string()) << std::flush;
-  if (result.stats.status != RunStatus::Equilibrium) throw CLI::RuntimeError(3);
+  exit_with_run_status("drape", result.stats, interrupt, dir.string());
 }
 
 }  // namespace

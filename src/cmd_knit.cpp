@@ -5,7 +5,8 @@
 // the run options and the integrator name, build the model, create and probe --out; only then
 // run and write. Bad input (a bad chart: one line naming row and column) therefore writes
 // nothing and exits 2; a run that ends in any status but equilibrium still writes everything
-// and exits 3.
+// and exits 3 -- or 128 + the signal (130, 143) when Ctrl-C or SIGTERM stopped it (status
+// interrupted, src/interrupt.hpp).
 //
 // Outputs in --out (lengths in m):
 //   points.csv       id,wale,level,x,y,z,x0,y0,z0  every interlacing point at the end and at rest
@@ -412,6 +413,8 @@ void run(const KnitArgs& args) {
 
   const std::string name = fs::path(args.chart).stem().string();
   const fs::path dir = make_output_dir(args.out, "knit-" + name);
+  const InterruptScope interrupt;
+  opt.interrupt = interrupt.flag();
   std::vector<double> x(model.network.dof()), v(model.network.dof());
   model.network.initial_state(x.data(), v.data());
   RunStats stats;
@@ -450,7 +453,7 @@ void run(const KnitArgs& args) {
         {"outputs", dir.string() + "/"}};
     std::cout << t.text() << std::flush;
   }
-  if (stats.status != RunStatus::Equilibrium) throw CLI::RuntimeError(3);
+  exit_with_run_status("knit", stats, interrupt, dir.string());
 }
 
 }  // namespace

@@ -3,7 +3,8 @@
 //
 // Contract for every command: exit status 0 on success; on bad input one line on stderr
 // naming the field and its accepted range, exit status 2; on a numerical failure of the run
-// itself the outputs are still written with the status, exit status 3.
+// itself the outputs are still written with the status, exit status 3 (drape and knit: 128 + the
+// signal after Ctrl-C or SIGTERM, outputs written; src/interrupt.hpp).
 #pragma once
 
 namespace CLI {

@@ -5,6 +5,8 @@
 //      "knitsim: error: <message>" on stderr (commands validate all input before writing)
 //   3  a run that ended in another status than equilibrium: the command throws
 //      CLI::RuntimeError(3) after writing its outputs (CLI11 prints nothing for it)
+//   130, 143  drape or knit stopped by SIGINT or SIGTERM (128 + the signal): the run ended with
+//      status interrupted and its outputs were written (src/interrupt.hpp)
 //   1  anything else (e.g. a file that cannot be written), one line on stderr
 #include <CLI/CLI.hpp>
 #include <algorithm>

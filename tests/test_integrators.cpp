@@ -3,6 +3,7 @@
 // Verlet's energy behaviour, cross-integrator agreement on the drape equilibrium, the
 // elongation limit on both paths, and the driver's statuses.
 #include <algorithm>
+#include <atomic>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <map>
@@ -334,7 +335,7 @@ TEST_CASE("elongation limit: Provot on the reference path, a stiff penalty on th
   }
 }
 
-TEST_CASE("driver statuses: time, step and wall limits, divergence, bad options") {
+TEST_CASE("driver statuses: time, step and wall limits, interrupts, divergence, bad options") {
   const SpringNetwork net(build_chain(hanging(1)));
   std::vector<double> x, v;
 
@@ -365,6 +366,28 @@ TEST_CASE("driver statuses: time, step and wall limits, divergence, bad options"
     opt.max_wall_seconds = 1e-9;
     const RunStats s = run_to_equilibrium(net, "implicit-euler", opt, x, v);
     CHECK(s.status == RunStatus::WallLimit);
+  }
+  SECTION("interrupt request: Interrupted at the next check, with the state reached") {
+    std::atomic<bool> stop{false};
+    IntegratorOptions opt;
+    opt.interrupt = &stop;
+    x.clear();
+    const RunStats settled = run_to_equilibrium(net, "cvode-bdf", opt, x, v);
+    CHECK(settled.status == RunStatus::Equilibrium);  // an unset request changes nothing
+    for (const char* name : {"cvode-bdf", "euler"}) {
+      stop = true;
+      opt.dt = std::string(name) == "euler" ? 1e-7 : 0.0;  // 1000 steps do not settle
+      x.clear();
+      const RunStats s = run_to_equilibrium(net, name, opt, x, v);
+      INFO(name << ": " << s.message);
+      CHECK(s.status == RunStatus::Interrupted);
+      CHECK(std::string(to_string(s.status)) == "interrupted");
+      // stopped at the first residual check: one step (cvode-bdf), check_every = 1000 (euler)
+      CHECK(s.steps == (std::string(name) == "euler" ? 1000 : 1));
+      CHECK(s.t_final > 0.0);
+      CHECK(static_cast<int>(x.size()) == net.dof());
+      CHECK(s.residual > opt.equilibrium_tol);
+    }
   }
   SECTION("NaN acceleration is a status for every integrator, never an exception") {
     const NanAccelerationSystem nan_system(net);

@@ -10,6 +10,7 @@
 
 #include <catch2/catch.hpp>
 #include <chrono>
+#include <fstream>
 #include <limits>
 #include <memory>
 #include <stdexcept>
@@ -237,4 +238,63 @@ TEST_CASE("knitsim fit killed after a decade and resumed equals an uninterrupted
     CHECK(b.at(key) == a.at(key));
   }
   CHECK(slurp(cut / "history.csv") == slurp(whole / "history.csv"));
+}
+
+TEST_CASE("knitsim drape and knit stopped by SIGINT or SIGTERM: outputs written, status "
+          "interrupted, exit 128 + signal") {
+  using namespace knitsim::test;
+  TempDir tmp("interrupt");
+  // Two runs that take minutes (explicit Euler to equilibrium), stopped after half a second.
+  std::string chart;
+  for (int r = 0; r < 20; ++r, chart += '\n')
+    for (int c = 0; c < 20; ++c) chart += (r % 4 == 1 && c % 5 == 2) ? 'T' : 'K';
+  std::ofstream(tmp.path / "tucks.chart") << chart;
+  struct Case {
+    std::string args;
+    int signal;
+    std::vector<std::string> files;
+  };
+  const std::vector<Case> cases = {
+      {"drape --integrator euler", SIGINT, {"summary.json", "nodes.csv", "drape.png"}},
+      {"knit --integrator euler --chart '" + (tmp.path / "tucks.chart").string() + "'",
+       SIGTERM,
+       {"summary.json", "points.csv", "after.png"}}};
+  for (const Case& c : cases) {
+    INFO(c.args);
+    const fs::path out = tmp.path / ("out-" + std::to_string(c.signal));
+    const pid_t pid = start_knitsim(c.args + " --quiet --out '" + out.string() + "'", tmp);
+    REQUIRE(pid > 0);
+    // The handler is installed right after --out is made; give the run half a second beyond.
+    int status = 0;
+    const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (!fs::exists(out) && std::chrono::steady_clock::now() < give_up &&
+           ::waitpid(pid, &status, WNOHANG) == 0)
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    ::kill(pid, c.signal);
+    // Ends at its next residual check (Euler: every 1000 steps, well under a second).
+    pid_t done = 0;
+    while ((done = ::waitpid(pid, &status, WNOHANG)) == 0 &&
+           std::chrono::steady_clock::now() < give_up)
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    if (done == 0) {
+      ::kill(pid, SIGKILL);
+      ::waitpid(pid, &status, 0);
+    }
+    const std::string err = slurp(tmp.path / "background-stderr.txt");
+    INFO("stderr: " << err);
+    REQUIRE(done == pid);
+    REQUIRE(WIFEXITED(status));
+    CHECK(WEXITSTATUS(status) == 128 + c.signal);
+    CHECK(lines(err).size() == 1);
+    CHECK(err.find(std::string("interrupted by ") + (c.signal == SIGINT ? "SIGINT" : "SIGTERM")) !=
+          std::string::npos);
+    CHECK(err.find(out.string()) != std::string::npos);
+    for (const std::string& f : c.files) CHECK(fs::exists(out / f));
+    const nlohmann::json summary = nlohmann::json::parse(slurp(out / "summary.json"));
+    CHECK(summary.at("status") == "interrupted");
+    const nlohmann::json& stats = summary.contains("stats") ? summary.at("stats") : summary;
+    CHECK(stats.at("steps").get<long>() >= 1000);
+    CHECK(stats.at("t_final").get<double>() > 0.0);
+  }
 }
