@@ -32,6 +32,7 @@ struct DrapeArgs {
   std::string target;
   bool step_history = false;
   bool quiet = false;
+  bool no_pictures = false;
 };
 
 std::string human_summary(const Scene& scene, const DrapeResult& r, const std::string& dir) {
@@ -110,7 +111,8 @@ void run(const DrapeArgs& args) {
     steps_csv = steps.csv();
     return r;
   }();
-  write_drape_outputs(dir, scene, result, args.target.empty() ? nullptr : &target_edges);
+  write_drape_outputs(dir, scene, result, args.target.empty() ? nullptr : &target_edges,
+                      !args.no_pictures);
   if (args.step_history) write_file_atomic(dir / "steps.csv", steps_csv);
   if (!args.quiet) std::cout << human_summary(scene, result, dir.string()) << std::flush;
   exit_with_run_status("drape", result.stats, interrupt, dir.string());
@@ -161,6 +163,8 @@ void register_drape_command(CLI::App& app) {
   cmd->add_flag("--step-history", args->step_history,
                 "Also write steps.csv: t, step size, order and residual of every step (thinned "
                 "evenly beyond 2e5 rows)");
+  cmd->add_flag("--no-pictures", args->no_pictures,
+                "Skip drape.png (its rendering costs about as much as a four_corner solve)");
   cmd->add_flag("--quiet", args->quiet, "No progress line and no summary on stdout");
   cmd->callback([args] { run(*args); });
 }

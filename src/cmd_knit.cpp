@@ -19,7 +19,7 @@
 //                    `course`)
 //   frames/centerlines_NNN.vtk, frames/frame_NNN.png   the captured frames (below)
 //   before.png, after.png   front views at rest and at the end (yarns as z-buffered tubes,
-//                    render_strokes_png; interlacing points as dots)
+//                    render_strokes_png; interlacing points as dots); --no-pictures skips every PNG
 //   summary.json, manifest.json
 //   steps.csv        with --step-history: step,t,h,order,residual (src/step_log.hpp)
 // Numbers in the CSV and VTK files are the shortest decimal text that reads back as the same
@@ -84,6 +84,7 @@ struct KnitArgs {
   std::string out;
   bool step_history = false;
   bool quiet = false;
+  bool no_pictures = false;
 };
 
 // The --set keys, each bound to one field.
@@ -324,8 +325,10 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
                             stats.integrator + ")";
   write_file_atomic(dir / "centerlines.vtk",
                     centerlines_vtk("knitsim knit " + name + ": " + state, lines));
-  render_front(dir / "before.png", m, rest, centerlines_of(rest), name + ": at rest");
-  render_front(dir / "after.png", m, pos, lines, name + ": " + state);
+  if (!args.no_pictures) {
+    render_front(dir / "before.png", m, rest, centerlines_of(rest), name + ": at rest");
+    render_front(dir / "after.png", m, pos, lines, name + ": " + state);
+  }
 
   fs::create_directories(dir / "frames");
   nlohmann::json frame_list = nlohmann::json::array();
@@ -338,7 +341,8 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
                               " s, residual " + format_number(frames[f].residual, 3);
     write_file_atomic(dir / "frames" / (std::string("centerlines_") + stem + ".vtk"),
                       centerlines_vtk("knitsim knit " + label, fl));
-    render_front(dir / "frames" / (std::string("frame_") + stem + ".png"), m, fp, fl, label);
+    if (!args.no_pictures)
+      render_front(dir / "frames" / (std::string("frame_") + stem + ".png"), m, fp, fl, label);
     frame_list.push_back({{"index", f},
                           {"t", frames[f].t},
                           {"residual", frames[f].residual},
@@ -494,6 +498,8 @@ void register_knit_command(CLI::App& app) {
   cmd->add_flag("--step-history", args->step_history,
                 "Also write steps.csv: t, step size, order and residual of every step (thinned "
                 "evenly beyond 2e5 rows)");
+  cmd->add_flag("--no-pictures", args->no_pictures,
+                "Skip before.png, after.png and the frames' PNGs (the CSV and VTK files stay)");
   cmd->add_flag("--quiet", args->quiet, "No progress line and no summary on stdout");
   cmd->callback([args, velocity_atol] {
     args->velocity_atol_given = velocity_atol->count() > 0;

@@ -388,8 +388,36 @@ nlohmann::json drape_summary(const Scene& scene, const DrapeResult& r) {
   return j;
 }
 
+namespace {
+
+// drape.png: the oblique view of the final state, pins marked, parameters in the caption.
+void write_drape_picture(const fs::path& path, const Scene& scene, const DrapeResult& r,
+                         const std::vector<std::array<int, 4>>& quads) {
+  const DrapeGrid& g = r.grid;
+  const int side = g.n + 1;
+  MeshScene mesh;
+  mesh.points = r.positions;
+  mesh.quads = quads;
+  mesh.markers = g.network.spec().pinned;
+  RenderView view;
+  view.title = scene.name + ": " + r.stats.integrator + ", " + to_string(r.stats.status) +
+               " at t = " + format_number(r.stats.t_final, 4) + " s";
+  const DrapeParams& p = scene.params;
+  view.caption = {"k = " + format_number(p.stiffness) + " N/m, c = " + format_number(p.damping) +
+                      " N s/m, L0 = " + format_number(100 * p.natural_length) + " cm, topology " +
+                      std::string(1, p.topology) + ", " + format_number(p.areal_density) + " g/m^2",
+                  std::to_string(side) + " x " + std::to_string(side) + " particles, centre sag " +
+                      format_number(100 * r.centre_sag, 3) + " cm, max strain " +
+                      format_number(100 * r.max_strain, 3) + " %, residual " +
+                      format_number(r.stats.residual, 2)};
+  write_file_atomic_with(path,
+                         [&](const std::string& tmp) { render_mesh_png(tmp, mesh, view); });
+}
+
+}  // namespace
+
 void write_drape_outputs(const fs::path& dir, const Scene& scene, const DrapeResult& r,
-                         const std::vector<EdgeFit>* target) {
+                         const std::vector<EdgeFit>* target, bool picture) {
   const DrapeGrid& g = r.grid;
   const int side = g.n + 1;
   std::vector<int> pinned(r.positions.size(), 0);
@@ -458,30 +486,14 @@ void write_drape_outputs(const fs::path& dir, const Scene& scene, const DrapeRes
   vtk.point_vectors.push_back({"displacement", displacement});
   write_file_atomic(dir / "drape.vtk", to_vtk(vtk));
 
-  MeshScene mesh;
-  mesh.points = r.positions;
-  mesh.quads = quads;
-  mesh.markers = g.network.spec().pinned;
-  RenderView view;
-  view.title = scene.name + ": " + r.stats.integrator + ", " + to_string(r.stats.status) +
-               " at t = " + format_number(r.stats.t_final, 4) + " s";
-  const DrapeParams& p = scene.params;
-  view.caption = {"k = " + format_number(p.stiffness) + " N/m, c = " + format_number(p.damping) +
-                      " N s/m, L0 = " + format_number(100 * p.natural_length) + " cm, topology " +
-                      std::string(1, p.topology) + ", " + format_number(p.areal_density) + " g/m^2",
-                  std::to_string(side) + " x " + std::to_string(side) + " particles, centre sag " +
-                      format_number(100 * r.centre_sag, 3) + " cm, max strain " +
-                      format_number(100 * r.max_strain, 3) + " %, residual " +
-                      format_number(r.stats.residual, 2)};
-  write_file_atomic_with(dir / "drape.png",
-                         [&](const std::string& tmp) { render_mesh_png(tmp, mesh, view); });
-
+  if (picture) write_drape_picture(dir / "drape.png", scene, r, quads);
   write_json_atomic(dir / "manifest.json", manifest({{"scene", scene.name},
                                                      {"source", scene.source},
                                                      {"integrator", r.stats.integrator},
                                                      {"params", to_json(scene.params)},
                                                      {"options", to_json(scene.options)}}));
 }
+
 
 // ---- progress ----------------------------------------------------------------------------------
 

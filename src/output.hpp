@@ -102,10 +102,11 @@ nlohmann::json drape_summary(const Scene& scene, const DrapeResult& result);
 // Writes summary.json, nodes.csv, drape.vtk, drape.png, and edges.csv (the measured edges,
 // SPEC 2.5) when the final state is finite. With `target` (the measured edges of the matching
 // target scene, e.g. fit_target_scene(...)), summary.json also gets `objective` (Eq. 5, %) and
-// the per-edge coefficients of both, and target_edges.csv is written.
+// the per-edge coefficients of both, and target_edges.csv is written. picture = false skips
+// drape.png (`--no-pictures`: the rendering costs about as much as a four_corner solve).
 void write_drape_outputs(const std::filesystem::path& dir, const Scene& scene,
                          const DrapeResult& result,
-                         const std::vector<EdgeFit>* target = nullptr);
+                         const std::vector<EdgeFit>* target = nullptr, bool picture = true);
 
 // ---- progress ----------------------------------------------------------------------------------
 

@@ -140,6 +140,22 @@ TEST_CASE("a settled drape: exit 0, summary, nodes, VTK, PNG and manifest agree"
   for (const auto& e : fs::directory_iterator(out)) CHECK(e.path().extension() != ".tmp");
 }
 
+TEST_CASE("drape --no-pictures writes every output but drape.png, the same numbers") {
+  TempDir tmp("nopictures");
+  const std::string args = "drape --quiet --out '";
+  const fs::path with = tmp.path / "with", without = tmp.path / "without";
+  REQUIRE(run_knitsim(args + with.string() + "'", tmp).status == 0);
+  REQUIRE(run_knitsim(args + without.string() + "' --no-pictures", tmp).status == 0);
+  CHECK(fs::exists(with / "drape.png"));
+  CHECK(!fs::exists(without / "drape.png"));
+  for (const char* f : {"nodes.csv", "edges.csv", "drape.vtk"}) {
+    INFO(f);
+    CHECK(slurp(without / f) == slurp(with / f));
+  }
+  CHECK(fs::exists(without / "summary.json"));
+  CHECK(fs::exists(without / "manifest.json"));
+}
+
 TEST_CASE("an unsettled drape exits 3 and still writes its outputs") {
   TempDir tmp("unsettled");
   const fs::path out = tmp.path / "run";

@@ -54,6 +54,17 @@ TEST_CASE("knitsim knit: a small tuck chart settles and its outputs agree with t
     CHECK(fs::exists(out / f));
   CHECK(!fs::exists(out / "frames/centerlines_003.vtk"));
 
+  // --no-pictures: the same run without a PNG anywhere, the same points.
+  const fs::path bare = tmp / "bare";
+  REQUIRE(run_knit("--chart '" + (tmp / "small.chart").string() +
+                       "' --set knit.stabiliser=0.1 --frames 3 --newton-solver ldl --max-order 3 "
+                       "--no-pictures --quiet --out '" +
+                       bare.string() + "'",
+                   err) == 0);
+  for (const auto& e : fs::recursive_directory_iterator(bare)) CHECK(e.path().extension() != ".png");
+  CHECK(fs::exists(bare / "frames/centerlines_002.vtk"));
+  CHECK(slurp(bare / "points.csv") == slurp(out / "points.csv"));
+
   KnitParams p;
   p.stabiliser_ratio = 0.1;
   const KnitModel m = build_knit(parse_knit_chart(chart_text), p);
