@@ -4,6 +4,8 @@
 #include <Eigen/Dense>
 #include <catch2/catch.hpp>
 #include <random>
+#include <thread>
+#include <vector>
 
 #include "models/drape_grid.hpp"
 #include "models/mirror_reduced.hpp"
@@ -89,6 +91,39 @@ TEST_CASE(
     for (int k = singular.outerIndexPtr()[j]; k < singular.outerIndexPtr()[j + 1]; ++k)
       if (j == 0 || singular.innerIndexPtr()[k] == 0) singular.valuePtr()[k] = 0.0;
   CHECK_FALSE(f.factorize(singular));
+}
+
+TEST_CASE("SymmetricFactor: instances in concurrent threads give the one-thread results bit for bit") {
+  // What `knitsim fit --jobs J` does: every evaluation owns its factorisation (CHOLMOD: its own
+  // cholmod_common), and threads factorise and solve at the same time.
+  const Eigen::SparseMatrix<double> S0 = drape_schur(100.0, 0.0);
+  const Eigen::SparseMatrix<double> S1 = drape_schur(100.0, 0.01);  // indefinite: LDL^T fallback
+  const int n = static_cast<int>(S0.rows());
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(n, -1.0, 2.0);
+  const Backend which = GENERATE(Backend::Simplicial, Backend::Block, Backend::Supernodal);
+  // x after `rounds` alternating factorisations of S0 and S1, each solved; concatenated.
+  auto run = [&](int rounds) {
+    detail::SymmetricFactor f(which);
+    f.analyze(S0);
+    Eigen::VectorXd x(n), all(2 * rounds * n);
+    for (int r = 0; r < 2 * rounds; ++r) {
+      if (!f.factorize(r % 2 ? S1 : S0)) return Eigen::VectorXd();
+      f.solve(b, x);
+      all.segment(r * n, n) = x;
+    }
+    return all;
+  };
+  constexpr int kRounds = 40;
+  const Eigen::VectorXd serial = run(kRounds);
+  REQUIRE(serial.size() == 2 * kRounds * n);
+  std::vector<Eigen::VectorXd> results(4);
+  std::vector<std::thread> threads;
+  for (auto& r : results) threads.emplace_back([&run, &r] { r = run(kRounds); });
+  for (auto& t : threads) t.join();
+  for (const Eigen::VectorXd& r : results) {
+    REQUIRE(r.size() == serial.size());
+    CHECK((r.array() == serial.array()).all());
+  }
 }
 
 TEST_CASE("SymmetricFactor: automatic takes the supernodal back end from supernodal_min_dof on") {
