@@ -180,15 +180,18 @@ std::unique_ptr<Integrator> make_integrator(const std::string& name) {
 
 RunStats run_to_equilibrium(const MechanicalSystem& sys, const std::string& integrator,
                             const IntegratorOptions& opt, std::vector<double>& x,
-                            std::vector<double>& v, RunObserver* observer) {
+                            std::vector<double>& v, RunObserver* observer, double t0) {
   auto integ = make_integrator(integrator);
-  return run_to_equilibrium(sys, *integ, opt, x, v, observer);
+  return run_to_equilibrium(sys, *integ, opt, x, v, observer, t0);
 }
 
 RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
                             const IntegratorOptions& opt, std::vector<double>& x,
-                            std::vector<double>& v, RunObserver* observer) {
+                            std::vector<double>& v, RunObserver* observer, double t0) {
   opt.validate();
+  if (!(t0 >= 0.0) || !(t0 < opt.t_max))
+    throw std::invalid_argument("run_to_equilibrium: t0 = " + std::to_string(t0) +
+                                " s: must be >= 0 and < t_max");
   const int n = sys.dof();
   if (x.empty() || v.empty()) {
     x.assign(n, 0.0);
@@ -205,7 +208,7 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
 
   RunStats stats;
   stats.integrator = integ.info().name;
-  integ.start(sys, 0.0, x.data(), v.data(), opt);
+  integ.start(sys, t0, x.data(), v.data(), opt);
 
   const bool cheap_steps = integ.info().explicit_method && !integ.info().adaptive;
   const long check_every = opt.check_every > 0 ? opt.check_every : (cheap_steps ? 1000 : 1);
@@ -236,8 +239,8 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
 
   // The initial state may already be at rest (e.g. a plain knit chart).
   {
-    const double r0 = sys.static_residual(0.0, x.data());
-    if (t_start_eq <= 0.0 && r0 <= opt.equilibrium_tol)
+    const double r0 = sys.static_residual(t0, x.data());
+    if (t_start_eq <= t0 && r0 <= opt.equilibrium_tol)
       return finish(RunStatus::Equilibrium, "initial state is already at equilibrium");
   }
 

@@ -227,11 +227,14 @@ class RunObserver {
   virtual void on_check(double t, const double* x, const double* v, double residual) = 0;
 };
 
-// The one run-to-equilibrium driver. x, v: in the initial state (empty = the model's
-// initial_state), out the final state.
+// The one run-to-equilibrium driver. x, v: in the initial state at time t0 (empty = the model's
+// initial_state), out the final state. t0 > 0 continues a run that stopped there (knitsim drape
+// --continue); it must be below opt.t_max (std::invalid_argument otherwise). The counters in the
+// result are this call's only.
 RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
                             const IntegratorOptions& opt, std::vector<double>& x,
-                            std::vector<double>& v, RunObserver* observer = nullptr);
+                            std::vector<double>& v, RunObserver* observer = nullptr,
+                            double t0 = 0.0);
 
 // The static residual run_to_equilibrium accepts as equilibrium at state (t, x): equilibrium_tol,
 // or the residual's round-off floor there (MechanicalSystem::residual_roundoff) where that is
@@ -245,7 +248,8 @@ double equilibrium_threshold(const MechanicalSystem& sys, double t, const double
 // Convenience: make_integrator(name) + run_to_equilibrium.
 RunStats run_to_equilibrium(const MechanicalSystem& sys, const std::string& integrator,
                             const IntegratorOptions& opt, std::vector<double>& x,
-                            std::vector<double>& v, RunObserver* observer = nullptr);
+                            std::vector<double>& v, RunObserver* observer = nullptr,
+                            double t0 = 0.0);
 
 // Linear stability prediction for the explicit fixed-step methods (SPEC 2.4), per dof i from
 // a Gershgorin bound on da_c/dx at (t, x): omega_i^2 <= sum_j |Ax_ij|, gamma_i = c_i/m_i.

@@ -4,11 +4,13 @@
 // integrator name, create and probe --out; only then run and write. Bad input therefore writes
 // nothing (exit 2); a run that ends in any status but equilibrium still writes its outputs and
 // exits 3 -- or 128 + the signal (130, 143) when Ctrl-C or SIGTERM stopped it (status
-// interrupted, src/interrupt.hpp).
+// interrupted, src/interrupt.hpp). --continue DIR starts from the state.json of an earlier run
+// (read and checked with the other input, before --out is made).
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 
 #include "src/cli_options.hpp"
@@ -33,7 +35,36 @@ struct DrapeArgs {
   bool step_history = false;
   bool quiet = false;
   bool no_pictures = false;
+  std::string continue_from;  // --continue DIR
 };
+
+// --continue DIR: the state to start from, checked against this run's scene and options (the
+// model must be the one that run integrated; integrator and run options may differ). A
+// fixed-step run continued by the same integrator keeps its step unless --dt is given, so an
+// interrupted euler run continues on the same step sequence.
+DrapeState continue_state(const std::string& dir, const std::string& integrator, Scene& scene) {
+  const std::string where = "--continue " + dir + ": ";
+  SavedDrape saved;
+  try {
+    saved = read_saved_drape(dir);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument("--continue: " + std::string(e.what()));
+  }
+  const nlohmann::json now = to_json(scene.params);
+  for (const auto& [key, value] : now.items())
+    if (!saved.params.contains(key) || saved.params.at(key) != value)
+      throw std::invalid_argument(
+          where + "model." + key + " = " + value.dump() + " here, " +
+          (saved.params.contains(key) ? saved.params.at(key).dump() : std::string("absent")) +
+          " in the run being continued; give the same --scene and --set");
+  if (!(saved.state.t < scene.options.t_max))
+    throw std::invalid_argument(where + "that run stopped at t = " + format_number(saved.state.t) +
+                                " s, not below run.t_max = " + format_number(scene.options.t_max) +
+                                " s; raise run.t_max");
+  if (scene.options.dt == 0.0 && saved.dt > 0.0 && integrator == saved.integrator)
+    scene.options.dt = saved.dt;
+  return saved.state;
+}
 
 std::string human_summary(const Scene& scene, const DrapeResult& r, const std::string& dir) {
   const RunStats& s = r.stats;
@@ -87,6 +118,9 @@ void run(const DrapeArgs& args) {
     throw std::invalid_argument(std::string("--") + e.what());  // "--integrator = X: ..."
   }
 
+  std::optional<DrapeState> from;
+  if (!args.continue_from.empty()) from = continue_state(args.continue_from, integrator, scene);
+
   // --target: read, checked and fitted before the output folder is made.
   std::vector<EdgeFit> target_edges;
   if (!args.target.empty()) {
@@ -107,7 +141,7 @@ void run(const DrapeArgs& args) {
                           !args.quiet);
     StepLog steps(&progress);
     RunObserver* observer = args.step_history ? static_cast<RunObserver*>(&steps) : &progress;
-    DrapeResult r = run_drape(scene, integrator, observer);
+    DrapeResult r = run_drape(scene, integrator, observer, from ? &*from : nullptr);
     steps_csv = steps.csv();
     return r;
   }();
@@ -165,6 +199,10 @@ void register_drape_command(CLI::App& app) {
                 "evenly beyond 2e5 rows)");
   cmd->add_flag("--no-pictures", args->no_pictures,
                 "Skip drape.png (its rendering costs about as much as a four_corner solve)");
+  cmd->add_option("--continue", args->continue_from,
+                  "Start from the final state (state.json) of the run in this folder, at its "
+                  "t_final: continues an interrupted or capped run (same scene and --set; "
+                  "integrator and run options may change)");
   cmd->add_flag("--quiet", args->quiet, "No progress line and no summary on stdout");
   cmd->callback([args] { run(*args); });
 }

@@ -50,6 +50,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// state.json's "format": bump the number if the layout changes.
+constexpr const char* kDrapeStateFormat = "knitsim drape state 1";
+
 std::string tmp_name(const fs::path& path) { return path.string() + ".tmp"; }
 
 void commit_tmp(const fs::path& path) {
@@ -381,6 +384,7 @@ nlohmann::json drape_summary(const Scene& scene, const DrapeResult& r) {
                {"springs", net.spec().springs.size()},
                {"dof", net.dof()},
                {"integrated_dof", r.integrated_dof}};
+  j["t_start"] = r.t_start;
   j["max_strain"] = r.max_strain;
   j["centre_sag_m"] = r.centre_sag;
   j["params"] = to_json(scene.params);
@@ -415,6 +419,45 @@ void write_drape_picture(const fs::path& path, const Scene& scene, const DrapeRe
 }
 
 }  // namespace
+
+SavedDrape read_saved_drape(const fs::path& dir) {
+  auto read = [&](const char* name) {
+    const fs::path path = dir / name;
+    std::ifstream in(path);
+    if (!in)
+      throw std::invalid_argument(
+          path.string() + ": cannot be read (" +
+          (fs::exists(dir / "summary.json")
+               ? "that run's final state was not finite, or it predates state.json)"
+               : "not the output folder of a knitsim drape run)"));
+    try {
+      return nlohmann::json::parse(in);
+    } catch (const nlohmann::json::exception& e) {
+      throw std::invalid_argument(path.string() + ": not valid JSON (" + e.what() + ")");
+    }
+  };
+  const nlohmann::json state = read("state.json"), summary = read("summary.json");
+  SavedDrape saved;
+  try {
+    if (state.at("format") != kDrapeStateFormat)
+      throw std::invalid_argument("format is not \"" + std::string(kDrapeStateFormat) + "\"");
+    saved.state.t = state.at("t").get<double>();
+    saved.state.x = state.at("x").get<std::vector<double>>();
+    saved.state.v = state.at("v").get<std::vector<double>>();
+    const size_t n = state.at("integrated_dof").get<size_t>();
+    if (saved.state.x.size() != n || saved.state.v.size() != n)
+      throw std::invalid_argument("x and v must hold integrated_dof = " + std::to_string(n) +
+                                  " numbers each");
+    saved.integrator = summary.at("integrator").get<std::string>();
+    saved.dt = summary.at("dt").get<double>();
+    saved.params = summary.at("params");
+  } catch (const nlohmann::json::exception& e) {
+    throw std::invalid_argument((dir / "state.json").string() + " or summary.json: " + e.what());
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument((dir / "state.json").string() + ": " + e.what());
+  }
+  return saved;
+}
 
 void write_drape_outputs(const fs::path& dir, const Scene& scene, const DrapeResult& r,
                          const std::vector<EdgeFit>* target, bool picture) {
@@ -469,6 +512,16 @@ void write_drape_outputs(const fs::path& dir, const Scene& scene, const DrapeRes
             << pinned[id] << "\n";
     }
   write_file_atomic(dir / "nodes.csv", nodes.str());
+
+  const auto all_finite = [](const std::vector<double>& a) {
+    return std::all_of(a.begin(), a.end(), [](double d) { return std::isfinite(d); });
+  };
+  if (all_finite(r.state_x) && all_finite(r.state_v))
+    write_json_atomic(dir / "state.json", {{"format", kDrapeStateFormat},
+                                           {"t", r.stats.t_final},
+                                           {"integrated_dof", r.integrated_dof},
+                                           {"x", r.state_x},
+                                           {"v", r.state_v}});
 
   std::vector<std::array<int, 4>> quads;
   for (int i = 0; i < g.n; ++i)

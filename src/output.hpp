@@ -98,7 +98,8 @@ nlohmann::json drape_summary(const Scene& scene, const DrapeResult& result);
 // Writes into `dir` (which must exist): summary.json, nodes.csv (id,i,j,x,y,z,pinned; all
 // particles at t_final, m), drape.vtk (the grid's quads, point data `pinned` and
 // `displacement` = position - rest position, m), drape.png (render_mesh_png, oblique view) and
-// manifest.json (options: scene, integrator, params, run options).
+// manifest.json (options: scene, integrator, params, run options), and state.json (t, and x, v:
+// the integrated unknowns at t_final, shortest round-trip decimals; omitted if not finite).
 // Writes summary.json, nodes.csv, drape.vtk, drape.png, and edges.csv (the measured edges,
 // SPEC 2.5) when the final state is finite. With `target` (the measured edges of the matching
 // target scene, e.g. fit_target_scene(...)), summary.json also gets `objective` (Eq. 5, %) and
@@ -107,6 +108,18 @@ nlohmann::json drape_summary(const Scene& scene, const DrapeResult& result);
 void write_drape_outputs(const std::filesystem::path& dir, const Scene& scene,
                          const DrapeResult& result,
                          const std::vector<EdgeFit>* target = nullptr, bool picture = true);
+
+// What `knitsim drape --continue DIR` reads back from an earlier run's folder: DIR/state.json
+// (the integrated state at t_final, written by write_drape_outputs whenever it is finite) and
+// that run's model parameters, integrator and fixed step from DIR/summary.json.
+struct SavedDrape {
+  DrapeState state;
+  std::string integrator;
+  double dt = 0.0;         // the run's fixed step (euler, verlet, implicit-euler), else 0
+  nlohmann::json params;   // to_json(DrapeParams) of the run
+};
+// Throws std::invalid_argument naming the file and what is missing or malformed.
+SavedDrape read_saved_drape(const std::filesystem::path& dir);
 
 // ---- progress ----------------------------------------------------------------------------------
 

@@ -285,22 +285,33 @@ std::string default_integrator() {
   return "implicit-euler";
 }
 
-DrapeResult run_drape(const Scene& scene, const std::string& integrator, RunObserver* observer) {
+DrapeResult run_drape(const Scene& scene, const std::string& integrator, RunObserver* observer,
+                      const DrapeState* from) {
   scene.validate();
   auto integ = make_integrator(integrator);
-  DrapeResult r{build_drape_grid(scene.params), 0, RunStats{}, {}, {}};
+  DrapeResult r{build_drape_grid(scene.params), 0, RunStats{}, {}, {}, 0.0, 0.0, {}, {}, 0.0};
   const SpringNetwork& net = r.grid.network;
-  std::vector<double> x, v;
+  std::vector<double>& q = r.state_x;
+  std::vector<double>& qv = r.state_v;
+  const double t0 = from ? from->t : 0.0;
+  r.t_start = t0;
+  if (from) q = from->x, qv = from->v;
+  auto run = [&](const MechanicalSystem& sys) {
+    if (from && (static_cast<int>(q.size()) != sys.dof() || static_cast<int>(qv.size()) != sys.dof()))
+      throw std::invalid_argument("the state to continue from has " + std::to_string(q.size()) +
+                                  " unknowns; this scene integrates " + std::to_string(sys.dof()));
+    r.stats = run_to_equilibrium(sys, *integ, scene.options, q, qv, observer, t0);
+    r.integrated_dof = sys.dof();
+  };
+  std::vector<double> x;
   if (scene.params.symmetry != DrapeSymmetry::None) {
     const MirrorReduced reduced = make_drape_reduced(r.grid, scene.params.symmetry);
-    std::vector<double> q, qv;
-    r.stats = run_to_equilibrium(reduced, *integ, scene.options, q, qv, observer);
-    r.integrated_dof = reduced.dof();
+    run(reduced);
     x.resize(net.dof());
     reduced.unfold(q.data(), x.data());
   } else {
-    r.stats = run_to_equilibrium(net, *integ, scene.options, x, v, observer);
-    r.integrated_dof = net.dof();
+    run(net);
+    x = q;
   }
   const double t = r.stats.t_final;
   net.all_positions(t, x.data(), r.positions);

@@ -80,6 +80,16 @@ struct DrapeResult {
   double max_strain = 0.0;      // largest spring strain (L - L0)/L0 at t_final
   double centre_sag = 0.0;      // m: mean pin height minus the height of the grid centre (the
                                 // mean of the 1 or 4 particles nearest to it), at t_final
+  // The integrated state at t_final (integrated_dof unknowns each; the reduction's where
+  // model.symmetry is set): what `knitsim drape --continue` starts from (state.json).
+  std::vector<double> state_x, state_v;
+  double t_start = 0.0;  // s: where the run began (0, or the t of the state it continued from)
+};
+
+// Where a drape run continues from: the integrated state (x, v) at time t of an earlier run.
+struct DrapeState {
+  double t = 0.0;
+  std::vector<double> x, v;
 };
 
 // Builds the grid of `scene`, runs it from the flat state with run_to_equilibrium and the named
@@ -87,8 +97,10 @@ struct DrapeResult {
 // With model.symmetry = half | quarter | eighth the run integrates make_drape_reduced(grid) and
 // unfolds its final state onto the full grid, so positions, edges and outputs always see the full
 // sheet. A run that does not reach equilibrium is a status in result.stats, not an exception.
+// With `from` the run starts at from->t from that state instead of the flat sheet at rest; its
+// size must be the integrated dof (std::invalid_argument otherwise).
 DrapeResult run_drape(const Scene& scene, const std::string& integrator,
-                      RunObserver* observer = nullptr);
+                      RunObserver* observer = nullptr, const DrapeState* from = nullptr);
 
 // The target scene (src/targets.hpp) a scene's edges are compared with: its own name if it is
 // one of four_corner, two_corner, two_corner_slack, else the one its pins imply.

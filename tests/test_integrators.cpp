@@ -367,6 +367,21 @@ TEST_CASE("driver statuses: time, step and wall limits, interrupts, divergence, 
     const RunStats s = run_to_equilibrium(net, "implicit-euler", opt, x, v);
     CHECK(s.status == RunStatus::WallLimit);
   }
+  SECTION("t0: a run continued from (t0, x, v) starts there; t0 outside [0, t_max) is refused") {
+    IntegratorOptions opt = with_dt(1e-4);
+    opt.max_steps = 10;
+    x.clear();
+    const RunStats first = run_to_equilibrium(net, "euler", opt, x, v);
+    REQUIRE(first.status == RunStatus::StepLimit);
+    const RunStats second = run_to_equilibrium(net, "euler", opt, x, v, nullptr, first.t_final);
+    CHECK(second.steps == 10);
+    CHECK(second.t_final == Approx(first.t_final + 10 * 1e-4).epsilon(1e-12));
+    opt.t_max = 1.0;
+    CHECK_THROWS_AS(run_to_equilibrium(net, "euler", opt, x, v, nullptr, 1.0),
+                    std::invalid_argument);
+    CHECK_THROWS_AS(run_to_equilibrium(net, "euler", opt, x, v, nullptr, -1.0),
+                    std::invalid_argument);
+  }
   SECTION("interrupt request: Interrupted at the next check, with the state reached") {
     std::atomic<bool> stop{false};
     IntegratorOptions opt;

@@ -296,5 +296,64 @@ TEST_CASE("knitsim drape and knit stopped by SIGINT or SIGTERM: outputs written,
     const nlohmann::json& stats = summary.contains("stats") ? summary.at("stats") : summary;
     CHECK(stats.at("steps").get<long>() >= 1000);
     CHECK(stats.at("t_final").get<double>() > 0.0);
+    if (c.signal == SIGINT) {  // the drape: nothing lost, it continues to equilibrium
+      const Run more = run_knitsim("drape --continue '" + out.string() + "' --quiet --out '" +
+                                       (tmp.path / "continued").string() + "'",
+                                   tmp);
+      INFO(more.err);
+      CHECK(more.status == 0);
+      const nlohmann::json end = nlohmann::json::parse(slurp(tmp.path / "continued" / "summary.json"));
+      CHECK(end.at("t_start") == stats.at("t_final"));
+      CHECK(end.at("centre_sag_m").get<double>() == Approx(0.012882511).epsilon(1e-6));
+    }
+  }
+}
+
+TEST_CASE("knitsim drape --continue: a run continued where it stopped is the uninterrupted run") {
+  using namespace knitsim::test;
+  TempDir tmp("continue");
+  auto drape = [&](const std::string& args, const std::string& out) {
+    return run_knitsim("drape " + args + " --quiet --out '" + (tmp.path / out).string() + "'", tmp);
+  };
+  auto json = [&](const std::string& out, const char* file) {
+    return nlohmann::json::parse(slurp(tmp.path / out / file));
+  };
+  // Euler (automatic step): 3000 + 2000 steps equal 5000 steps bit for bit, state and nodes.
+  REQUIRE(drape("--integrator euler --max-steps 3000", "first").status == 3);
+  REQUIRE(drape("--integrator euler --max-steps 2000 --continue '" + (tmp.path / "first").string() +
+                    "'",
+                "second")
+              .status == 3);
+  REQUIRE(drape("--integrator euler --max-steps 5000", "whole").status == 3);
+  const nlohmann::json second = json("second", "state.json"), whole = json("whole", "state.json");
+  CHECK(second.at("t") == whole.at("t"));
+  CHECK(second.at("x") == whole.at("x"));
+  CHECK(second.at("v") == whole.at("v"));
+  CHECK(slurp(tmp.path / "second" / "nodes.csv") == slurp(tmp.path / "whole" / "nodes.csv"));
+  CHECK(json("second", "summary.json").at("t_start") == json("first", "summary.json").at("t_final"));
+  CHECK(json("second", "summary.json").at("dt") == json("whole", "summary.json").at("dt"));
+
+  // Another integrator may take over: cvode-bdf from the Euler state reaches the same equilibrium.
+  REQUIRE(drape("--continue '" + (tmp.path / "first").string() + "'", "bdf").status == 0);
+  REQUIRE(drape("", "reference").status == 0);
+  CHECK(json("bdf", "summary.json").at("centre_sag_m").get<double>() ==
+        Approx(json("reference", "summary.json").at("centre_sag_m").get<double>()).epsilon(1e-8));
+
+  // Refused with one line and nothing written: no drape folder, another model, t_max passed.
+  struct Bad {
+    std::string args, says;
+  };
+  for (const Bad& b :
+       {Bad{"--continue '" + tmp.path.string() + "'", "not the output folder of a knitsim drape"},
+        Bad{"--continue '" + (tmp.path / "first").string() + "' --set model.stiffness=900",
+            "model.stiffness = 900"},
+        Bad{"--continue '" + (tmp.path / "first").string() + "' --set run.t_max=1e-3",
+            "raise run.t_max"}}) {
+    INFO(b.args);
+    const Run r = drape(b.args, "refused");
+    CHECK(r.status == 2);
+    CHECK(lines(r.err).size() == 1);
+    CHECK(r.err.find(b.says) != std::string::npos);
+    CHECK(!fs::exists(tmp.path / "refused"));
   }
 }
