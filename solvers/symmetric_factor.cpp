@@ -3,6 +3,7 @@
 #include <cholmod.h>
 
 #include <Eigen/SparseCholesky>
+#include <mutex>
 #include <stdexcept>
 
 #include "solvers/block_ldlt.hpp"
@@ -10,6 +11,23 @@
 namespace knitsim::detail {
 
 namespace {
+
+// Held around every CHOLMOD call that reaches BLAS (numeric factorisation, solve). CHOLMOD is
+// re-entrant with one cholmod_common per instance, but the BLAS under it need not be: Debian's
+// libopenblas0-serial (which run.sh installs) is built without USE_LOCKING, and two threads
+// inside it at once can corrupt each other's work buffers (the case that OpenBLAS build option
+// exists for). Measured before this lock (test_symmetric_factor, "instances in concurrent
+// threads", 4 threads factorising and solving a 96-dof drape matrix): with 80 rounds each, 14
+// of 20 repetitions had threads off the one-thread result (22 of 80 thread results), by up to
+// 2.5e-5 against |x| <= 1.7e-3 -- silently wrong solves for `knitsim fit --jobs J` on grids
+// from supernodal_min_dof unknowns; with 400 rounds (the test now), 10 of 10. With the lock:
+// bit-identical (0 of 40); with Debian's reference BLAS instead of OpenBLAS, 0 of 15. The lock
+// serialises only the supernodal back end, which runs on grids large enough for a
+// factorisation to take ~0.1-1 s; the other back ends call no BLAS.
+std::mutex& blas_mutex() {
+  static std::mutex m;
+  return m;
+}
 
 // A CHOLMOD view of S's lower triangle (no copy): S's arrays, stype -1.
 cholmod_sparse view_lower(const Eigen::SparseMatrix<double>& S) {
@@ -110,7 +128,10 @@ bool SymmetricFactor::factorize(const Eigen::SparseMatrix<double>& S) {
   Impl& c = *impl_;
   if (c.chosen != Backend::Supernodal) return c.factorize_ldlt(S);
   cholmod_sparse A = view_lower(S);
-  const int ok = cholmod_factorize(&A, c.L, &c.cm);
+  const int ok = [&] {
+    const std::lock_guard<std::mutex> lock(blas_mutex());
+    return cholmod_factorize(&A, c.L, &c.cm);
+  }();
   if (ok && c.cm.status == CHOLMOD_OK && c.L->minor == c.L->n) {
     c.latest_is_ldlt = false;
     return true;
@@ -139,6 +160,7 @@ void SymmetricFactor::solve(const Eigen::Ref<const Eigen::VectorXd>& b,
   B.x = const_cast<double*>(b.data());
   B.xtype = CHOLMOD_REAL;
   B.dtype = CHOLMOD_DOUBLE;
+  const std::lock_guard<std::mutex> lock(blas_mutex());
   if (!cholmod_solve2(CHOLMOD_A, c.L, &B, nullptr, &c.X, nullptr, &c.Y, &c.E, &c.cm))
     throw std::runtime_error("SymmetricFactor: CHOLMOD solve failed (out of memory)");
   x = Eigen::Map<const Eigen::VectorXd>(static_cast<const double*>(c.X->x), b.size());

@@ -15,6 +15,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "src/cli_options.hpp"
 #include "src/lm_fit.hpp"
 #include "src/render.hpp"
 
@@ -421,17 +422,19 @@ void write_drape_picture(const fs::path& path, const Scene& scene, const DrapeRe
 }  // namespace
 
 SavedDrape read_saved_drape(const fs::path& dir) {
+  // Capped like the other inputs: 256 MiB holds the state of a 1000 x 1000 grid.
+  constexpr std::size_t kMaxStateFileBytes = std::size_t{256} << 20;
   auto read = [&](const char* name) {
     const fs::path path = dir / name;
-    std::ifstream in(path);
-    if (!in)
+    std::string text, why;
+    if (!read_input_file(path.string(), kMaxStateFileBytes, text, why))
       throw std::invalid_argument(
-          path.string() + ": cannot be read (" +
+          path.string() + ": " + why +
           (fs::exists(dir / "summary.json")
-               ? "that run's final state was not finite, or it predates state.json)"
-               : "not the output folder of a knitsim drape run)"));
+               ? " (that run's final state was not finite, or it predates state.json)"
+               : " (not the output folder of a knitsim drape run)"));
     try {
-      return nlohmann::json::parse(in);
+      return nlohmann::json::parse(text);
     } catch (const nlohmann::json::exception& e) {
       throw std::invalid_argument(path.string() + ": not valid JSON (" + e.what() + ")");
     }
@@ -442,6 +445,8 @@ SavedDrape read_saved_drape(const fs::path& dir) {
     if (state.at("format") != kDrapeStateFormat)
       throw std::invalid_argument("format is not \"" + std::string(kDrapeStateFormat) + "\"");
     saved.state.t = state.at("t").get<double>();
+    if (!(saved.state.t >= 0.0) || !std::isfinite(saved.state.t))
+      throw std::invalid_argument("t = " + format_number(saved.state.t) + ": must be >= 0 s and finite");
     saved.state.x = state.at("x").get<std::vector<double>>();
     saved.state.v = state.at("v").get<std::vector<double>>();
     const size_t n = state.at("integrated_dof").get<size_t>();
