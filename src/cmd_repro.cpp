@@ -6,6 +6,7 @@
 //                 [--resume] [--targets DIR] [--optimizer ica|lm|ica,lm] [overrides of the
 //                 preset: --samples --sets --runs --decades --countries --imperialists
 //                 --replicates --seed] [--four-corner-symmetry none|quarter|eighth]
+//                 [--integrator NAME]
 //                 [--no-pictures]
 //
 // --optimizer: the optimizers of Tables 4 and 6 (default ica); lm adds table4_lm.csv,
@@ -58,6 +59,7 @@ struct ReproArgs {
   int runs = 0, decades = 0, countries = 0, imperialists = 0, replicates = 0;
   std::uint64_t seed = 0;
   std::string four_corner_symmetry;
+  std::string integrator;
   bool no_pictures = false;
   bool quiet = false;
 };
@@ -77,6 +79,7 @@ void run(const ReproArgs& a, const CLI::App& cmd) {
   if (cmd.count("--imperialists")) o.ica.imperialists = a.imperialists;
   if (cmd.count("--replicates")) o.taguchi_replicates = a.replicates;
   if (cmd.count("--seed")) o.seed = a.seed;
+  if (cmd.count("--integrator")) o.integrator = a.integrator;
   o.pictures = !a.no_pictures;
   o.progress = !a.quiet;
   if (cmd.count("--targets")) {
@@ -98,6 +101,7 @@ void run(const ReproArgs& a, const CLI::App& cmd) {
   } catch (const std::invalid_argument& e) {
     rethrow_with_flag_names(e, {{"taguchi_replicates", "--replicates"},
                                 {"four_corner_symmetry", "--four-corner-symmetry"},
+                                {"integrator", "--integrator"},
                                 {"optimizers", "--optimizer"},
                                 {"runs", "--runs"},
                                 {"samples", "--samples"},
@@ -168,6 +172,9 @@ void register_repro_command(CLI::App& app) {
                   "Integrate every four_corner fit and drape on this symmetry reduction: none | "
                   "quarter | eighth (default; the exact restriction to the symmetric states, "
                   "models/mirror_reduced.hpp); two_corner stays whole");
+  cmd->add_option("--integrator", args->integrator,
+                  "Integrator of every fit drape and picture (knitsim list integrators; default "
+                  "cvode-bdf); part of the checkpoints' settings");
   cmd->add_flag("--no-pictures", args->no_pictures, "Skip the fitted drapes' pictures");
   cmd->add_flag("--quiet", args->quiet, "Nothing on stdout");
   cmd->callback([args, cmd] { run(*args, *cmd); });
