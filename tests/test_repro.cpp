@@ -370,7 +370,8 @@ TEST_CASE("knitsim repro: bad input is one line, exit 2, nothing written", "[rep
         std::string("table4 --jobs 0"), std::string("all --sets twin,wool"),
         std::string("table4 --targets /nonexistent"), std::string("table4 --optimizer xyz"),
         std::string("fig13 --optimizer lm"), std::string("table4 --optimizer lm,lm"),
-        std::string("table4 --four-corner-symmetry half")}) {
+        std::string("table4 --four-corner-symmetry half"),
+        std::string("table4 --integrator rk4")}) {
     const fs::path out = tmp.path / "out";
     const knitsim::test::Run run =
         knitsim::test::run_knitsim("repro " + args + " --out '" + out.string() + "'", tmp);
@@ -422,6 +423,12 @@ TEST_CASE("knitsim repro killed after a unit and resumed writes the uninterrupte
   CHECK(after.size() == 1 + 4);
   REQUIRE(after.size() >= before.size());
   CHECK(std::equal(before.begin(), before.end(), after.begin()));
+
+  // The integrator is part of the settings: resuming with another one is refused.
+  const Run other = run_knitsim(args + cut.string() + "' --resume --integrator static", tmp);
+  CHECK(other.status == 2);
+  CHECK(lines(other.err).size() == 1);
+  CHECK(other.err.find("integrator") != std::string::npos);
 }
 
 TEST_CASE("repro table6 --optimizer ica,lm: LM tables, errors recomputed, the comparison",
