@@ -17,7 +17,7 @@ namespace knitsim {
 
 class InterruptScope {
  public:
-  InterruptScope();  // installs the SIGINT and SIGTERM handlers; one scope at a time
+  InterruptScope();   // installs the SIGINT and SIGTERM handlers; one scope at a time
   ~InterruptScope();  // restores the previous handlers
   InterruptScope(const InterruptScope&) = delete;
   InterruptScope& operator=(const InterruptScope&) = delete;

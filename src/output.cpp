@@ -415,8 +415,7 @@ void write_drape_picture(const fs::path& path, const Scene& scene, const DrapeRe
                       format_number(100 * r.centre_sag, 3) + " cm, max strain " +
                       format_number(100 * r.max_strain, 3) + " %, residual " +
                       format_number(r.stats.residual, 2)};
-  write_file_atomic_with(path,
-                         [&](const std::string& tmp) { render_mesh_png(tmp, mesh, view); });
+  write_file_atomic_with(path, [&](const std::string& tmp) { render_mesh_png(tmp, mesh, view); });
 }
 
 }  // namespace
@@ -446,7 +445,8 @@ SavedDrape read_saved_drape(const fs::path& dir) {
       throw std::invalid_argument("format is not \"" + std::string(kDrapeStateFormat) + "\"");
     saved.state.t = state.at("t").get<double>();
     if (!(saved.state.t >= 0.0) || !std::isfinite(saved.state.t))
-      throw std::invalid_argument("t = " + format_number(saved.state.t) + ": must be >= 0 s and finite");
+      throw std::invalid_argument("t = " + format_number(saved.state.t) +
+                                  ": must be >= 0 s and finite");
     saved.state.x = state.at("x").get<std::vector<double>>();
     saved.state.v = state.at("v").get<std::vector<double>>();
     const size_t n = state.at("integrated_dof").get<size_t>();
@@ -551,7 +551,6 @@ void write_drape_outputs(const fs::path& dir, const Scene& scene, const DrapeRes
                                                      {"params", to_json(scene.params)},
                                                      {"options", to_json(scene.options)}}));
 }
-
 
 // ---- progress ----------------------------------------------------------------------------------
 

@@ -297,7 +297,8 @@ DrapeResult run_drape(const Scene& scene, const std::string& integrator, RunObse
   r.t_start = t0;
   if (from) q = from->x, qv = from->v;
   auto run = [&](const MechanicalSystem& sys) {
-    if (from && (static_cast<int>(q.size()) != sys.dof() || static_cast<int>(qv.size()) != sys.dof()))
+    if (from &&
+        (static_cast<int>(q.size()) != sys.dof() || static_cast<int>(qv.size()) != sys.dof()))
       throw std::invalid_argument("the state to continue from has " + std::to_string(q.size()) +
                                   " unknowns; this scene integrates " + std::to_string(sys.dof()));
     r.stats = run_to_equilibrium(sys, *integ, scene.options, q, qv, observer, t0);

@@ -61,7 +61,8 @@ TEST_CASE("knitsim knit: a small tuck chart settles and its outputs agree with t
                        "--no-pictures --quiet --out '" +
                        bare.string() + "'",
                    err) == 0);
-  for (const auto& e : fs::recursive_directory_iterator(bare)) CHECK(e.path().extension() != ".png");
+  for (const auto& e : fs::recursive_directory_iterator(bare))
+    CHECK(e.path().extension() != ".png");
   CHECK(fs::exists(bare / "frames/centerlines_002.vtk"));
   CHECK(slurp(bare / "points.csv") == slurp(out / "points.csv"));
 

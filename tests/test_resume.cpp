@@ -240,8 +240,9 @@ TEST_CASE("knitsim fit killed after a decade and resumed equals an uninterrupted
   CHECK(slurp(cut / "history.csv") == slurp(whole / "history.csv"));
 }
 
-TEST_CASE("knitsim drape and knit stopped by SIGINT or SIGTERM: outputs written, status "
-          "interrupted, exit 128 + signal") {
+TEST_CASE(
+    "knitsim drape and knit stopped by SIGINT or SIGTERM: outputs written, status "
+    "interrupted, exit 128 + signal") {
   using namespace knitsim::test;
   TempDir tmp("interrupt");
   // Two runs that take minutes (explicit Euler to equilibrium), stopped after half a second.
@@ -302,7 +303,8 @@ TEST_CASE("knitsim drape and knit stopped by SIGINT or SIGTERM: outputs written,
                                    tmp);
       INFO(more.err);
       CHECK(more.status == 0);
-      const nlohmann::json end = nlohmann::json::parse(slurp(tmp.path / "continued" / "summary.json"));
+      const nlohmann::json end =
+          nlohmann::json::parse(slurp(tmp.path / "continued" / "summary.json"));
       CHECK(end.at("t_start") == stats.at("t_final"));
       CHECK(end.at("centre_sag_m").get<double>() == Approx(0.012882511).epsilon(1e-6));
     }
@@ -330,7 +332,8 @@ TEST_CASE("knitsim drape --continue: a run continued where it stopped is the uni
   CHECK(second.at("x") == whole.at("x"));
   CHECK(second.at("v") == whole.at("v"));
   CHECK(slurp(tmp.path / "second" / "nodes.csv") == slurp(tmp.path / "whole" / "nodes.csv"));
-  CHECK(json("second", "summary.json").at("t_start") == json("first", "summary.json").at("t_final"));
+  CHECK(json("second", "summary.json").at("t_start") ==
+        json("first", "summary.json").at("t_final"));
   CHECK(json("second", "summary.json").at("dt") == json("whole", "summary.json").at("dt"));
 
   // Another integrator may take over: cvode-bdf from the Euler state reaches the same equilibrium.

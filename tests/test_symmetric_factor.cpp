@@ -93,7 +93,8 @@ TEST_CASE(
   CHECK_FALSE(f.factorize(singular));
 }
 
-TEST_CASE("SymmetricFactor: instances in concurrent threads give the one-thread results bit for bit") {
+TEST_CASE(
+    "SymmetricFactor: instances in concurrent threads give the one-thread results bit for bit") {
   // What `knitsim fit --jobs J` does: every evaluation owns its factorisation (CHOLMOD: its own
   // cholmod_common), and threads factorise and solve at the same time. Without the lock around
   // CHOLMOD's BLAS calls (symmetric_factor.cpp: Debian's serial OpenBLAS is not thread-safe)
