@@ -99,6 +99,43 @@ void add_gmres_options(CLI::App* cmd, IntegratorOptions& o) {
       ->capture_default_str();
 }
 
+CLI::Option* add_run_options(CLI::App* cmd, IntegratorOptions& o) {
+  cmd->add_option("--rtol", o.rtol, "Relative tolerance (adaptive methods)")->capture_default_str();
+  CLI::Option* velocity_atol = add_atol_options(cmd, o.atol, o.velocity_atol);
+  cmd->add_option("--dt", o.dt, "Fixed step, s (fixed-step methods; 0 = automatic)")
+      ->capture_default_str();
+  cmd->add_option("--max-order", o.max_order, "Cap on the method order (0 = default)")
+      ->capture_default_str();
+  cmd->add_option("--max-steps", o.max_steps, "Step cap")->capture_default_str();
+  cmd->add_option("--max-wall", o.max_wall_seconds,
+                  "Wall-clock cap, s (0 = none); the run then ends with status wall_limit")
+      ->capture_default_str();
+  cmd->add_option("--max-restarts", o.max_restarts,
+                  "Restarts from the last accepted state after CVODE's or ARKODE's repeated "
+                  "error-test or corrector failures (0 = the run ends with solver_failure)")
+      ->capture_default_str();
+  add_newton_solver_option(cmd, o.newton_solver);
+  add_factorization_option(cmd, o.factorization);
+  add_gmres_options(cmd, o);
+  return velocity_atol;
+}
+
+void copy_run_flags(const IntegratorOptions& flags, IntegratorOptions& into) {
+  into.rtol = flags.rtol;
+  into.atol = flags.atol;
+  into.velocity_atol = flags.velocity_atol;
+  into.dt = flags.dt;
+  into.max_order = flags.max_order;
+  into.max_steps = flags.max_steps;
+  into.max_wall_seconds = flags.max_wall_seconds;
+  into.max_restarts = flags.max_restarts;
+  into.newton_solver = flags.newton_solver;
+  into.factorization = flags.factorization;
+  into.gmres_preconditioner = flags.gmres_preconditioner;
+  into.krylov_dim = flags.krylov_dim;
+  into.krylov_eps_lin = flags.krylov_eps_lin;
+}
+
 void rethrow_with_flag_names(const std::invalid_argument& e,
                              const std::vector<std::pair<std::string, std::string>>& extra) {
   static const std::vector<std::pair<std::string, std::string>> ica = {

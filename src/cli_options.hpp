@@ -37,6 +37,15 @@ void add_factorization_option(CLI::App* cmd, IntegratorOptions::Factorization& w
 // --gmres-preconditioner, --krylov-dim and --eps-lin (cvode-bdf-gmres) into `o`.
 void add_gmres_options(CLI::App* cmd, IntegratorOptions& o);
 
+// The run flags of drape and knit, bound to the IntegratorOptions fields they set: --rtol,
+// --atol, --velocity-atol, --dt, --max-order, --max-steps, --max-wall, --max-restarts,
+// --newton-solver, --factorization and the cvode-bdf-gmres flags. Returns the --velocity-atol
+// option (knit appends its own default rule to the description).
+CLI::Option* add_run_options(CLI::App* cmd, IntegratorOptions& o);
+// Copies into `into` exactly the fields add_run_options binds (not t_max, equilibrium_tol:
+// scene keys), so a scene's run settings and the command line combine in one place.
+void copy_run_flags(const IntegratorOptions& flags, IntegratorOptions& into);
+
 // Validation messages name struct fields ("revolution_rate = 2: ..."); the user typed flags.
 // Rethrows `e` with the field replaced by its flag ("--revolution = 2: ..."), for the ICA
 // fields and the extra (field, flag) pairs given; unchanged if no name matches.

@@ -29,7 +29,7 @@ struct DrapeArgs {
   std::string scene = "four_corner";
   std::vector<std::string> sets;
   std::string integrator;     // empty: default_integrator()
-  IntegratorOptions options;  // only the fields bound to flags below are taken from here
+  IntegratorOptions options;  // only the fields add_run_options binds are taken from here
   std::string out;
   std::string target;
   bool step_history = false;
@@ -37,34 +37,6 @@ struct DrapeArgs {
   bool no_pictures = false;
   std::string continue_from;  // --continue DIR
 };
-
-// --continue DIR: the state to start from, checked against this run's scene and options (the
-// model must be the one that run integrated; integrator and run options may differ). A
-// fixed-step run continued by the same integrator keeps its step unless --dt is given, so an
-// interrupted euler run continues on the same step sequence.
-DrapeState continue_state(const std::string& dir, const std::string& integrator, Scene& scene) {
-  const std::string where = "--continue " + dir + ": ";
-  SavedDrape saved;
-  try {
-    saved = read_saved_drape(dir);
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument("--continue: " + std::string(e.what()));
-  }
-  const nlohmann::json now = to_json(scene.params);
-  for (const auto& [key, value] : now.items())
-    if (!saved.params.contains(key) || saved.params.at(key) != value)
-      throw std::invalid_argument(
-          where + "model." + key + " = " + value.dump() + " here, " +
-          (saved.params.contains(key) ? saved.params.at(key).dump() : std::string("absent")) +
-          " in the run being continued; give the same --scene and --set");
-  if (!(saved.state.t < scene.options.t_max))
-    throw std::invalid_argument(where + "that run stopped at t = " + format_number(saved.state.t) +
-                                " s, not below run.t_max = " + format_number(scene.options.t_max) +
-                                " s; raise run.t_max");
-  if (scene.options.dt == 0.0 && saved.dt > 0.0 && integrator == saved.integrator)
-    scene.options.dt = saved.dt;
-  return saved.state;
-}
 
 std::string human_summary(const Scene& scene, const DrapeResult& r, const std::string& dir) {
   const RunStats& s = r.stats;
@@ -95,20 +67,7 @@ std::string human_summary(const Scene& scene, const DrapeResult& r, const std::s
 
 void run(const DrapeArgs& args) {
   Scene scene = load_scene(args.scene, args.sets);
-  const IntegratorOptions& o = args.options;
-  scene.options.rtol = o.rtol;
-  scene.options.atol = o.atol;
-  scene.options.velocity_atol = o.velocity_atol;
-  scene.options.dt = o.dt;
-  scene.options.max_order = o.max_order;
-  scene.options.max_steps = o.max_steps;
-  scene.options.max_wall_seconds = o.max_wall_seconds;
-  scene.options.max_restarts = o.max_restarts;
-  scene.options.newton_solver = o.newton_solver;
-  scene.options.factorization = o.factorization;
-  scene.options.krylov_dim = o.krylov_dim;
-  scene.options.krylov_eps_lin = o.krylov_eps_lin;
-  scene.options.gmres_preconditioner = o.gmres_preconditioner;
+  copy_run_flags(args.options, scene.options);
   scene.validate();
 
   const std::string integrator = args.integrator.empty() ? default_integrator() : args.integrator;
@@ -118,8 +77,10 @@ void run(const DrapeArgs& args) {
     throw std::invalid_argument(std::string("--") + e.what());  // "--integrator = X: ..."
   }
 
-  std::optional<DrapeState> from;
-  if (!args.continue_from.empty()) from = continue_state(args.continue_from, integrator, scene);
+  std::optional<RunState> from;
+  if (!args.continue_from.empty())
+    from = continue_state(args.continue_from, "drape", drape_model_keys(scene.params),
+                          "--scene and --set", integrator, scene.options);
 
   // --target: read, checked and fitted before the output folder is made.
   std::vector<EdgeFit> target_edges;
@@ -171,24 +132,7 @@ void register_drape_command(CLI::App& app) {
   cmd->add_option("--integrator", args->integrator,
                   "Integrator (knitsim list integrators); default cvode-bdf if built, else "
                   "implicit-euler");
-  cmd->add_option("--rtol", args->options.rtol, "Relative tolerance (adaptive methods)")
-      ->capture_default_str();
-  add_atol_options(cmd, args->options.atol, args->options.velocity_atol);
-  cmd->add_option("--dt", args->options.dt, "Fixed step, s (fixed-step methods; 0 = automatic)")
-      ->capture_default_str();
-  cmd->add_option("--max-order", args->options.max_order, "Cap on the method order (0 = default)")
-      ->capture_default_str();
-  cmd->add_option("--max-steps", args->options.max_steps, "Step cap")->capture_default_str();
-  cmd->add_option("--max-wall", args->options.max_wall_seconds,
-                  "Wall-clock cap, s (0 = none); the run then ends with status wall_limit")
-      ->capture_default_str();
-  cmd->add_option("--max-restarts", args->options.max_restarts,
-                  "Restarts from the last accepted state after CVODE's or ARKODE's repeated "
-                  "error-test or corrector failures (0 = the run ends with solver_failure)")
-      ->capture_default_str();
-  add_newton_solver_option(cmd, args->options.newton_solver);
-  add_factorization_option(cmd, args->options.factorization);
-  add_gmres_options(cmd, args->options);
+  add_run_options(cmd, args->options);
   cmd->add_option("--out", args->out,
                   "Output folder (default: a fresh out/drape-<scene>-<YYYYmmdd-HHMMSS>)");
   cmd->add_option("--target", args->target,

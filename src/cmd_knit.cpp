@@ -6,7 +6,8 @@
 // run and write. Bad input (a bad chart: one line naming row and column) therefore writes
 // nothing and exits 2; a run that ends in any status but equilibrium still writes everything
 // and exits 3 -- or 128 + the signal (130, 143) when Ctrl-C or SIGTERM stopped it (status
-// interrupted, src/interrupt.hpp).
+// interrupted, src/interrupt.hpp). --continue DIR starts from the state.json of an earlier
+// run of the same chart and --set (read and checked with the other input, before --out is made).
 //
 // Outputs in --out (lengths in m):
 //   points.csv       id,wale,level,x,y,z,x0,y0,z0  every interlacing point at the end and at rest
@@ -21,6 +22,8 @@
 //   before.png, after.png   front views at rest and at the end (yarns as z-buffered tubes,
 //                    render_strokes_png; interlacing points as dots); --no-pictures skips every PNG
 //   summary.json, manifest.json
+//   state.json       x, v at t_final and what was integrated, for --continue (write_run_state;
+//                    omitted if not finite)
 //   steps.csv        with --step-history: step,t,h,order,residual (src/step_log.hpp)
 // Numbers in the CSV and VTK files are the shortest decimal text that reads back as the same
 // double (std::to_chars). Cost: the centrelines of each distinct state are computed once (the
@@ -71,20 +74,15 @@ constexpr double kStabilisedVelocityAtol = 1e-3;  // m/s, see the file comment
 struct KnitArgs {
   std::string chart;
   std::vector<std::string> sets;
-  std::string integrator;  // empty: default_integrator()
-  double rtol = IntegratorOptions{}.rtol;
-  double atol = IntegratorOptions{}.atol;
-  double velocity_atol = IntegratorOptions{}.velocity_atol;
+  std::string integrator;            // empty: default_integrator()
+  IntegratorOptions options;         // only the fields add_run_options binds are taken from here
   bool velocity_atol_given = false;  // --velocity-atol on the command line
-  double dt = IntegratorOptions{}.dt;
-  int max_order = IntegratorOptions{}.max_order;
-  IntegratorOptions::NewtonSolver newton_solver = IntegratorOptions{}.newton_solver;
-  IntegratorOptions::Factorization factorization = IntegratorOptions{}.factorization;
   int frames = 4;
   std::string out;
   bool step_history = false;
   bool quiet = false;
   bool no_pictures = false;
+  std::string continue_from;  // --continue DIR
 };
 
 // The --set keys, each bound to one field.
@@ -130,6 +128,23 @@ void apply_sets(const std::vector<std::string>& sets, KnitParams& p, IntegratorO
       throw std::invalid_argument("--set " + s + ": expected " + key + "=<number>");
     *found->field = v;
   }
+}
+
+// What a knit run integrates, as SavedRun::model (--continue): the chart, one string of stitch
+// letters per course from the bottom, and the knit.* parameters under their --set names.
+nlohmann::json knit_model_keys(const KnitChart& chart, KnitParams params) {
+  nlohmann::json keys = nlohmann::json::object();
+  std::vector<std::string> courses;
+  for (int c = 0; c < chart.courses; ++c) {
+    std::string row;
+    for (int w = 0; w < chart.wales; ++w) row += static_cast<char>(chart.at(w, c));
+    courses.push_back(row);
+  }
+  keys["chart"] = courses;
+  IntegratorOptions unused;
+  for (const SetKey& k : set_keys(params, unused))
+    if (std::string(k.name).rfind("knit.", 0) == 0) keys[k.name] = *k.field;
+  return keys;
 }
 
 KnitChart read_chart(const std::string& path) {
@@ -278,7 +293,8 @@ nlohmann::json params_json(const KnitParams& p) {
 
 void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m,
                    const IntegratorOptions& opt, const RunStats& stats,
-                   const std::vector<double>& x, const std::vector<FrameRecorder::Frame>& frames) {
+                   const std::vector<double>& x, const std::vector<FrameRecorder::Frame>& frames,
+                   double t_start) {
   const std::string name = fs::path(args.chart).stem().string();
   const std::vector<Vec3> pos = all_points(m, stats.t_final, x);
   const std::vector<Vec3> rest = m.rest_positions();
@@ -360,6 +376,7 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
                                   {"status", to_string(stats.status)},
                                   {"message", stats.message},
                                   {"integrator", stats.integrator},
+                                  {"t_start", t_start},
                                   {"t_final", stats.t_final},
                                   {"residual", stats.residual},
                                   {"wall_seconds", stats.wall_seconds},
@@ -395,17 +412,12 @@ void run(const KnitArgs& args) {
   KnitParams params;
   IntegratorOptions opt;
   apply_sets(args.sets, params, opt);
-  opt.rtol = args.rtol;
-  opt.atol = args.atol;
+  copy_run_flags(args.options, opt);
   // The stabilised default is an error-control setting: the fixed-step methods have none, so
   // their summaries keep the (unused) value given, not 1e-3.
   const bool stabilised_default =
       !args.velocity_atol_given && params.stabiliser_ratio > 0.0 && integ->info().adaptive;
-  opt.velocity_atol = stabilised_default ? kStabilisedVelocityAtol : args.velocity_atol;
-  opt.dt = args.dt;
-  opt.max_order = args.max_order;
-  opt.newton_solver = args.newton_solver;
-  opt.factorization = args.factorization;
+  if (stabilised_default) opt.velocity_atol = kStabilisedVelocityAtol;
   try {
     opt.validate();
   } catch (const std::invalid_argument& e) {
@@ -414,28 +426,40 @@ void run(const KnitArgs& args) {
   if (args.frames < 1)
     throw std::invalid_argument("--frames = " + std::to_string(args.frames) + ": must be >= 1");
   const KnitModel model = build_knit(chart, params);  // validates params
+  std::vector<double> x(model.network.dof()), v(model.network.dof());
+  model.network.initial_state(x.data(), v.data());
+  double t0 = 0.0;
+  if (!args.continue_from.empty()) {
+    const RunState from = continue_state(args.continue_from, "knit", knit_model_keys(chart, params),
+                                         "--chart and --set", integrator, opt);
+    if (from.x.size() != x.size())  // same chart and parameters: only a corrupt file gets here
+      throw std::invalid_argument("--continue " + args.continue_from + ": the state has " +
+                                  std::to_string(from.x.size()) + " unknowns; this chart has " +
+                                  std::to_string(x.size()));
+    t0 = from.t, x = from.x, v = from.v;
+  }
 
   const std::string name = fs::path(args.chart).stem().string();
   const fs::path dir = make_output_dir(args.out, "knit-" + name);
   const InterruptScope interrupt;
   opt.interrupt = interrupt.flag();
-  std::vector<double> x(model.network.dof()), v(model.network.dof());
-  model.network.initial_state(x.data(), v.data());
   RunStats stats;
   std::vector<FrameRecorder::Frame> frames;
   {
     ProgressLine progress(name + " " + integrator, opt.equilibrium_tol, !args.quiet);
     FrameRecorder recorder(args.frames, &progress);
     recorder.set_dof(model.network.dof());
-    recorder.record(0.0, x.data(), model.network.dof(),
-                    model.network.static_residual(0.0, x.data()));
+    recorder.record(t0, x.data(), model.network.dof(), model.network.static_residual(t0, x.data()));
     StepLog steps(&recorder);
     RunObserver* observer = args.step_history ? static_cast<RunObserver*>(&steps) : &recorder;
-    stats = run_to_equilibrium(model.network, *integ, opt, x, v, observer);
+    stats = run_to_equilibrium(model.network, *integ, opt, x, v, observer, t0);
     frames = recorder.frames();
     if (args.step_history) write_file_atomic(dir / "steps.csv", steps.csv());
   }
-  write_outputs(dir, args, model, opt, stats, x, frames);
+  write_outputs(dir, args, model, opt, stats, x, frames, t0);
+  write_run_state(
+      dir,
+      {"knit", {stats.t_final, x, v}, stats.integrator, stats.dt, knit_model_keys(chart, params)});
   if (!args.quiet) {
     Table t;
     t.columns = {"knit", name + " (" + args.chart + ")"};
@@ -479,17 +503,9 @@ void register_knit_command(CLI::App& app) {
   cmd->add_option("--integrator", args->integrator,
                   "Integrator (knitsim list integrators); default cvode-bdf if built, else "
                   "implicit-euler");
-  cmd->add_option("--rtol", args->rtol, "Relative tolerance (adaptive methods)")
-      ->capture_default_str();
-  CLI::Option* velocity_atol = add_atol_options(cmd, args->atol, args->velocity_atol);
+  CLI::Option* velocity_atol = add_run_options(cmd, args->options);
   velocity_atol->description(velocity_atol->get_description() +
                              "; not given: 0, or 0.001 with knit.stabiliser > 0");
-  cmd->add_option("--dt", args->dt, "Fixed step, s (fixed-step methods; 0 = automatic)")
-      ->capture_default_str();
-  cmd->add_option("--max-order", args->max_order, "Cap on the method order (0 = default)")
-      ->capture_default_str();
-  add_newton_solver_option(cmd, args->newton_solver);
-  add_factorization_option(cmd, args->factorization);
   cmd->add_option("--frames", args->frames,
                   "Captured frames (the start to the last residual check), >= 1")
       ->capture_default_str();
@@ -500,6 +516,10 @@ void register_knit_command(CLI::App& app) {
                 "evenly beyond 2e5 rows)");
   cmd->add_flag("--no-pictures", args->no_pictures,
                 "Skip before.png, after.png and the frames' PNGs (the CSV and VTK files stay)");
+  cmd->add_option("--continue", args->continue_from,
+                  "Start from the final state (state.json) of the run in this folder, at its "
+                  "t_final: continues an interrupted or capped run (same --chart and --set; "
+                  "integrator and run options may change)");
   cmd->add_flag("--quiet", args->quiet, "No progress line and no summary on stdout");
   cmd->callback([args, velocity_atol] {
     args->velocity_atol_given = velocity_atol->count() > 0;

@@ -51,8 +51,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// state.json's "format": bump the number if the layout changes.
-constexpr const char* kDrapeStateFormat = "knitsim drape state 1";
+// state.json's "format": bump the number if the layout changes (1: drape only, with the
+// integrator, step and parameters in summary.json).
+constexpr const char* kRunStateFormat = "knitsim run state 2";
 
 std::string tmp_name(const fs::path& path) { return path.string() + ".tmp"; }
 
@@ -420,29 +421,45 @@ void write_drape_picture(const fs::path& path, const Scene& scene, const DrapeRe
 
 }  // namespace
 
-SavedDrape read_saved_drape(const fs::path& dir) {
+// ---- run state ----------------------------------------------------------------------------------
+
+void write_run_state(const fs::path& dir, const SavedRun& saved) {
+  const auto finite = [](const std::vector<double>& a) {
+    return std::all_of(a.begin(), a.end(), [](double d) { return std::isfinite(d); });
+  };
+  if (!finite(saved.state.x) || !finite(saved.state.v) || !std::isfinite(saved.state.t)) return;
+  write_json_atomic(dir / "state.json", {{"format", kRunStateFormat},
+                                         {"command", saved.command},
+                                         {"integrator", saved.integrator},
+                                         {"dt", saved.dt},
+                                         {"model", saved.model},
+                                         {"t", saved.state.t},
+                                         {"integrated_dof", saved.state.x.size()},
+                                         {"x", saved.state.x},
+                                         {"v", saved.state.v}});
+}
+
+SavedRun read_run_state(const fs::path& dir, const std::string& command) {
   // Capped like the other inputs: 256 MiB holds the state of a 1000 x 1000 grid.
   constexpr std::size_t kMaxStateFileBytes = std::size_t{256} << 20;
-  auto read = [&](const char* name) {
-    const fs::path path = dir / name;
-    std::string text, why;
-    if (!read_input_file(path.string(), kMaxStateFileBytes, text, why))
-      throw std::invalid_argument(
-          path.string() + ": " + why +
-          (fs::exists(dir / "summary.json")
-               ? " (that run's final state was not finite, or it predates state.json)"
-               : " (not the output folder of a knitsim drape run)"));
-    try {
-      return nlohmann::json::parse(text);
-    } catch (const nlohmann::json::exception& e) {
-      throw std::invalid_argument(path.string() + ": not valid JSON (" + e.what() + ")");
-    }
-  };
-  const nlohmann::json state = read("state.json"), summary = read("summary.json");
-  SavedDrape saved;
+  const fs::path path = dir / "state.json";
+  std::string text, why;
+  if (!read_input_file(path.string(), kMaxStateFileBytes, text, why))
+    throw std::invalid_argument(
+        path.string() + ": " + why +
+        (fs::exists(dir / "summary.json")
+             ? " (that run's final state was not finite, or it predates state.json)"
+             : " (not the output folder of a knitsim " + command + " run)"));
+  SavedRun saved;
   try {
-    if (state.at("format") != kDrapeStateFormat)
-      throw std::invalid_argument("format is not \"" + std::string(kDrapeStateFormat) + "\"");
+    const nlohmann::json state = nlohmann::json::parse(text);
+    if (state.at("format") != kRunStateFormat)
+      throw std::invalid_argument("format is not \"" + std::string(kRunStateFormat) +
+                                  "\" (written by another knitsim version)");
+    saved.command = state.at("command").get<std::string>();
+    if (saved.command != command)
+      throw std::invalid_argument("the state of a knitsim " + saved.command +
+                                  " run; this is knitsim " + command);
     saved.state.t = state.at("t").get<double>();
     if (!(saved.state.t >= 0.0) || !std::isfinite(saved.state.t))
       throw std::invalid_argument("t = " + format_number(saved.state.t) +
@@ -453,15 +470,51 @@ SavedDrape read_saved_drape(const fs::path& dir) {
     if (saved.state.x.size() != n || saved.state.v.size() != n)
       throw std::invalid_argument("x and v must hold integrated_dof = " + std::to_string(n) +
                                   " numbers each");
-    saved.integrator = summary.at("integrator").get<std::string>();
-    saved.dt = summary.at("dt").get<double>();
-    saved.params = summary.at("params");
+    saved.integrator = state.at("integrator").get<std::string>();
+    saved.dt = state.at("dt").get<double>();
+    saved.model = state.at("model");
+    if (!saved.model.is_object()) throw std::invalid_argument("model is not an object");
   } catch (const nlohmann::json::exception& e) {
-    throw std::invalid_argument((dir / "state.json").string() + " or summary.json: " + e.what());
+    throw std::invalid_argument(path.string() + ": " + e.what());
   } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument((dir / "state.json").string() + ": " + e.what());
+    throw std::invalid_argument(path.string() + ": " + e.what());
   }
   return saved;
+}
+
+nlohmann::json drape_model_keys(const DrapeParams& params) {
+  nlohmann::json keys = nlohmann::json::object();
+  const nlohmann::json fields = to_json(params);  // items() must not outlive its object
+  for (const auto& [key, value] : fields.items()) keys["model." + key] = value;
+  return keys;
+}
+
+RunState continue_state(const std::string& dir, const std::string& command,
+                        const nlohmann::json& model, const std::string& same_what,
+                        const std::string& integrator, IntegratorOptions& options) {
+  const std::string where = "--continue " + dir + ": ";
+  SavedRun saved;
+  try {
+    saved = read_run_state(dir, command);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument("--continue: " + std::string(e.what()));
+  }
+  for (const auto& [key, value] : model.items())
+    if (!saved.model.contains(key) || saved.model.at(key) != value) {
+      const std::string here = value.dump(),
+                        there = saved.model.contains(key) ? saved.model.at(key).dump() : "absent";
+      const std::string differ = here.size() + there.size() <= 80
+                                     ? key + " = " + here + " here, " + there + " in"
+                                     : key + " differs from";  // e.g. a chart: not one line
+      throw std::invalid_argument(where + differ + " the run being continued; give the same " +
+                                  same_what);
+    }
+  if (!(saved.state.t < options.t_max))
+    throw std::invalid_argument(where + "that run stopped at t = " + format_number(saved.state.t) +
+                                " s, not below run.t_max = " + format_number(options.t_max) +
+                                " s; raise run.t_max");
+  if (options.dt == 0.0 && saved.dt > 0.0 && integrator == saved.integrator) options.dt = saved.dt;
+  return saved.state;
 }
 
 void write_drape_outputs(const fs::path& dir, const Scene& scene, const DrapeResult& r,
@@ -518,15 +571,11 @@ void write_drape_outputs(const fs::path& dir, const Scene& scene, const DrapeRes
     }
   write_file_atomic(dir / "nodes.csv", nodes.str());
 
-  const auto all_finite = [](const std::vector<double>& a) {
-    return std::all_of(a.begin(), a.end(), [](double d) { return std::isfinite(d); });
-  };
-  if (all_finite(r.state_x) && all_finite(r.state_v))
-    write_json_atomic(dir / "state.json", {{"format", kDrapeStateFormat},
-                                           {"t", r.stats.t_final},
-                                           {"integrated_dof", r.integrated_dof},
-                                           {"x", r.state_x},
-                                           {"v", r.state_v}});
+  write_run_state(dir, {"drape",
+                        {r.stats.t_final, r.state_x, r.state_v},
+                        r.stats.integrator,
+                        r.stats.dt,
+                        drape_model_keys(scene.params)});
 
   std::vector<std::array<int, 4>> quads;
   for (int i = 0; i < g.n; ++i)

@@ -98,28 +98,47 @@ nlohmann::json drape_summary(const Scene& scene, const DrapeResult& result);
 // Writes into `dir` (which must exist): summary.json, nodes.csv (id,i,j,x,y,z,pinned; all
 // particles at t_final, m), drape.vtk (the grid's quads, point data `pinned` and
 // `displacement` = position - rest position, m), drape.png (render_mesh_png, oblique view) and
-// manifest.json (options: scene, integrator, params, run options), and state.json (t, and x, v:
-// the integrated unknowns at t_final, shortest round-trip decimals; omitted if not finite).
+// manifest.json (options: scene, integrator, params, run options), and state.json
+// (write_run_state: the integrated unknowns at t_final; omitted if not finite).
 // Writes summary.json, nodes.csv, drape.vtk, drape.png, and edges.csv (the measured edges,
 // SPEC 2.5) when the final state is finite. With `target` (the measured edges of the matching
 // target scene, e.g. fit_target_scene(...)), summary.json also gets `objective` (Eq. 5, %) and
 // the per-edge coefficients of both, and target_edges.csv is written. picture = false skips
 // drape.png (`--no-pictures`: the rendering costs about as much as a four_corner solve).
 void write_drape_outputs(const std::filesystem::path& dir, const Scene& scene,
-                         const DrapeResult& result,
-                         const std::vector<EdgeFit>* target = nullptr, bool picture = true);
+                         const DrapeResult& result, const std::vector<EdgeFit>* target = nullptr,
+                         bool picture = true);
 
-// What `knitsim drape --continue DIR` reads back from an earlier run's folder: DIR/state.json
-// (the integrated state at t_final, written by write_drape_outputs whenever it is finite) and
-// that run's model parameters, integrator and fixed step from DIR/summary.json.
-struct SavedDrape {
-  DrapeState state;
+// ---- run state: knitsim drape|knit --continue ----------------------------------------------
+
+// What `--continue DIR` starts from: DIR/state.json, the integrated state at t_final of a drape
+// or knit run with what a continuation must match.
+struct SavedRun {
+  std::string command;  // "drape" or "knit": the command that wrote it
+  RunState state;       // t_final, and x, v: the integrated unknowns
   std::string integrator;
-  double dt = 0.0;         // the run's fixed step (euler, verlet, implicit-euler), else 0
-  nlohmann::json params;   // to_json(DrapeParams) of the run
+  double dt = 0.0;       // the run's fixed step (euler, verlet, implicit-euler), else 0
+  nlohmann::json model;  // {"model.stiffness": 852, ...}: what was integrated, keyed as the user
+                         // sets it (--set keys; "chart" for the knit chart)
 };
-// Throws std::invalid_argument naming the file and what is missing or malformed.
-SavedDrape read_saved_drape(const std::filesystem::path& dir);
+// A drape's SavedRun::model: to_json(params) with its keys as --set names them ("model.KEY").
+nlohmann::json drape_model_keys(const DrapeParams& params);
+// Writes DIR/state.json (format "knitsim run state 2", shortest round-trip decimals); does
+// nothing if x or v is not finite (there is nothing to continue from).
+void write_run_state(const std::filesystem::path& dir, const SavedRun& saved);
+// Reads DIR/state.json back; throws std::invalid_argument naming the file and what is missing or
+// malformed, or that it was written by another command.
+SavedRun read_run_state(const std::filesystem::path& dir, const std::string& command);
+// --continue DIR of `command`: the saved state, checked against this run -- `model` (keyed as
+// SavedRun::model) must equal the saved one key by key (the message names the first that differs,
+// "model.stiffness = 900 here, 852 in the run being continued; give the same <same_what>"), its
+// t must be below options.t_max ("raise run.t_max"). A fixed-step run continued by the same
+// integrator keeps the saved step unless options.dt is set, so an interrupted euler run
+// continues on the same step sequence. Throws std::invalid_argument (one line, starting
+// "--continue"). The caller checks the state's size against what it integrates.
+RunState continue_state(const std::string& dir, const std::string& command,
+                        const nlohmann::json& model, const std::string& same_what,
+                        const std::string& integrator, IntegratorOptions& options);
 
 // ---- progress ----------------------------------------------------------------------------------
 

@@ -286,7 +286,7 @@ std::string default_integrator() {
 }
 
 DrapeResult run_drape(const Scene& scene, const std::string& integrator, RunObserver* observer,
-                      const DrapeState* from) {
+                      const RunState* from) {
   scene.validate();
   auto integ = make_integrator(integrator);
   DrapeResult r{build_drape_grid(scene.params), 0, RunStats{}, {}, {}, 0.0, 0.0, {}, {}, 0.0};

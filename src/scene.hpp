@@ -86,8 +86,9 @@ struct DrapeResult {
   double t_start = 0.0;  // s: where the run began (0, or the t of the state it continued from)
 };
 
-// Where a drape run continues from: the integrated state (x, v) at time t of an earlier run.
-struct DrapeState {
+// Where a run continues from (knitsim drape|knit --continue): the integrated state (x, v) at
+// time t of an earlier run.
+struct RunState {
   double t = 0.0;
   std::vector<double> x, v;
 };
@@ -100,7 +101,7 @@ struct DrapeState {
 // With `from` the run starts at from->t from that state instead of the flat sheet at rest; its
 // size must be the integrated dof (std::invalid_argument otherwise).
 DrapeResult run_drape(const Scene& scene, const std::string& integrator,
-                      RunObserver* observer = nullptr, const DrapeState* from = nullptr);
+                      RunObserver* observer = nullptr, const RunState* from = nullptr);
 
 // The target scene (src/targets.hpp) a scene's edges are compared with: its own name if it is
 // one of four_corner, two_corner, two_corner_slack, else the one its pins imply.

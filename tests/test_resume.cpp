@@ -297,17 +297,20 @@ TEST_CASE(
     const nlohmann::json& stats = summary.contains("stats") ? summary.at("stats") : summary;
     CHECK(stats.at("steps").get<long>() >= 1000);
     CHECK(stats.at("t_final").get<double>() > 0.0);
-    if (c.signal == SIGINT) {  // the drape: nothing lost, it continues to equilibrium
-      const Run more = run_knitsim("drape --continue '" + out.string() + "' --quiet --out '" +
-                                       (tmp.path / "continued").string() + "'",
-                                   tmp);
-      INFO(more.err);
-      CHECK(more.status == 0);
-      const nlohmann::json end =
-          nlohmann::json::parse(slurp(tmp.path / "continued" / "summary.json"));
-      CHECK(end.at("t_start") == stats.at("t_final"));
+    // Nothing lost: cvode-bdf continues from the interrupted state to equilibrium.
+    const std::string args = c.args.substr(0, c.args.find(" --integrator")) +
+                             c.args.substr(c.args.find(" --integrator euler") + 19);
+    const fs::path continued = tmp.path / ("continued-" + std::to_string(c.signal));
+    const Run more = run_knitsim(args + " --continue '" + out.string() +
+                                     "' --no-pictures --quiet --out '" + continued.string() + "'",
+                                 tmp);
+    INFO(more.err);
+    CHECK(more.status == 0);
+    const nlohmann::json end = nlohmann::json::parse(slurp(continued / "summary.json"));
+    CHECK(end.at("t_start") == stats.at("t_final"));
+    CHECK(end.at("status") == "equilibrium");
+    if (c.signal == SIGINT)  // the drape
       CHECK(end.at("centre_sag_m").get<double>() == Approx(0.012882511).epsilon(1e-6));
-    }
   }
 }
 
@@ -354,6 +357,60 @@ TEST_CASE("knitsim drape --continue: a run continued where it stopped is the uni
             "raise run.t_max"}}) {
     INFO(b.args);
     const Run r = drape(b.args, "refused");
+    CHECK(r.status == 2);
+    CHECK(lines(r.err).size() == 1);
+    CHECK(r.err.find(b.says) != std::string::npos);
+    CHECK(!fs::exists(tmp.path / "refused"));
+  }
+}
+
+TEST_CASE("knitsim knit --continue: a run continued where it stopped is the uninterrupted run") {
+  using namespace knitsim::test;
+  TempDir tmp("knit-continue");
+  std::ofstream(tmp.path / "tuck.chart") << "KKKKKK\nKKKTKK\nKKKKKK\nKKKKKK\n";
+  std::ofstream(tmp.path / "other.chart") << "KKKKKK\nKKTKKK\nKKKKKK\nKKKKKK\n";
+  std::ofstream(tmp.path / "wide.chart") << "KKKKKKKKKKKK\nKKKKKTKKKKKK\nKKKKKKKKKKKK\n";
+  auto knit = [&](const std::string& args, const std::string& out,
+                  const std::string& chart = "tuck.chart") {
+    return run_knitsim("knit --chart '" + (tmp.path / chart).string() + "' " + args +
+                           " --no-pictures --quiet --out '" + (tmp.path / out).string() + "'",
+                       tmp);
+  };
+  auto json = [&](const std::string& out, const char* file) {
+    return nlohmann::json::parse(slurp(tmp.path / out / file));
+  };
+  // Euler (automatic step): 1500 + 1000 steps equal 2500 steps bit for bit (none settles).
+  REQUIRE(knit("--integrator euler --max-steps 1500", "first").status == 3);
+  REQUIRE(
+      knit("--integrator euler --max-steps 1000 --continue '" + (tmp.path / "first").string() + "'",
+           "second")
+          .status == 3);
+  REQUIRE(knit("--integrator euler --max-steps 2500", "whole").status == 3);
+  const nlohmann::json second = json("second", "state.json"), whole = json("whole", "state.json");
+  CHECK(second.at("t") == whole.at("t"));
+  CHECK(second.at("x") == whole.at("x"));
+  CHECK(second.at("v") == whole.at("v"));
+  CHECK(slurp(tmp.path / "second" / "points.csv") == slurp(tmp.path / "whole" / "points.csv"));
+  CHECK(json("second", "summary.json").at("t_start") ==
+        json("first", "summary.json").at("t_final"));
+  CHECK(json("second", "summary.json").at("stats").at("steps") == 1000);
+
+  // Refused with one line and nothing written: another chart, other parameters, a drape's state.
+  REQUIRE(
+      run_knitsim("drape --max-steps 10 --quiet --out '" + (tmp.path / "drape").string() + "'", tmp)
+          .status == 3);
+  struct Bad {
+    std::string args, chart, says;
+  };
+  const std::string first = " --continue '" + (tmp.path / "first").string() + "'";
+  for (const Bad& b : {Bad{first, "other.chart", "chart = [\"KKKKKK\",\"KKKKKK\",\"KKTKKK\""},
+                       Bad{first, "wide.chart", "chart differs from the run being continued"},
+                       Bad{first + " --set knit.damping=0.001", "tuck.chart",
+                           "knit.damping = 0.001 here, 0.0005 in the run being continued"},
+                       Bad{" --continue '" + (tmp.path / "drape").string() + "'", "tuck.chart",
+                           "the state of a knitsim drape run; this is knitsim knit"}}) {
+    INFO(b.args);
+    const Run r = knit(b.args, "refused", b.chart);
     CHECK(r.status == 2);
     CHECK(lines(r.err).size() == 1);
     CHECK(r.err.find(b.says) != std::string::npos);
