@@ -439,26 +439,16 @@ void write_run_state(const fs::path& dir, const SavedRun& saved) {
                                          {"v", saved.state.v}});
 }
 
-SavedRun read_run_state(const fs::path& dir, const std::string& command) {
-  // Capped like the other inputs: 256 MiB holds the state of a 1000 x 1000 grid.
-  constexpr std::size_t kMaxStateFileBytes = std::size_t{256} << 20;
-  const fs::path path = dir / "state.json";
-  std::string text, why;
-  if (!read_input_file(path.string(), kMaxStateFileBytes, text, why))
-    throw std::invalid_argument(
-        path.string() + ": " + why +
-        (fs::exists(dir / "summary.json")
-             ? " (that run's final state was not finite, or it predates state.json)"
-             : " (not the output folder of a knitsim " + command + " run)"));
+SavedRun parse_run_state(const std::string& text, const std::string& command) {
   SavedRun saved;
   try {
     const nlohmann::json state = nlohmann::json::parse(text);
-    if (state.at("format") != kRunStateFormat)
+    if (!state.is_object() || !state.contains("format") || state.at("format") != kRunStateFormat)
       throw std::invalid_argument("format is not \"" + std::string(kRunStateFormat) +
-                                  "\" (written by another knitsim version)");
+                                  "\" (not a state file of this knitsim version)");
     saved.command = state.at("command").get<std::string>();
     if (saved.command != command)
-      throw std::invalid_argument("the state of a knitsim " + saved.command +
+      throw std::invalid_argument("the state of a knitsim " + printable(saved.command) +
                                   " run; this is knitsim " + command);
     saved.state.t = state.at("t").get<double>();
     if (!(saved.state.t >= 0.0) || !std::isfinite(saved.state.t))
@@ -470,16 +460,39 @@ SavedRun read_run_state(const fs::path& dir, const std::string& command) {
     if (saved.state.x.size() != n || saved.state.v.size() != n)
       throw std::invalid_argument("x and v must hold integrated_dof = " + std::to_string(n) +
                                   " numbers each");
+    const auto finite = [](double d) { return std::isfinite(d); };
+    if (!std::all_of(saved.state.x.begin(), saved.state.x.end(), finite) ||
+        !std::all_of(saved.state.v.begin(), saved.state.v.end(), finite))
+      throw std::invalid_argument("x and v must be finite");
     saved.integrator = state.at("integrator").get<std::string>();
     saved.dt = state.at("dt").get<double>();
+    if (!(saved.dt >= 0.0) || !std::isfinite(saved.dt))
+      throw std::invalid_argument("dt = " + format_number(saved.dt) +
+                                  ": must be >= 0 s and finite");
     saved.model = state.at("model");
     if (!saved.model.is_object()) throw std::invalid_argument("model is not an object");
   } catch (const nlohmann::json::exception& e) {
-    throw std::invalid_argument(path.string() + ": " + e.what());
+    throw std::invalid_argument(printable(e.what()));
+  }
+  return saved;
+}
+
+SavedRun read_run_state(const fs::path& dir, const std::string& command) {
+  // Capped like the other inputs: 256 MiB holds the state of a 1000 x 1000 grid.
+  constexpr std::size_t kMaxStateFileBytes = std::size_t{256} << 20;
+  const fs::path path = dir / "state.json";
+  std::string text, why;
+  if (!read_input_file(path.string(), kMaxStateFileBytes, text, why))
+    throw std::invalid_argument(
+        path.string() + ": " + why +
+        (fs::exists(dir / "summary.json")
+             ? " (that run's final state was not finite, or it predates state.json)"
+             : " (not the output folder of a knitsim " + command + " run)"));
+  try {
+    return parse_run_state(text, command);
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(path.string() + ": " + e.what());
   }
-  return saved;
 }
 
 nlohmann::json drape_model_keys(const DrapeParams& params) {

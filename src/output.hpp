@@ -126,8 +126,11 @@ nlohmann::json drape_model_keys(const DrapeParams& params);
 // Writes DIR/state.json (format "knitsim run state 2", shortest round-trip decimals); does
 // nothing if x or v is not finite (there is nothing to continue from).
 void write_run_state(const std::filesystem::path& dir, const SavedRun& saved);
-// Reads DIR/state.json back; throws std::invalid_argument naming the file and what is missing or
-// malformed, or that it was written by another command.
+// The text of a state.json written by `command`: throws std::invalid_argument (one line) naming
+// what is missing or malformed (x, v not finite or not integrated_dof long, t or dt negative),
+// or that another command or format wrote it. Fuzzed (tests/fuzz/fuzz_state.cpp).
+SavedRun parse_run_state(const std::string& text, const std::string& command);
+// Reads DIR/state.json (at most 256 MiB) with parse_run_state; the message names the file.
 SavedRun read_run_state(const std::filesystem::path& dir, const std::string& command);
 // --continue DIR of `command`: the saved state, checked against this run -- `model` (keyed as
 // SavedRun::model) must equal the saved one key by key (the message names the first that differs,

@@ -5,6 +5,7 @@
 
 #include "models/drape_grid.hpp"
 #include "models/knit_loops.hpp"
+#include "src/output.hpp"
 #include "src/scene.hpp"
 #include "src/targets.hpp"
 
@@ -96,9 +97,25 @@ void check_target_input(const std::string& text) {
   });
 }
 
+void check_state_input(const std::string& text) {
+  SavedRun saved;
+  if (!accepted([&] { saved = parse_run_state(text, "drape"); })) return;
+  must_succeed("checking what it holds", [&] {
+    if (saved.state.x.size() != saved.state.v.size())
+      throw FuzzFinding("accepted a state whose x and v differ in size");
+    require_finite(saved.state.t, "t");
+    require_finite(saved.dt, "dt");
+    for (double d : saved.state.x) require_finite(d, "position");
+    for (double d : saved.state.v) require_finite(d, "velocity");
+    if (!saved.model.is_object()) throw FuzzFinding("accepted a model that is not an object");
+  });
+}
+
 const std::vector<FuzzEntry>& fuzz_entries() {
-  static const std::vector<FuzzEntry> entries = {
-      {"scene", check_scene_input}, {"chart", check_chart_input}, {"target", check_target_input}};
+  static const std::vector<FuzzEntry> entries = {{"scene", check_scene_input},
+                                                 {"chart", check_chart_input},
+                                                 {"target", check_target_input},
+                                                 {"state", check_state_input}};
   return entries;
 }
 

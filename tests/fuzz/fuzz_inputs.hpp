@@ -6,7 +6,9 @@
 //   scene   load_scene_text (TOML scene, SPEC 2.10), then, if accepted and small, the grid;
 //   chart   parse_knit_chart (SPEC 2.9), then, if accepted and small, the model and its
 //           type-value points and centrelines at rest;
-//   target  parse_target_csv (src/targets.hpp), then every scene's edge fits.
+//   target  parse_target_csv (src/targets.hpp), then every scene's edge fits;
+//   state   parse_run_state (src/output.hpp: the state.json of drape|knit --continue), then
+//           what it holds (finite, x and v of one size).
 // Oracle: the parser either accepts the input or throws std::invalid_argument with one
 // non-empty line (SPEC 2.10: "one clear line naming the bad input"). Once it has accepted, the
 // later stages must succeed (validation promised they would) and give finite numbers. Anything
@@ -30,6 +32,7 @@ void check_rejection_message(const std::string& message);
 void check_scene_input(const std::string& text);
 void check_chart_input(const std::string& text);
 void check_target_input(const std::string& text);
+void check_state_input(const std::string& text);
 
 // The fuzz targets by name (the folder names under tests/fuzz/corpus and regressions).
 struct FuzzEntry {
