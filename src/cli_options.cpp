@@ -194,13 +194,17 @@ size_t edit_distance(const std::string& a, const std::string& b) {
 void exit_with_run_status(const char* command, const RunStats& stats,
                           const InterruptScope& interrupt, const std::string& dir) {
   if (stats.status == RunStatus::Equilibrium) return;
-  if (stats.status == RunStatus::Interrupted) {
-    std::cerr << "knitsim " << command << ": interrupted by " << interrupt.signal_name()
-              << " at t = " << stats.t_final << " s; outputs written to " << dir << "/"
+  const char* why = stats.status == RunStatus::Interrupted ? interrupt.signal_name()
+                    : stats.status == RunStatus::StepLimit ? "--max-steps"
+                    : stats.status == RunStatus::WallLimit ? "--max-wall"
+                                                           : nullptr;
+  if (why != nullptr)  // a run cut short, not a failed one: say how to go on
+    std::cerr << "knitsim " << command << ": "
+              << (stats.status == RunStatus::Interrupted ? "interrupted by " : "stopped by ") << why
+              << " at t = " << stats.t_final << " s; outputs written to " << dir
+              << "/; the same command with --continue " << dir << " goes on from there"
               << std::endl;
-    throw CLI::RuntimeError(interrupt.exit_code());
-  }
-  throw CLI::RuntimeError(3);
+  throw CLI::RuntimeError(stats.status == RunStatus::Interrupted ? interrupt.exit_code() : 3);
 }
 
 std::string printable(const std::string& text) {

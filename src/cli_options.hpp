@@ -60,8 +60,10 @@ const std::vector<std::pair<std::string, std::string>>& run_option_names();
 
 // The end of drape and knit once their outputs are written (src/main.cpp's exit contract):
 // returns at equilibrium; a run stopped by `interrupt`'s signal prints one line on stderr
-// ("knitsim <command>: interrupted by SIGINT at t = ... s; outputs written to DIR/") and exits
-// 128 + the signal; any other status exits 3.
+// ("knitsim <command>: interrupted by SIGINT at t = ... s; outputs written to DIR/; the same
+// command with --continue DIR goes on from there") and exits 128 + the signal; one stopped by
+// --max-steps or --max-wall prints the same line ("stopped by --max-wall ...") and exits 3, as
+// does any other status (silently: the reason is in summary.json and the stdout summary).
 void exit_with_run_status(const char* command, const RunStats& stats,
                           const InterruptScope& interrupt, const std::string& dir);
 

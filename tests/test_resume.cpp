@@ -380,7 +380,11 @@ TEST_CASE("knitsim knit --continue: a run continued where it stopped is the unin
     return nlohmann::json::parse(slurp(tmp.path / out / file));
   };
   // Euler (automatic step): 1500 + 1000 steps equal 2500 steps bit for bit (none settles).
-  REQUIRE(knit("--integrator euler --max-steps 1500", "first").status == 3);
+  const Run capped = knit("--integrator euler --max-steps 1500", "first");
+  REQUIRE(capped.status == 3);
+  CHECK(lines(capped.err).size() == 1);  // says how to go on
+  CHECK(capped.err.find("stopped by --max-steps") != std::string::npos);
+  CHECK(capped.err.find("--continue " + (tmp.path / "first").string()) != std::string::npos);
   REQUIRE(
       knit("--integrator euler --max-steps 1000 --continue '" + (tmp.path / "first").string() + "'",
            "second")
