@@ -9,6 +9,8 @@
 //    particle distance from the reference run (cvode-bdf, or the first integrator registered).
 // 3. report.md (tables and picture links), comparison.csv (full precision), manifest.json.
 // Exit status 3 if a scene run of step 1 did not reach equilibrium (everything is still written).
+// Ctrl-C or SIGTERM (src/interrupt.hpp) ends the current run at its next residual check, skips
+// the rest, writes the report of the runs so far and exits 128 + the signal.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <iostream>
@@ -16,6 +18,7 @@
 #include <sstream>
 
 #include "src/commands.hpp"
+#include "src/interrupt.hpp"
 #include "src/output.hpp"
 #include "src/scene.hpp"
 
@@ -50,13 +53,17 @@ void run(const std::string& out) {
   const fs::path dir = make_output_dir(out, "demo");
   const std::string integrator = default_integrator();
   bool all_settled = true;
+  const InterruptScope interrupt;
+  const auto stopped = [&] { return interrupt.signal() != 0; };
 
   Table scenes;
   scenes.columns = {"scene",    "integrator", "status",         "t_final (s)", "steps",
                     "residual", "sag (cm)",   "max strain (%)", "wall (ms)",   "picture"};
   std::string pictures;
   for (const std::string& name : kScenes) {
-    const Scene scene = load_scene(name);
+    if (stopped()) break;
+    Scene scene = load_scene(name);
+    scene.options.interrupt = interrupt.flag();
     const DrapeResult r = run_with_progress(scene, integrator);
     fs::create_directories(dir / name);
     write_drape_outputs(dir / name, scene, r);
@@ -73,9 +80,11 @@ void run(const std::string& out) {
 
   Scene scene = load_scene(kComparisonScene);
   scene.options.max_wall_seconds = kComparisonWallCap;
+  scene.options.interrupt = interrupt.flag();
   std::vector<RunStats> stats;
   std::vector<std::vector<Vec3>> positions;
   for (const IntegratorInfo& info : integrator_catalog()) {
+    if (stopped()) break;
     DrapeResult r = run_with_progress(scene, info.name);
     std::cout << one_line(scene.name, r.stats) << std::endl;
     stats.push_back(r.stats);
@@ -122,6 +131,9 @@ void run(const std::string& out) {
          << "of any particle from its position in the " << ref_name << " run. Raw numbers: "
          << "comparison.csv.\n\n"
          << md.markdown();
+  if (stopped())
+    report << "\n**Interrupted** by " << interrupt.signal_name()
+           << ": the runs after the one marked `interrupted` were skipped.\n";
   write_file_atomic(dir / "report.md", report.str());
 
   nlohmann::json integrators = nlohmann::json::array();
@@ -135,6 +147,12 @@ void run(const std::string& out) {
                                                      {"options", to_json(scene.options)}}));
 
   std::cout << "\n" << md.text() << "\nreport: " << (dir / "report.md").string() << std::endl;
+  if (stopped()) {
+    std::cerr << "knitsim demo: interrupted by " << interrupt.signal_name()
+              << "; the report of the runs so far is in " << (dir / "report.md").string()
+              << std::endl;
+    throw CLI::RuntimeError(interrupt.exit_code());
+  }
   if (!all_settled) throw CLI::RuntimeError(3);
 }
 

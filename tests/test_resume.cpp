@@ -78,6 +78,33 @@ void check_same_run(const IcaResult& r, const IcaResult& ref) {
   }
 }
 
+// Starts `knitsim <args>` (writing into `out`) in the background and sends it `signal` half a
+// second after `out` appears (the handler is installed right after --out is made); returns its
+// wait status, or -1 if it had not ended 60 s after the start (it is then killed).
+int interrupted_run(const std::string& args, const std::filesystem::path& out, int signal,
+                    const knitsim::test::TempDir& tmp) {
+  const pid_t pid = knitsim::test::start_knitsim(args, tmp);
+  if (pid <= 0) return -1;
+  int status = 0;
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (!std::filesystem::exists(out) && std::chrono::steady_clock::now() < give_up &&
+         ::waitpid(pid, &status, WNOHANG) == 0)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  ::kill(pid, signal);
+  // Ends at its next residual check (Euler: every 1000 steps, well under a second).
+  pid_t done = 0;
+  while ((done = ::waitpid(pid, &status, WNOHANG)) == 0 &&
+         std::chrono::steady_clock::now() < give_up)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  if (done == 0) {
+    ::kill(pid, SIGKILL);
+    ::waitpid(pid, &status, 0);
+    return -1;
+  }
+  return status;
+}
+
 }  // namespace
 
 TEST_CASE("the random state round trip continues the same stream", "[resume]") {
@@ -263,28 +290,10 @@ TEST_CASE(
   for (const Case& c : cases) {
     INFO(c.args);
     const fs::path out = tmp.path / ("out-" + std::to_string(c.signal));
-    const pid_t pid = start_knitsim(c.args + " --quiet --out '" + out.string() + "'", tmp);
-    REQUIRE(pid > 0);
-    // The handler is installed right after --out is made; give the run half a second beyond.
-    int status = 0;
-    const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-    while (!fs::exists(out) && std::chrono::steady_clock::now() < give_up &&
-           ::waitpid(pid, &status, WNOHANG) == 0)
-      std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    std::this_thread::sleep_for(std::chrono::milliseconds(500));
-    ::kill(pid, c.signal);
-    // Ends at its next residual check (Euler: every 1000 steps, well under a second).
-    pid_t done = 0;
-    while ((done = ::waitpid(pid, &status, WNOHANG)) == 0 &&
-           std::chrono::steady_clock::now() < give_up)
-      std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    if (done == 0) {
-      ::kill(pid, SIGKILL);
-      ::waitpid(pid, &status, 0);
-    }
+    const int status =
+        interrupted_run(c.args + " --quiet --out '" + out.string() + "'", out, c.signal, tmp);
     const std::string err = slurp(tmp.path / "background-stderr.txt");
     INFO("stderr: " << err);
-    REQUIRE(done == pid);
     REQUIRE(WIFEXITED(status));
     CHECK(WEXITSTATUS(status) == 128 + c.signal);
     CHECK(lines(err).size() == 1);
@@ -420,4 +429,24 @@ TEST_CASE("knitsim knit --continue: a run continued where it stopped is the unin
     CHECK(r.err.find(b.says) != std::string::npos);
     CHECK(!fs::exists(tmp.path / "refused"));
   }
+}
+
+TEST_CASE("knitsim demo stopped by SIGINT: the report of the runs so far, exit 130") {
+  using namespace knitsim::test;
+  TempDir tmp("demo-interrupt");
+  const fs::path out = tmp.path / "demo";
+  // The scenes take a fraction of a second; the signal lands in the integrator comparison.
+  const int status = interrupted_run("demo --out '" + out.string() + "'", out, SIGINT, tmp);
+  const std::string err = slurp(tmp.path / "background-stderr.txt");
+  INFO("stderr: " << err);
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 130);
+  CHECK(lines(err).size() == 1);
+  CHECK(err.find("interrupted by SIGINT") != std::string::npos);
+  for (const char* f : {"report.md", "comparison.csv", "manifest.json", "four_corner/drape.png",
+                        "two_corner/summary.json"})
+    CHECK(fs::exists(out / f));
+  const std::string report = slurp(out / "report.md");
+  CHECK(report.find("| interrupted |") != std::string::npos);
+  CHECK(report.find("**Interrupted** by SIGINT") != std::string::npos);
 }
