@@ -447,6 +447,6 @@ TEST_CASE("knitsim demo stopped by SIGINT: the report of the runs so far, exit 1
                         "two_corner/summary.json"})
     CHECK(fs::exists(out / f));
   const std::string report = slurp(out / "report.md");
-  CHECK(report.find("| interrupted |") != std::string::npos);
+  // (a run marked interrupted in its table too, unless the signal fell between two runs)
   CHECK(report.find("**Interrupted** by SIGINT") != std::string::npos);
 }
