@@ -5,12 +5,14 @@
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "models/drape_grid.hpp"
 #include "solvers/integrator.hpp"
+#include "solvers/sundials_common.hpp"
 #include "tests/test_systems.hpp"
 
 using namespace knitsim;
@@ -364,4 +366,77 @@ TEST_CASE("SUNDIALS integrators reject orders their methods do not have") {
   opt.max_steps = 50;
   const RunStats s = run_to_equilibrium(grid.network, "cvode-bdf", opt, x, v);
   CHECK(s.max_order_used == 2);
+}
+
+TEST_CASE("the compiled N_Vector operations give SUNDIALS' own results bit for bit") {
+  // make_vector installs knitsim's loops for SUNDIALS' -O0 ones (sundials_common.cpp); every
+  // case of N_VLinearSum and N_VScale, in place or not, must round exactly as the library does.
+  using namespace knitsim::sun;
+  const ContextPtr ctx = make_context();
+  const long n = 37;  // odd: the vectorised loops' remainders too
+  std::vector<double> xs(n), ys(n);
+  for (long i = 0; i < n; ++i) {
+    xs[i] = std::sin(1.3 * i + 0.2) * std::pow(10.0, (i % 7) - 3);
+    ys[i] = std::cos(0.7 * i - 0.4) * std::pow(10.0, 2 - (i % 5));
+  }
+  ys[3] = 0.0;
+  auto vec = [&](const std::vector<double>& v) {
+    VectorPtr p = make_vector(n, ctx.get());
+    std::copy(v.begin(), v.end(), N_VGetArrayPointer(p.get()));
+    return p;
+  };
+  auto values = [&](N_Vector v) {
+    const double* d = N_VGetArrayPointer(v);
+    return std::vector<double>(d, d + n);
+  };
+  auto bits_equal = [](const std::vector<double>& a, const std::vector<double>& b) {
+    return std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
+  };
+  const double coefficients[] = {1.0, -1.0, 0.0, 2.5, -2.5, 1.0 / 3.0, -0.1};
+  int cases = 0;
+  for (double a : coefficients)
+    for (double b : coefficients)
+      for (int alias = 0; alias < 3; ++alias) {  // z separate, z = x, z = y
+        INFO("a = " << a << ", b = " << b << ", alias " << alias);
+        VectorPtr x1 = vec(xs), y1 = vec(ys), z1 = vec(ys), x2 = vec(xs), y2 = vec(ys),
+                  z2 = vec(ys);
+        N_Vector za = alias == 1 ? x1.get() : alias == 2 ? y1.get() : z1.get();
+        N_Vector zb = alias == 1 ? x2.get() : alias == 2 ? y2.get() : z2.get();
+        N_VLinearSum(a, x1.get(), b, y1.get(), za);         // knitsim's
+        N_VLinearSum_Serial(a, x2.get(), b, y2.get(), zb);  // SUNDIALS'
+        CHECK(bits_equal(values(za), values(zb)));
+        if (b == coefficients[0]) {
+          N_VScale(a, x1.get(), alias == 0 ? z1.get() : x1.get());
+          N_VScale_Serial(a, x2.get(), alias == 0 ? z2.get() : x2.get());
+          CHECK(bits_equal(values(alias == 0 ? z1.get() : x1.get()),
+                           values(alias == 0 ? z2.get() : x2.get())));
+        }
+        ++cases;
+      }
+  CHECK(cases == 147);
+  VectorPtr x = vec(xs), y = vec(ys), z1 = vec(ys), z2 = vec(ys);
+  auto same = [&](auto ours, auto theirs) {
+    ours(z1.get());
+    theirs(z2.get());
+    return bits_equal(values(z1.get()), values(z2.get()));
+  };
+  CHECK(same([&](N_Vector z) { N_VProd(x.get(), y.get(), z); },
+             [&](N_Vector z) { N_VProd_Serial(x.get(), y.get(), z); }));
+  CHECK(same([&](N_Vector z) { N_VDiv(y.get(), x.get(), z); },
+             [&](N_Vector z) { N_VDiv_Serial(y.get(), x.get(), z); }));
+  CHECK(same([&](N_Vector z) { N_VAbs(x.get(), z); },
+             [&](N_Vector z) { N_VAbs_Serial(x.get(), z); }));
+  CHECK(same([&](N_Vector z) { N_VInv(x.get(), z); },
+             [&](N_Vector z) { N_VInv_Serial(x.get(), z); }));
+  CHECK(same([&](N_Vector z) { N_VAddConst(x.get(), 0.3, z); },
+             [&](N_Vector z) { N_VAddConst_Serial(x.get(), 0.3, z); }));
+  CHECK(same([&](N_Vector z) { N_VCompare(0.05, x.get(), z); },
+             [&](N_Vector z) { N_VCompare_Serial(0.05, x.get(), z); }));
+  CHECK(same([&](N_Vector z) { N_VConst(-4.25, z); },
+             [&](N_Vector z) { N_VConst_Serial(-4.25, z); }));
+  CHECK(N_VMaxNorm(y.get()) == N_VMaxNorm_Serial(y.get()));
+  CHECK(N_VDotProd(x.get(), y.get()) == N_VDotProd_Serial(x.get(), y.get()));
+  // ...and they are knitsim's, not SUNDIALS' (else the comparisons above prove nothing).
+  CHECK(x->ops->nvlinearsum != N_VLinearSum_Serial);
+  CHECK(x->ops->nvscale != N_VScale_Serial);
 }
