@@ -105,6 +105,23 @@ int interrupted_run(const std::string& args, const std::filesystem::path& out, i
   return status;
 }
 
+// The run in dir/second (continued with --continue from dir/first) ended where dir/whole (one
+// uninterrupted run) did, bit for bit -- state.json and `file` (nodes.csv, points.csv) -- and
+// says it started at first's t_final.
+void check_continued_equals_whole(const std::filesystem::path& dir, const char* file) {
+  using knitsim::test::slurp;
+  auto json = [&](const char* run, const char* name) {
+    return nlohmann::json::parse(slurp(dir / run / name));
+  };
+  const nlohmann::json second = json("second", "state.json"), whole = json("whole", "state.json");
+  CHECK(second.at("t") == whole.at("t"));
+  CHECK(second.at("x") == whole.at("x"));
+  CHECK(second.at("v") == whole.at("v"));
+  CHECK(slurp(dir / "second" / file) == slurp(dir / "whole" / file));
+  CHECK(json("second", "summary.json").at("t_start") ==
+        json("first", "summary.json").at("t_final"));
+}
+
 }  // namespace
 
 TEST_CASE("the random state round trip continues the same stream", "[resume]") {
@@ -339,13 +356,7 @@ TEST_CASE("knitsim drape --continue: a run continued where it stopped is the uni
                 "second")
               .status == 3);
   REQUIRE(drape("--integrator euler --max-steps 5000", "whole").status == 3);
-  const nlohmann::json second = json("second", "state.json"), whole = json("whole", "state.json");
-  CHECK(second.at("t") == whole.at("t"));
-  CHECK(second.at("x") == whole.at("x"));
-  CHECK(second.at("v") == whole.at("v"));
-  CHECK(slurp(tmp.path / "second" / "nodes.csv") == slurp(tmp.path / "whole" / "nodes.csv"));
-  CHECK(json("second", "summary.json").at("t_start") ==
-        json("first", "summary.json").at("t_final"));
+  check_continued_equals_whole(tmp.path, "nodes.csv");
   CHECK(json("second", "summary.json").at("dt") == json("whole", "summary.json").at("dt"));
 
   // Another integrator may take over: cvode-bdf from the Euler state reaches the same equilibrium.
@@ -399,13 +410,7 @@ TEST_CASE("knitsim knit --continue: a run continued where it stopped is the unin
            "second")
           .status == 3);
   REQUIRE(knit("--integrator euler --max-steps 2500", "whole").status == 3);
-  const nlohmann::json second = json("second", "state.json"), whole = json("whole", "state.json");
-  CHECK(second.at("t") == whole.at("t"));
-  CHECK(second.at("x") == whole.at("x"));
-  CHECK(second.at("v") == whole.at("v"));
-  CHECK(slurp(tmp.path / "second" / "points.csv") == slurp(tmp.path / "whole" / "points.csv"));
-  CHECK(json("second", "summary.json").at("t_start") ==
-        json("first", "summary.json").at("t_final"));
+  check_continued_equals_whole(tmp.path, "points.csv");
   CHECK(json("second", "summary.json").at("stats").at("steps") == 1000);
 
   // Refused with one line and nothing written: another chart, other parameters, a drape's state.
