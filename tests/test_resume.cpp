@@ -122,6 +122,15 @@ void check_continued_equals_whole(const std::filesystem::path& dir, const char* 
         json("first", "summary.json").at("t_final"));
 }
 
+// A refused command line: exit 2, one line on stderr containing `says`, nothing written at `out`.
+void check_refused(const knitsim::test::Run& r, const std::string& says,
+                   const std::filesystem::path& out) {
+  CHECK(r.status == 2);
+  CHECK(knitsim::test::lines(r.err).size() == 1);
+  CHECK(r.err.find(says) != std::string::npos);
+  CHECK(!std::filesystem::exists(out));
+}
+
 }  // namespace
 
 TEST_CASE("the random state round trip continues the same stream", "[resume]") {
@@ -376,11 +385,7 @@ TEST_CASE("knitsim drape --continue: a run continued where it stopped is the uni
         Bad{"--continue '" + (tmp.path / "first").string() + "' --set run.t_max=1e-3",
             "raise run.t_max"}}) {
     INFO(b.args);
-    const Run r = drape(b.args, "refused");
-    CHECK(r.status == 2);
-    CHECK(lines(r.err).size() == 1);
-    CHECK(r.err.find(b.says) != std::string::npos);
-    CHECK(!fs::exists(tmp.path / "refused"));
+    check_refused(drape(b.args, "refused"), b.says, tmp.path / "refused");
   }
 }
 
@@ -428,11 +433,7 @@ TEST_CASE("knitsim knit --continue: a run continued where it stopped is the unin
                        Bad{" --continue '" + (tmp.path / "drape").string() + "'", "tuck.chart",
                            "the state of a knitsim drape run; this is knitsim knit"}}) {
     INFO(b.args);
-    const Run r = knit(b.args, "refused", b.chart);
-    CHECK(r.status == 2);
-    CHECK(lines(r.err).size() == 1);
-    CHECK(r.err.find(b.says) != std::string::npos);
-    CHECK(!fs::exists(tmp.path / "refused"));
+    check_refused(knit(b.args, "refused", b.chart), b.says, tmp.path / "refused");
   }
 }
 
