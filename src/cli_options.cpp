@@ -120,6 +120,17 @@ CLI::Option* add_run_options(CLI::App* cmd, IntegratorOptions& o) {
   return velocity_atol;
 }
 
+void add_history_and_continue_options(CLI::App* cmd, bool& step_history, std::string& continue_from,
+                                      const std::string& inputs) {
+  cmd->add_flag("--step-history", step_history,
+                "Also write steps.csv: t, step size, order and residual of every step (thinned "
+                "evenly beyond 2e5 rows)");
+  cmd->add_option("--continue", continue_from,
+                  "Start from the final state (state.json) of the run in this folder, at its "
+                  "t_final: continues an interrupted or capped run (same " +
+                      inputs + "; integrator and run options may change)");
+}
+
 void copy_run_flags(const IntegratorOptions& flags, IntegratorOptions& into) {
   into.rtol = flags.rtol;
   into.atol = flags.atol;

@@ -42,6 +42,10 @@ void add_gmres_options(CLI::App* cmd, IntegratorOptions& o);
 // --newton-solver, --factorization and the cvode-bdf-gmres flags. Returns the --velocity-atol
 // option (knit appends its own default rule to the description).
 CLI::Option* add_run_options(CLI::App* cmd, IntegratorOptions& o);
+// --step-history (bound to `step_history`) and --continue DIR (to `continue_from`) of drape and
+// knit; `inputs` names what a continuation must repeat ("--scene and --set").
+void add_history_and_continue_options(CLI::App* cmd, bool& step_history, std::string& continue_from,
+                                      const std::string& inputs);
 // Copies into `into` exactly the fields add_run_options binds (not t_max, equilibrium_tol:
 // scene keys), so a scene's run settings and the command line combine in one place.
 void copy_run_flags(const IntegratorOptions& flags, IntegratorOptions& into);

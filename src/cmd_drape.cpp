@@ -138,15 +138,9 @@ void register_drape_command(CLI::App& app) {
   cmd->add_option("--target", args->target,
                   "Target edges (CSV, src/targets.hpp): adds the Eq. 5 objective and both sets of "
                   "edge coefficients to summary.json and writes target_edges.csv");
-  cmd->add_flag("--step-history", args->step_history,
-                "Also write steps.csv: t, step size, order and residual of every step (thinned "
-                "evenly beyond 2e5 rows)");
   cmd->add_flag("--no-pictures", args->no_pictures,
                 "Skip drape.png (its rendering costs about as much as a four_corner solve)");
-  cmd->add_option("--continue", args->continue_from,
-                  "Start from the final state (state.json) of the run in this folder, at its "
-                  "t_final: continues an interrupted or capped run (same scene and --set; "
-                  "integrator and run options may change)");
+  add_history_and_continue_options(cmd, args->step_history, args->continue_from, "scene and --set");
   cmd->add_flag("--quiet", args->quiet, "No progress line and no summary on stdout");
   cmd->callback([args] { run(*args); });
 }

@@ -511,15 +511,10 @@ void register_knit_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--out", args->out,
                   "Output folder (default: a fresh out/knit-<chart>-<YYYYmmdd-HHMMSS>)");
-  cmd->add_flag("--step-history", args->step_history,
-                "Also write steps.csv: t, step size, order and residual of every step (thinned "
-                "evenly beyond 2e5 rows)");
   cmd->add_flag("--no-pictures", args->no_pictures,
                 "Skip before.png, after.png and the frames' PNGs (the CSV and VTK files stay)");
-  cmd->add_option("--continue", args->continue_from,
-                  "Start from the final state (state.json) of the run in this folder, at its "
-                  "t_final: continues an interrupted or capped run (same --chart and --set; "
-                  "integrator and run options may change)");
+  add_history_and_continue_options(cmd, args->step_history, args->continue_from,
+                                   "--chart and --set");
   cmd->add_flag("--quiet", args->quiet, "No progress line and no summary on stdout");
   cmd->callback([args, velocity_atol] {
     args->velocity_atol_given = velocity_atol->count() > 0;
