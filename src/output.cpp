@@ -423,11 +423,17 @@ void write_drape_picture(const fs::path& path, const Scene& scene, const DrapeRe
 
 // ---- run state ----------------------------------------------------------------------------------
 
+namespace {
+
+bool all_finite(const std::vector<double>& a) {
+  return std::all_of(a.begin(), a.end(), [](double d) { return std::isfinite(d); });
+}
+
+}  // namespace
+
 void write_run_state(const fs::path& dir, const SavedRun& saved) {
-  const auto finite = [](const std::vector<double>& a) {
-    return std::all_of(a.begin(), a.end(), [](double d) { return std::isfinite(d); });
-  };
-  if (!finite(saved.state.x) || !finite(saved.state.v) || !std::isfinite(saved.state.t)) return;
+  if (!all_finite(saved.state.x) || !all_finite(saved.state.v) || !std::isfinite(saved.state.t))
+    return;
   write_json_atomic(dir / "state.json", {{"format", kRunStateFormat},
                                          {"command", saved.command},
                                          {"integrator", saved.integrator},
@@ -460,9 +466,7 @@ SavedRun parse_run_state(const std::string& text, const std::string& command) {
     if (saved.state.x.size() != n || saved.state.v.size() != n)
       throw std::invalid_argument("x and v must hold integrated_dof = " + std::to_string(n) +
                                   " numbers each");
-    const auto finite = [](double d) { return std::isfinite(d); };
-    if (!std::all_of(saved.state.x.begin(), saved.state.x.end(), finite) ||
-        !std::all_of(saved.state.v.begin(), saved.state.v.end(), finite))
+    if (!all_finite(saved.state.x) || !all_finite(saved.state.v))
       throw std::invalid_argument("x and v must be finite");
     saved.integrator = state.at("integrator").get<std::string>();
     saved.dt = state.at("dt").get<double>();
