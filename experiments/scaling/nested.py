@@ -13,7 +13,8 @@ much cheaper is it?  Two routes per fine grid n (cells per side, even):
 The sheet, L0 = 0.5 m / n and the damping scaled with the particle mass are those of
 experiments/scaling/run.sh, on the full grid (the interpolation needs every node integrated).
 Writes OUT/nested_runs.csv (one row per route and grid; cpu_seconds of the nested route is
-the coarse run's plus the fine run's solver CPU) and OUT/nested_manifest.json.
+the coarse run's plus the fine run's solver CPU; start_residual the static residual after the
+first step, from --step-history) and OUT/nested_manifest.json.
 
     /usr/bin/python3 experiments/scaling/nested.py [--quick] [--grids "50 100"]
                                                     [--out DIR] [--keep-runs]
@@ -81,12 +82,19 @@ def prolong(coarse, template, folder):
         json.dump(state, f)
 
 
+def first_residual(run):
+    """The static residual after the run's first step (steps.csv, --step-history)."""
+    with open(os.path.join(run.folder, "steps.csv")) as f:
+        return float(next(csv.DictReader(f))["residual"])
+
+
 def row(n, route, run, cpu, reference):
     s = run.stats()
     return {"n": n, "particles": (n + 1) ** 2, "route": route, "status": s.get("status"),
             "steps": s.get("steps"), "factorisations": s.get("factorisations"),
             "t_final": s.get("t_final"), "residual": s.get("residual"),
             "centre_sag_m": s.get("centre_sag_m"), "cpu_seconds": cpu,
+            "start_residual": first_residual(run),
             "max_position_difference_m":
                 expkit.max_position_error(expkit.read_positions(run),
                                           expkit.read_positions(reference))}
@@ -100,7 +108,8 @@ def main():
     grids = [int(g) for g in (args.grids or ("20" if args.quick else "50 100")).split()]
     if any(g < 4 or g % 2 for g in grids):
         sys.exit("nested: --grids must be even numbers of cells per side >= 4")
-    common = ["drape", "--scene", "four_corner", "--integrator", "static", "--no-pictures"]
+    common = ["drape", "--scene", "four_corner", "--integrator", "static", "--no-pictures",
+              "--step-history"]
     rows = []
     for n in grids:
         fine = common + model_args(n)
@@ -121,7 +130,9 @@ def main():
                      r["cpu_seconds"], r["max_position_difference_m"]))
     expkit.write_csv(os.path.join(args.out, "nested_runs.csv"), rows,
                      list(rows[0].keys()) + ["coarse_cpu_seconds"])
-    expkit.write_manifest(args, "scaling", extra={"study": "nested start", "grids": grids})
+    command = " ".join(["/usr/bin/python3 experiments/scaling/nested.py"] + sys.argv[1:])
+    expkit.write_manifest(args, "scaling", extra={"study": "nested start", "grids": grids,
+                                                   "command": command})
     os.replace(os.path.join(args.out, "manifest.json"),
                os.path.join(args.out, "nested_manifest.json"))
     expkit.finish(args)

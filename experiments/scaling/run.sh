@@ -33,6 +33,7 @@
 # machine, and cvode-bdf-gmres-bj, which does not settle at n >= 20, uses all of it; on a loaded machine raise
 # it). Grids: n = 10 20 40 60 80 100
 # 140; --quick: 10 20 40.
+# --quick also runs nested.py --quick (the coarse-to-fine start at n = 20: nested_runs.csv).
 # Writes DIR/runs.csv (one row per run), DIR/manifest.json (with the binary's build stamp as
 # knitsim_build), DIR/runs/<n>-<solver>/ (each knitsim output folder and its /usr/bin/time -v
 # log); default DIR = out/scaling.
@@ -145,6 +146,9 @@ else
     run "$n" static-eighth static "${eighth[@]}"
   done
 fi
+
+# The coarse-to-fine start (nested.py; its full mode is run on its own, README) at n = 20.
+[ "$QUICK" = 1 ] && /usr/bin/python3 "$here/nested.py" --quick --keep-runs --out "$OUT"
 
 commit=$(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)
 mode=
