@@ -4,6 +4,7 @@
 #include <sunmatrix/sunmatrix_sparse.h>
 
 #include <Eigen/SparseCore>
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <stdexcept>
@@ -22,6 +23,7 @@ struct SchurLdl {
   int n = 0;                    // dof (half the first-order size)
   std::vector<int> ax_begin;    // column j < n: first Ax entry of A's column j
   std::vector<int> diag;        // reduced matrix: position of (j, j)
+  bool node_columns = false;    // columns 3p, 3p+1, 3p+2 of Ax share one row list (every p)
   std::vector<double> rhs, x2;  // length n
   Eigen::SparseMatrix<double> S;
   SymmetricFactor factor;
@@ -97,6 +99,53 @@ bool cg_solve(SchurLdl& c, const Eigen::Ref<const Eigen::VectorXd>& b,
   return false;
 }
 
+// c.rhs -= A_vx b1 (A_vx: the rows n..2n-1 of A's columns j < n; the entries of column j
+// from ax_begin[j] on, in the order of the stiffness pattern's column j). Where every
+// particle's three columns share one row list (node_columns: spring networks), the three are
+// applied together per row: one pass over the rows instead of three, and each row still
+// receives its terms in ascending column order, so the sums are bit for bit those of the
+// column-by-column loop (the other branch; test_schur_ldl checks both against it).
+void subtract_ax_product(SchurLdl& c, const double* a, const sunindextype* colptr,
+                         const sunindextype* rowind, const double* b1) {
+  const int n = c.n;
+  double* rhs = c.rhs.data();
+  if (c.node_columns) {
+    const CscPattern& kp = c.sys->mechanical().stiffness_pattern();
+    for (int j = 0; j < n; j += 3) {
+      const int* rows = kp.rowind.data() + kp.colptr[j];
+      const int count = kp.colptr[j + 1] - kp.colptr[j];
+      const double *a0 = a + c.ax_begin[j], *a1 = a + c.ax_begin[j + 1], *a2 = a + c.ax_begin[j + 2];
+      const double u0 = b1[j], u1 = b1[j + 1], u2 = b1[j + 2];
+      for (int e = 0; e < count; ++e) {
+        double& r = rhs[rows[e]];
+        r -= a0[e] * u0;
+        r -= a1[e] * u1;
+        r -= a2[e] * u2;
+      }
+    }
+    return;
+  }
+  for (int j = 0; j < n; ++j) {
+    const double u = b1[j];
+    for (sunindextype k = c.ax_begin[j]; k < colptr[j + 1]; ++k) rhs[rowind[k] - n] -= a[k] * u;
+  }
+}
+
+// True if the pattern's columns come in triples 3p, 3p+1, 3p+2 with identical row lists.
+bool shares_node_columns(const CscPattern& kp) {
+  if (kp.cols % 3 != 0) return false;
+  for (int j = 0; j < kp.cols; j += 3) {
+    const int count = kp.colptr[j + 1] - kp.colptr[j];
+    for (int d = 1; d < 3; ++d) {
+      if (kp.colptr[j + d + 1] - kp.colptr[j + d] != count) return false;
+      if (!std::equal(kp.rowind.begin() + kp.colptr[j], kp.rowind.begin() + kp.colptr[j + 1],
+                      kp.rowind.begin() + kp.colptr[j + d]))
+        return false;
+    }
+  }
+  return true;
+}
+
 int setup(SUNLinearSolver LS, SUNMatrix A) {
   SchurLdl& c = *content(LS);
   const sunindextype* colptr = SUNSparseMatrix_IndexPointers(A);
@@ -131,10 +180,7 @@ int solve(SUNLinearSolver LS, SUNMatrix A, N_Vector x, N_Vector b, realtype /*to
   const auto& m = c.sys->mechanical().mass();
   // rhs = M (b2 - A_vx b1)
   for (int i = 0; i < n; ++i) c.rhs[i] = bb[n + i];
-  for (int j = 0; j < n; ++j) {
-    const double b1 = bb[j];
-    for (sunindextype k = c.ax_begin[j]; k < colptr[j + 1]; ++k) c.rhs[rowind[k] - n] -= a[k] * b1;
-  }
+  subtract_ax_product(c, a, colptr, rowind, bb);
   for (int i = 0; i < n; ++i) c.rhs[i] *= m[i];
   Eigen::Map<Eigen::VectorXd> r(c.rhs.data(), n), x2(c.x2.data(), n);
   if (!c.factorised && c.try_cg && cg_solve(c, r, x2)) {
@@ -176,6 +222,7 @@ SchurCounts schur_counts(SUNLinearSolver LS) {
   SchurCounts counts = c.counts;
   counts.ldl_fallbacks = c.factor.ldl_fallbacks();
   counts.backend = c.factor.backend();
+  counts.node_columns = c.node_columns;
   return counts;
 }
 
@@ -207,6 +254,7 @@ SUNLinearSolver make_schur_ldl_solver(SUNContext ctx, const FirstOrderSystem& sy
     if (c->S.innerIndexPtr()[k] != kp.rowind[k]) return nullptr;
   c->diag.resize(n);
   for (int j = 0; j < n; ++j) c->diag[j] = kp.find(j, j);
+  c->node_columns = options.node_columns && shares_node_columns(kp);
   c->factor.analyze(c->S);
 
   SUNLinearSolver LS = SUNLinSolNewEmpty(ctx);

@@ -58,6 +58,10 @@ struct SchurOptions {
   int cg_max_iterations = 40;  // per solve, then LDL^T
   double cg_rel_tol = 1e-6;    // bound on |x - x_cg|_D / |x|_D
   IntegratorOptions::Factorization factorization = IntegratorOptions::Factorization::Automatic;
+  // The right-hand side's product A_vx b1 particle by particle where each particle's three
+  // columns share one row list (spring networks), else column by column: the same sums bit for
+  // bit, one pass over the rows instead of three (false: always column by column; for tests).
+  bool node_columns = true;
 };
 
 // Work done since creation.
@@ -69,6 +73,7 @@ struct SchurCounts {
   IntegratorOptions::Factorization backend = IntegratorOptions::Factorization::Simplicial;
   long cg_solves = 0;      // solves finished by CG
   long cg_iterations = 0;  // CG iterations, including those of solves CG gave up on
+  bool node_columns = false;  // the right-hand side's product is taken particle by particle
 };
 
 // The returned solver owns its workspace; free it with SUNLinSolFree. `sys` must outlive it.

@@ -100,6 +100,58 @@ TEST_CASE("Schur LDL^T solve equals a dense LU solve of I - gamma J") {
   SUNContext_Free(&ctx);
 }
 
+TEST_CASE("Schur solve: the particle-wise A_vx b1 gives the column-wise sums bit for bit") {
+  DrapeParams p;
+  p.natural_length = 0.1;  // 6 x 6 grid: every particle has three columns with one row list
+  const DrapeGrid g = build_drape_grid(p);
+  const FirstOrderSystem fo(g.network);
+  const int N = fo.size(), n = N / 2;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<double> y(N);
+  g.network.initial_state(y.data(), y.data() + n);
+  for (int i = 0; i < n; ++i) y[i] += 0.01 * u(rng);
+
+  SUNContext ctx;
+  REQUIRE(SUNContext_Create(nullptr, &ctx) == 0);
+  const CscPattern& P = fo.jacobian_pattern();
+  SUNMatrix A = SUNSparseMatrix(N, N, P.nnz(), CSC_MAT, ctx);
+  std::copy(P.colptr.begin(), P.colptr.end(), SUNSparseMatrix_IndexPointers(A));
+  std::copy(P.rowind.begin(), P.rowind.end(), SUNSparseMatrix_IndexValues(A));
+  detail::SchurOptions by_node, by_column;
+  by_node.cg_max_radius = by_column.cg_max_radius = 0.0;  // LDL^T: a deterministic solve
+  by_column.node_columns = false;
+  SUNLinearSolver node_ls = detail::make_schur_ldl_solver(ctx, fo, by_node);
+  SUNLinearSolver column_ls = detail::make_schur_ldl_solver(ctx, fo, by_column);
+  REQUIRE((node_ls && column_ls));
+  CHECK(detail::schur_counts(node_ls).node_columns);
+  CHECK_FALSE(detail::schur_counts(column_ls).node_columns);
+  N_Vector b = N_VNew_Serial(N, ctx), x_node = N_VNew_Serial(N, ctx),
+           x_column = N_VNew_Serial(N, ctx);
+  std::vector<double> jv(P.nnz());
+  fo.jacobian_values(0.0, y.data(), jv.data());
+  for (double gamma : {1e-4, 1.0, 100.0}) {
+    double* a = SUNSparseMatrix_Data(A);
+    for (int j = 0; j < N; ++j)
+      for (int k = P.colptr[j]; k < P.colptr[j + 1]; ++k)
+        a[k] = (P.rowind[k] == j ? 1.0 : 0.0) - gamma * jv[k];
+    for (int i = 0; i < N; ++i) NV_Ith_S(b, i) = u(rng);
+    REQUIRE(SUNLinSolSetup(node_ls, A) == 0);
+    REQUIRE(SUNLinSolSetup(column_ls, A) == 0);
+    REQUIRE(SUNLinSolSolve(node_ls, A, x_node, b, 0.0) == 0);
+    REQUIRE(SUNLinSolSolve(column_ls, A, x_column, b, 0.0) == 0);
+    int differing = 0;
+    for (int i = 0; i < N; ++i) differing += NV_Ith_S(x_node, i) != NV_Ith_S(x_column, i);
+    INFO("gamma " << gamma);
+    CHECK(differing == 0);
+  }
+  for (N_Vector v : {b, x_node, x_column}) N_VDestroy(v);
+  SUNLinSolFree(node_ls);
+  SUNLinSolFree(column_ls);
+  SUNMatDestroy(A);
+  SUNContext_Free(&ctx);
+}
+
 TEST_CASE("cvode-bdf takes the same steps to the same equilibrium with KLU, LDL^T and CG-LDL^T") {
   const DrapeGrid g = build_drape_grid(DrapeParams{});
   using NS = IntegratorOptions::NewtonSolver;
