@@ -6,6 +6,7 @@
 #include <Eigen/Dense>
 #include <catch2/catch.hpp>
 #include <random>
+#include <stdexcept>
 
 #include "models/drape_grid.hpp"
 #include "solvers/integrator.hpp"
@@ -15,25 +16,65 @@
 
 using namespace knitsim;
 
-TEST_CASE("Schur LDL^T solve equals a dense LU solve of I - gamma J") {
+namespace {
+
+DrapeGrid small_grid() {
   DrapeParams p;
   p.natural_length = 0.1;  // 6 x 6 grid, 2n = 192
-  const DrapeGrid g = build_drape_grid(p);
-  const FirstOrderSystem fo(g.network);
-  const int N = fo.size(), n = N / 2;
-  std::mt19937 rng(3);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::vector<double> y(N);
-  g.network.initial_state(y.data(), y.data() + n);
-  for (int i = 0; i < n; ++i) y[i] += 0.01 * u(rng);  // stretched and compressed springs
-  for (int i = n; i < N; ++i) y[i] = 1e-3 * u(rng);
+  return build_drape_grid(p);
+}
 
-  SUNContext ctx;
-  REQUIRE(SUNContext_Create(nullptr, &ctx) == 0);
+// The Newton matrix of a 6 x 6 four_corner grid at a perturbed state (stretched and
+// compressed springs, random velocities): A = I - gamma J in J's CSC pattern, and its
+// SUNDIALS context. rng and u go on to draw the right-hand sides.
+struct NewtonSetting {
+  explicit NewtonSetting(unsigned seed) : rng(seed) {
+    g.network.initial_state(y.data(), y.data() + n);
+    for (int i = 0; i < n; ++i) y[i] += 0.01 * u(rng);
+    for (int i = n; i < N; ++i) y[i] = 1e-3 * u(rng);
+    fo.jacobian_values(0.0, y.data(), jv.data());
+    if (SUNContext_Create(nullptr, &ctx) != 0) throw std::runtime_error("SUNContext_Create");
+    A = SUNSparseMatrix(N, N, P.nnz(), CSC_MAT, ctx);
+    std::copy(P.colptr.begin(), P.colptr.end(), SUNSparseMatrix_IndexPointers(A));
+    std::copy(P.rowind.begin(), P.rowind.end(), SUNSparseMatrix_IndexValues(A));
+  }
+  ~NewtonSetting() {
+    SUNMatDestroy(A);
+    SUNContext_Free(&ctx);
+  }
+  NewtonSetting(const NewtonSetting&) = delete;
+  NewtonSetting& operator=(const NewtonSetting&) = delete;
+
+  void set_gamma(double gamma) {
+    double* a = SUNSparseMatrix_Data(A);
+    for (int j = 0; j < N; ++j)
+      for (int k = P.colptr[j]; k < P.colptr[j + 1]; ++k)
+        a[k] = (P.rowind[k] == j ? 1.0 : 0.0) - gamma * jv[k];
+  }
+
+  const DrapeGrid g = small_grid();
+  const FirstOrderSystem fo{g.network};
   const CscPattern& P = fo.jacobian_pattern();
-  SUNMatrix A = SUNSparseMatrix(N, N, P.nnz(), CSC_MAT, ctx);
-  std::copy(P.colptr.begin(), P.colptr.end(), SUNSparseMatrix_IndexPointers(A));
-  std::copy(P.rowind.begin(), P.rowind.end(), SUNSparseMatrix_IndexValues(A));
+  const int N = fo.size(), n = N / 2;
+  std::mt19937 rng;
+  std::uniform_real_distribution<double> u{-1.0, 1.0};
+  std::vector<double> y = std::vector<double>(N);
+  std::vector<double> jv = std::vector<double>(P.nnz());  // J's values at y
+  SUNContext ctx = nullptr;
+  SUNMatrix A = nullptr;
+};
+
+}  // namespace
+
+TEST_CASE("Schur LDL^T solve equals a dense LU solve of I - gamma J") {
+  NewtonSetting setting(3);
+  const FirstOrderSystem& fo = setting.fo;
+  const CscPattern& P = setting.P;
+  const int N = setting.N;
+  auto& rng = setting.rng;
+  auto& u = setting.u;
+  SUNContext ctx = setting.ctx;
+  SUNMatrix A = setting.A;
   // ldl: factorise at every setup. cg-ldl: the default options (CG at small gamma). forced
   // fallback: CG may take one iteration only, so the solves it cannot finish factorise.
   detail::SchurOptions ldl_only, forced_fallback;
@@ -56,15 +97,11 @@ TEST_CASE("Schur LDL^T solve equals a dense LU solve of I - gamma J") {
 
   long multi_iteration_cg = 0;  // CG solves that needed more than one iteration
   for (double gamma : {1e-6, 1e-4, 1e-3, 1.0, 100.0}) {
-    std::vector<double> jv(P.nnz());
-    fo.jacobian_values(0.0, y.data(), jv.data());
-    double* a = SUNSparseMatrix_Data(A);
+    setting.set_gamma(gamma);
     Eigen::MatrixXd dense = Eigen::MatrixXd::Identity(N, N);
     for (int j = 0; j < N; ++j)
-      for (int k = P.colptr[j]; k < P.colptr[j + 1]; ++k) {
-        a[k] = (P.rowind[k] == j ? 1.0 : 0.0) - gamma * jv[k];
-        dense(P.rowind[k], j) -= gamma * jv[k];
-      }
+      for (int k = P.colptr[j]; k < P.colptr[j + 1]; ++k)
+        dense(P.rowind[k], j) -= gamma * setting.jv[k];
     const detail::SchurCounts before = detail::schur_counts(LS);
     REQUIRE(SUNLinSolSetup(LS, A) == 0);
     Eigen::VectorXd rhs(N);
@@ -96,50 +133,28 @@ TEST_CASE("Schur LDL^T solve equals a dense LU solve of I - gamma J") {
   N_VDestroy(b);
   N_VDestroy(x);
   SUNLinSolFree(LS);
-  SUNMatDestroy(A);
-  SUNContext_Free(&ctx);
 }
 
 TEST_CASE("Schur solve: the particle-wise A_vx b1 gives the column-wise sums bit for bit") {
-  DrapeParams p;
-  p.natural_length = 0.1;  // 6 x 6 grid: every particle has three columns with one row list
-  const DrapeGrid g = build_drape_grid(p);
-  const FirstOrderSystem fo(g.network);
-  const int N = fo.size(), n = N / 2;
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::vector<double> y(N);
-  g.network.initial_state(y.data(), y.data() + n);
-  for (int i = 0; i < n; ++i) y[i] += 0.01 * u(rng);
-
-  SUNContext ctx;
-  REQUIRE(SUNContext_Create(nullptr, &ctx) == 0);
-  const CscPattern& P = fo.jacobian_pattern();
-  SUNMatrix A = SUNSparseMatrix(N, N, P.nnz(), CSC_MAT, ctx);
-  std::copy(P.colptr.begin(), P.colptr.end(), SUNSparseMatrix_IndexPointers(A));
-  std::copy(P.rowind.begin(), P.rowind.end(), SUNSparseMatrix_IndexValues(A));
+  NewtonSetting setting(7);  // every particle's three columns share one row list
+  const int N = setting.N;
   detail::SchurOptions by_node, by_column;
   by_node.cg_max_radius = by_column.cg_max_radius = 0.0;  // LDL^T: a deterministic solve
   by_column.node_columns = false;
-  SUNLinearSolver node_ls = detail::make_schur_ldl_solver(ctx, fo, by_node);
-  SUNLinearSolver column_ls = detail::make_schur_ldl_solver(ctx, fo, by_column);
+  SUNLinearSolver node_ls = detail::make_schur_ldl_solver(setting.ctx, setting.fo, by_node);
+  SUNLinearSolver column_ls = detail::make_schur_ldl_solver(setting.ctx, setting.fo, by_column);
   REQUIRE((node_ls && column_ls));
   CHECK(detail::schur_counts(node_ls).node_columns);
   CHECK_FALSE(detail::schur_counts(column_ls).node_columns);
-  N_Vector b = N_VNew_Serial(N, ctx), x_node = N_VNew_Serial(N, ctx),
-           x_column = N_VNew_Serial(N, ctx);
-  std::vector<double> jv(P.nnz());
-  fo.jacobian_values(0.0, y.data(), jv.data());
+  N_Vector b = N_VNew_Serial(N, setting.ctx), x_node = N_VNew_Serial(N, setting.ctx),
+           x_column = N_VNew_Serial(N, setting.ctx);
   for (double gamma : {1e-4, 1.0, 100.0}) {
-    double* a = SUNSparseMatrix_Data(A);
-    for (int j = 0; j < N; ++j)
-      for (int k = P.colptr[j]; k < P.colptr[j + 1]; ++k)
-        a[k] = (P.rowind[k] == j ? 1.0 : 0.0) - gamma * jv[k];
-    for (int i = 0; i < N; ++i) NV_Ith_S(b, i) = u(rng);
-    REQUIRE(SUNLinSolSetup(node_ls, A) == 0);
-    REQUIRE(SUNLinSolSetup(column_ls, A) == 0);
-    REQUIRE(SUNLinSolSolve(node_ls, A, x_node, b, 0.0) == 0);
-    REQUIRE(SUNLinSolSolve(column_ls, A, x_column, b, 0.0) == 0);
+    setting.set_gamma(gamma);
+    for (int i = 0; i < N; ++i) NV_Ith_S(b, i) = setting.u(setting.rng);
+    REQUIRE(SUNLinSolSetup(node_ls, setting.A) == 0);
+    REQUIRE(SUNLinSolSetup(column_ls, setting.A) == 0);
+    REQUIRE(SUNLinSolSolve(node_ls, setting.A, x_node, b, 0.0) == 0);
+    REQUIRE(SUNLinSolSolve(column_ls, setting.A, x_column, b, 0.0) == 0);
     int differing = 0;
     for (int i = 0; i < N; ++i) differing += NV_Ith_S(x_node, i) != NV_Ith_S(x_column, i);
     INFO("gamma " << gamma);
@@ -148,8 +163,6 @@ TEST_CASE("Schur solve: the particle-wise A_vx b1 gives the column-wise sums bit
   for (N_Vector v : {b, x_node, x_column}) N_VDestroy(v);
   SUNLinSolFree(node_ls);
   SUNLinSolFree(column_ls);
-  SUNMatDestroy(A);
-  SUNContext_Free(&ctx);
 }
 
 TEST_CASE("cvode-bdf takes the same steps to the same equilibrium with KLU, LDL^T and CG-LDL^T") {
