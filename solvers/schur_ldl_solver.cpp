@@ -104,7 +104,7 @@ bool cg_solve(SchurLdl& c, const Eigen::Ref<const Eigen::VectorXd>& b,
 // particle's three columns share one row list (node_columns: spring networks), the three are
 // applied together per row: one pass over the rows instead of three, and each row still
 // receives its terms in ascending column order, so the sums are bit for bit those of the
-// column-by-column loop (the other branch; test_schur_ldl checks both against it).
+// column-by-column loop below (test_schur_ldl compares the two bit for bit).
 void subtract_ax_product(SchurLdl& c, const double* a, const sunindextype* colptr,
                          const sunindextype* rowind, const double* b1) {
   const int n = c.n;
