@@ -11,6 +11,12 @@ namespace {
 
 // 3 x 3 blocks are row-major arrays of 9.
 
+struct BlockPattern {
+  std::vector<int> start;              // group J holds columns start[J] .. start[J + 1) - 1
+  std::vector<std::vector<int>> rows;  // rows[J]: the groups of group J's stored blocks, sorted
+  bool empty() const { return rows.empty(); }
+};
+
 // Y -= A B
 inline void sub_product(double* Y, const double* A, const double* B) {
   for (int r = 0; r < 3; ++r)
@@ -53,43 +59,62 @@ inline void apply_pivot_inverse(const double* f, double* v) {
   v[2] = w2;
 }
 
-// The node pattern of a blocked S: for node column J, the node rows of its blocks in order
-// (empty result if S is not blocked).
-std::vector<std::vector<int>> node_pattern(const Eigen::SparseMatrix<double>& S) {
+// The block structure of a blocked S: its columns cut into groups of 1 to 3 consecutive ones
+// with the same rows (a particle's coordinates; fewer than 3 where a mirror plane keeps only
+// some), and for each group the groups of its stored blocks, in order. Greedy from column 0: a
+// group takes the next column while it holds the same rows and the group has fewer than 3, so a
+// pattern of whole 3 x 3 particle blocks gives exactly its particles. S is blocked if every
+// column holds whole groups, the group pattern is symmetric, and padding every group to 3 adds
+// at most a third to the unknowns (a scalar pattern, all groups of 1, is not blocked).
+BlockPattern block_pattern(const Eigen::SparseMatrix<double>& S) {
   const int n = static_cast<int>(S.rows());
-  if (S.cols() != n || n % 3 != 0 || n == 0 || !S.isCompressed()) return {};
+  if (S.cols() != n || n == 0 || !S.isCompressed()) return {};
   const int* cp = S.outerIndexPtr();
   const int* ri = S.innerIndexPtr();
-  const int nb = n / 3;
-  std::vector<std::vector<int>> rows(nb);
+  auto same_rows = [&](int a, int b) {
+    return cp[a + 1] - cp[a] == cp[b + 1] - cp[b] && std::equal(ri + cp[a], ri + cp[a + 1], ri + cp[b]);
+  };
+  BlockPattern bp;
+  bp.start.push_back(0);
+  for (int j = 0; j < n;) {
+    int size = 1;
+    while (size < 3 && j + size < n && same_rows(j, j + size)) ++size;
+    j += size;
+    bp.start.push_back(j);
+  }
+  const int nb = static_cast<int>(bp.start.size()) - 1;
+  if (3L * nb * 3 > 4L * n) return {};  // padded to 3 x nb unknowns: more than n * 4/3
+  std::vector<int> group_of(n);
+  for (int J = 0; J < nb; ++J)
+    for (int c = bp.start[J]; c < bp.start[J + 1]; ++c) group_of[c] = J;
+  bp.rows.resize(nb);
   for (int J = 0; J < nb; ++J) {
-    const int len = cp[3 * J + 1] - cp[3 * J];
-    if (len % 3 != 0) return {};
-    for (int c = 1; c < 3; ++c)  // the node's three columns hold the same rows
-      if (cp[3 * J + c + 1] - cp[3 * J + c] != len ||
-          !std::equal(ri + cp[3 * J], ri + cp[3 * J + 1], ri + cp[3 * J + c]))
-        return {};
-    for (int k = cp[3 * J]; k < cp[3 * J + 1]; k += 3) {
-      const int r = ri[k];
-      if (r % 3 != 0 || ri[k + 1] != r + 1 || ri[k + 2] != r + 2) return {};
-      rows[J].push_back(r / 3);
+    const int col = bp.start[J];
+    for (int k = cp[col]; k < cp[col + 1];) {
+      const int I = group_of[ri[k]];
+      const int size = bp.start[I + 1] - bp.start[I];
+      if (ri[k] != bp.start[I] || k + size > cp[col + 1]) return {};
+      for (int q = 1; q < size; ++q)
+        if (ri[k + q] != ri[k] + q) return {};
+      bp.rows[J].push_back(I);
+      k += size;
     }
   }
-  // Structurally symmetric: the factorisation reads each node column's upper part only.
+  // Structurally symmetric: the factorisation reads each group column's upper part only.
   std::vector<int> count(nb, 0);
   for (int J = 0; J < nb; ++J)
-    for (int I : rows[J]) ++count[I];
+    for (int I : bp.rows[J]) ++count[I];
   for (int J = 0; J < nb; ++J)
-    if (count[J] != static_cast<int>(rows[J].size())) return {};
+    if (count[J] != static_cast<int>(bp.rows[J].size())) return {};
   for (int J = 0; J < nb; ++J)
-    for (int I : rows[J])
-      if (!std::binary_search(rows[I].begin(), rows[I].end(), J)) return {};
-  return rows;
+    for (int I : bp.rows[J])
+      if (!std::binary_search(bp.rows[I].begin(), bp.rows[I].end(), J)) return {};
+  return bp;
 }
 
 }  // namespace
 
-bool BlockLdlt::blocked(const Eigen::SparseMatrix<double>& S) { return !node_pattern(S).empty(); }
+bool BlockLdlt::blocked(const Eigen::SparseMatrix<double>& S) { return !block_pattern(S).empty(); }
 
 void BlockLdlt::analyze(const Eigen::SparseMatrix<double>& S) {
   if (!try_analyze(S))
@@ -97,8 +122,9 @@ void BlockLdlt::analyze(const Eigen::SparseMatrix<double>& S) {
 }
 
 bool BlockLdlt::try_analyze(const Eigen::SparseMatrix<double>& S) {
-  const std::vector<std::vector<int>> rows = node_pattern(S);
-  if (rows.empty()) return false;
+  const BlockPattern bp = block_pattern(S);
+  if (bp.empty()) return false;
+  const std::vector<std::vector<int>>& rows = bp.rows;
   nb_ = static_cast<int>(rows.size());
 
   // AMD on the node graph; Eigen's ordering returns the node eliminated k-th at position k.
@@ -112,20 +138,33 @@ bool BlockLdlt::try_analyze(const Eigen::SparseMatrix<double>& S) {
   perm_.assign(order.indices().data(), order.indices().data() + nb_);
   std::vector<int> pinv(nb_);
   for (int k = 0; k < nb_; ++k) pinv[perm_[k]] = k;
+  first_.resize(nb_);
+  size_.resize(nb_);
+  uniform_ = true;
+  for (int k = 0; k < nb_; ++k) {
+    first_[k] = bp.start[perm_[k]];
+    size_[k] = bp.start[perm_[k] + 1] - first_[k];
+    uniform_ = uniform_ && size_[k] == 3;
+  }
 
-  // Column k of P S P^T, rows i <= k, with where each block's columns start in S's values.
+  // Column k of P S P^T, rows i <= k, with where each block's columns start in S's values (-1
+  // for a padded column).
   const int* cp = S.outerIndexPtr();
   ap_.assign(nb_ + 1, 0);
   ai_.clear();
   at_.clear();
   for (int k = 0; k < nb_; ++k) {
     const int J = perm_[k];
-    for (std::size_t t = 0; t < rows[J].size(); ++t) {
-      const int i = pinv[rows[J][t]];
-      if (i > k) continue;
-      ai_.push_back(i);
-      const int offset = 3 * static_cast<int>(t);
-      at_.push_back({cp[3 * J] + offset, cp[3 * J + 1] + offset, cp[3 * J + 2] + offset});
+    int offset = 0;  // rows of S above this block in group J's columns
+    for (int I : rows[J]) {
+      const int i = pinv[I];
+      if (i <= k) {
+        ai_.push_back(i);
+        std::array<int, 3> where{-1, -1, -1};
+        for (int c = 0; c < size_[k]; ++c) where[c] = cp[bp.start[J] + c] + offset;
+        at_.push_back(where);
+      }
+      offset += size_[i];
     }
     ap_[k + 1] = static_cast<int>(ai_.size());
   }
@@ -155,7 +194,14 @@ bool BlockLdlt::try_analyze(const Eigen::SparseMatrix<double>& S) {
 
 bool BlockLdlt::factorize(const Eigen::SparseMatrix<double>& S) {
   if (nb_ == 0) throw std::logic_error("BlockLdlt::factorize before analyze");
-  const double* s = S.valuePtr();
+  return uniform_ ? factorize_blocks<true>(S.valuePtr()) : factorize_blocks<false>(S.valuePtr());
+}
+
+// Padded groups (Uniform false) enter as identity rows and columns: their entries of L stay
+// exactly 0 and their pivots 1, so the real unknowns' arithmetic is that of the unpadded
+// matrix. Uniform (every group 3, the spring networks) is the same loop with the sizes known.
+template <bool Uniform>
+bool BlockLdlt::factorize_blocks(const double* s) {
   std::fill(lnz_.begin(), lnz_.end(), 0);
   std::fill(flag_.begin(), flag_.end(), -1);
   std::fill(work_.begin(), work_.end(), 0.0);  // clean even after a failed factorisation
@@ -166,8 +212,10 @@ bool BlockLdlt::factorize(const Eigen::SparseMatrix<double>& S) {
     flag_[k] = k;
     for (int p = ap_[k]; p < ap_[k + 1]; ++p) {
       double* y = &work_[9 * static_cast<std::size_t>(ai_[p])];
-      for (int c = 0; c < 3; ++c)
-        for (int r = 0; r < 3; ++r) y[3 * r + c] += s[at_[p][c] + r];
+      const int rows = Uniform ? 3 : size_[ai_[p]];
+      const int cols = Uniform ? 3 : size_[k];
+      for (int c = 0; c < cols; ++c)
+        for (int r = 0; r < rows; ++r) y[3 * r + c] += s[at_[p][c] + r];
       int len = 0;
       for (int i = ai_[p]; flag_[i] != k; i = parent_[i]) {
         stack_[len++] = i;
@@ -179,6 +227,8 @@ bool BlockLdlt::factorize(const Eigen::SparseMatrix<double>& S) {
     double* yk = &work_[9 * static_cast<std::size_t>(k)];
     std::copy(yk, yk + 9, d);
     std::fill(yk, yk + 9, 0.0);
+    if (!Uniform)
+      for (int q = size_[k]; q < 3; ++q) d[4 * q] = 1.0;  // a padded coordinate's pivot
     // Row k of L: solve L(0:k, 0:k) y = column k along the pattern; L(k, i) = y_i^T D_i^-1,
     // D_k = S_kk - sum_i L(k, i) y_i.
     for (; top < nb_; ++top) {
@@ -210,7 +260,7 @@ bool BlockLdlt::factorize(const Eigen::SparseMatrix<double>& S) {
 void BlockLdlt::solve(const double* b, double* x) {
   double* w = work_.data();  // 3 per node, in elimination order
   for (int k = 0; k < nb_; ++k)
-    for (int r = 0; r < 3; ++r) w[3 * k + r] = b[3 * perm_[k] + r];
+    for (int r = 0; r < 3; ++r) w[3 * k + r] = r < size_[k] ? b[first_[k] + r] : 0.0;
   for (int j = 0; j < nb_; ++j) {  // L z = P b
     const double* wj = &w[3 * j];
     for (int p = lp_[j]; p < lp_[j + 1]; ++p) {
@@ -231,7 +281,7 @@ void BlockLdlt::solve(const double* b, double* x) {
     }
   }
   for (int k = 0; k < nb_; ++k)
-    for (int r = 0; r < 3; ++r) x[3 * perm_[k] + r] = w[3 * k + r];
+    for (int r = 0; r < size_[k]; ++r) x[first_[k] + r] = w[3 * k + r];
 }
 
 }  // namespace knitsim::detail

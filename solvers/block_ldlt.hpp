@@ -1,6 +1,9 @@
 // Sparse LDL^T in 3 x 3 node blocks, for symmetric matrices whose pattern is made of dense
 // 3 x 3 blocks: S = M (I + h Gamma) - h^2 K of a spring network (solvers/schur_matrix.hpp),
-// where every particle's three coordinates couple to the same neighbours.
+// where every particle's three coordinates couple to the same neighbours. On the mirror-reduced
+// drapes (models/mirror_reduced.hpp) a particle on a mirror plane keeps 1 or 2 coordinates: its
+// node is padded to 3 with identity rows and columns, which the arithmetic keeps exact (their
+// entries of L stay 0, their pivots 1), so those matrices are factorised in blocks too.
 //
 //   S = P^T L D L^T P,  L unit block lower triangular (3 x 3 blocks), D block diagonal.
 //
@@ -27,8 +30,8 @@ namespace knitsim::detail {
 class BlockLdlt {
  public:
   // True if S (square, compressed, full symmetric pattern with sorted rows) is made of dense
-  // 3 x 3 blocks: its size is a multiple of 3, and each stored entry's 3 x 3 node block is
-  // stored whole.
+  // blocks between nodes of 1 to 3 consecutive unknowns with the same rows, each stored entry's
+  // block stored whole, and padding the nodes to 3 adds at most a third to the unknowns.
   static bool blocked(const Eigen::SparseMatrix<double>& S);
 
   // Ordering and symbolic factorisation of S's pattern; throws std::invalid_argument if
@@ -53,6 +56,11 @@ class BlockLdlt {
   std::vector<double> lx_;                                  // L's blocks, 9 per entry (row-major)
   std::vector<double> pivot_;  // D_k = l d l^T, 6 per node: d0, d1, d2, l10, l20, l21
   std::vector<double> work_;   // 9 per node: the row of L being formed; 3 per node in solve
+  std::vector<int> first_, size_;  // for the node eliminated k-th: its first unknown, its count
+  bool uniform_ = true;            // every node has 3 unknowns (no padding)
+
+  template <bool Uniform>
+  bool factorize_blocks(const double* s);
 };
 
 }  // namespace knitsim::detail

@@ -106,7 +106,7 @@ struct IntegratorOptions {
   // Newton solvers, the schur-ldl preconditioner; solvers/symmetric_factor.hpp):
   //   Simplicial  Eigen's simplicial LDL^T, scalar by scalar;
   //   Block       the same LDL^T in 3 x 3 node blocks (solvers/block_ldlt.hpp), where S is made
-  //               of them (spring networks without symmetry planes), else Simplicial;
+  //               of them (spring networks; mirror-plane particles padded), else Simplicial;
   //   Supernodal  CHOLMOD's supernodal LL^T, falling back to LDL^T (Block where it applies)
   //               where S is not positive definite;
   //   Automatic   Block (or Simplicial) below SymmetricFactor::supernodal_min_dof unknowns,

@@ -10,8 +10,8 @@
 //               compressed).
 //   block       the same up-looking LDL^T in 3 x 3 particle blocks (solvers/block_ldlt.hpp):
 //               same fill, one index per block instead of nine, unrolled 3 x 3 kernels. Used
-//               where S is made of such blocks (every spring network; not the mirror-reduced
-//               drapes, whose particles on a plane keep 1 or 2 coordinates: there simplicial).
+//               where S is made of such blocks: every spring network, the mirror-reduced drapes
+//               too (a particle on a mirror plane keeps 1 or 2 coordinates, padded to 3).
 //   supernodal  CHOLMOD's supernodal LL^T (AMD or METIS ordering, dense BLAS kernels on the
 //               supernodes). Fastest on large grids with an optimised BLAS (Debian's
 //               libopenblas0-serial, which run.sh installs); LL^T needs S positive definite,

@@ -19,14 +19,10 @@ using Backend = IntegratorOptions::Factorization;
 
 namespace {
 
-// The reduced Newton matrix S = M (I + h Gamma) - h^2 K of a 6 x 6 drape grid (96 dof), at
-// rest (K negative semidefinite: S positive definite) or with every coordinate moved by up to
-// `noise` m (stretched and compressed springs).
-Eigen::SparseMatrix<double> drape_schur(double h, double noise) {
-  DrapeParams p;
-  p.natural_length = 0.1;
-  const DrapeGrid g = build_drape_grid(p);
-  const SpringNetwork& sys = g.network;
+// The reduced Newton matrix S = M (I + h Gamma) - h^2 K of a drape's system, at rest (K
+// negative semidefinite: S positive definite) or with every unknown moved by up to `noise` m
+// (stretched and compressed springs).
+Eigen::SparseMatrix<double> schur_at(const MechanicalSystem& sys, double h, double noise) {
   std::vector<double> x(sys.dof()), v(sys.dof());
   sys.initial_state(x.data(), v.data());
   std::mt19937 rng(5);
@@ -37,6 +33,13 @@ Eigen::SparseMatrix<double> drape_schur(double h, double noise) {
   Eigen::SparseMatrix<double> S = detail::schur_matrix(sys);
   detail::fill_schur_values(sys, h, ax.data(), S);
   return S;
+}
+
+// S of a 6 x 6 four_corner drape grid (96 dof).
+Eigen::SparseMatrix<double> drape_schur(double h, double noise) {
+  DrapeParams p;
+  p.natural_length = 0.1;
+  return schur_at(build_drape_grid(p).network, h, noise);
 }
 
 // max |x - S^-1 b| / max |S^-1 b| against a dense solve.
@@ -316,12 +319,105 @@ TEST_CASE(
   CHECK_FALSE(detail::BlockLdlt::blocked(odd));
   CHECK_THROWS_AS(detail::BlockLdlt().analyze(odd), std::invalid_argument);
 
-  // The eighth-symmetry drape: particles on a mirror plane keep fewer than 3 coordinates.
-  const DrapeGrid g = build_drape_grid(DrapeParams{});
-  const MirrorReduced reduced = make_drape_reduced(g, DrapeSymmetry::Eighth);
-  const Eigen::SparseMatrix<double> eighth = detail::schur_matrix(reduced);
-  CHECK_FALSE(detail::BlockLdlt::blocked(eighth));
+  // A scalar pattern (every node of 1 unknown: padding would triple the unknowns) is not
+  // blocked: the block back end falls back to simplicial.
+  Eigen::SparseMatrix<double> scalar(12, 12);
+  for (int i = 0; i < 12; ++i) {
+    scalar.insert(i, i) = 4.0;
+    if (i > 0) scalar.insert(i, i - 1) = scalar.insert(i - 1, i) = -1.0;
+  }
+  scalar.makeCompressed();
+  CHECK_FALSE(detail::BlockLdlt::blocked(scalar));
   detail::SymmetricFactor f(Backend::Block);
-  f.analyze(eighth);
+  f.analyze(scalar);
   CHECK(f.backend() == Backend::Simplicial);
+}
+
+namespace {
+
+// S with the unknowns `drop` removed (rows and columns).
+Eigen::SparseMatrix<double> without(const Eigen::SparseMatrix<double>& S,
+                                    const std::vector<bool>& drop) {
+  std::vector<int> index(S.rows(), -1);
+  int n = 0;
+  for (int i = 0; i < S.rows(); ++i)
+    if (!drop[i]) index[i] = n++;
+  std::vector<Eigen::Triplet<double>> t;
+  for (int j = 0; j < S.outerSize(); ++j)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(S, j); it; ++it)
+      if (index[it.row()] >= 0 && index[j] >= 0)
+        t.emplace_back(index[it.row()], index[j], it.value());
+  Eigen::SparseMatrix<double> m(n, n);
+  m.setFromTriplets(t.begin(), t.end());
+  m.makeCompressed();
+  return m;
+}
+
+}  // namespace
+
+TEST_CASE("BlockLdlt: nodes of 1 or 2 unknowns are padded to 3 and solved as exactly") {
+  // Random indefinite blocks with one unknown of every 4th node and two of every 7th removed
+  // (nodes 17 and 45 lose all three).
+  const unsigned seed = GENERATE(1u, 2u, 3u);
+  const Eigen::SparseMatrix<double> full = random_block_matrix(60, 3, seed);
+  std::vector<bool> drop(full.rows(), false);
+  for (int I = 0; I < 60; ++I) {
+    if (I % 4 == 1) drop[3 * I + 2] = true;
+    if (I % 7 == 3) drop[3 * I] = drop[3 * I + 1] = true;
+  }
+  const Eigen::SparseMatrix<double> S = without(full, drop);
+  const int n = static_cast<int>(S.rows());
+  REQUIRE(detail::BlockLdlt::blocked(S));
+  detail::BlockLdlt f;
+  f.analyze(S);
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(n, -2.0, 3.0);
+  Eigen::VectorXd x(n);
+  REQUIRE(f.factorize(S));
+  f.solve(b.data(), x.data());
+  CHECK(relative_error(S, b, x) < 1e-12);
+
+  // A node of one unknown with that unknown zeroed: its pivot (1 x 1 inside the padded block)
+  // is singular.
+  const int lone = 3;  // kept its third unknown only (node 17 lost all three)
+  int at = 0;          // that unknown's index in S
+  for (int i = 0; i < 3 * lone + 2; ++i) at += drop[i] ? 0 : 1;
+  Eigen::SparseMatrix<double> singular = S;
+  for (int j = 0; j < n; ++j)
+    for (int k = singular.outerIndexPtr()[j]; k < singular.outerIndexPtr()[j + 1]; ++k)
+      if (j == at || singular.innerIndexPtr()[k] == at) singular.valuePtr()[k] = 0.0;
+  CHECK_FALSE(f.factorize(singular));
+  REQUIRE(f.factorize(S));
+  f.solve(b.data(), x.data());
+  CHECK(relative_error(S, b, x) < 1e-12);
+}
+
+TEST_CASE("BlockLdlt: the mirror-reduced drapes are blocked and solve as the scalar LDL^T") {
+  // Particles on a mirror plane keep 1 or 2 coordinates (the eighth's centre 1: z).
+  const DrapeSymmetry sym =
+      GENERATE(DrapeSymmetry::Half, DrapeSymmetry::Quarter, DrapeSymmetry::Eighth);
+  DrapeParams p;
+  if (sym == DrapeSymmetry::Half) p.layout = PinLayout::TwoCorner;
+  const DrapeGrid g = build_drape_grid(p);
+  const MirrorReduced reduced = make_drape_reduced(g, sym);
+  INFO("symmetry " << to_string(sym) << ", " << reduced.dof() << " unknowns");
+  const double noise = GENERATE(0.0, 0.01);  // 1 cm: compressed springs, S indefinite
+  const Eigen::SparseMatrix<double> S = schur_at(reduced, 100.0, noise);
+  const int n = static_cast<int>(S.rows());
+  REQUIRE(detail::BlockLdlt::blocked(S));
+  for (const Backend which : {Backend::Block, Backend::Automatic}) {
+    detail::SymmetricFactor f(which);
+    f.analyze(S);
+    CHECK(f.backend() == Backend::Block);
+  }
+  detail::SymmetricFactor block(Backend::Block), scalar(Backend::Simplicial);
+  block.analyze(S);
+  scalar.analyze(S);
+  REQUIRE(block.factorize(S));
+  REQUIRE(scalar.factorize(S));
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(n, -1.0, 2.0);
+  Eigen::VectorXd xb(n), xs(n);
+  block.solve(b, xb);
+  scalar.solve(b, xs);
+  CHECK(relative_error(S, b, xb) < 1e-10);
+  CHECK((xb - xs).cwiseAbs().maxCoeff() <= 1e-10 * xs.cwiseAbs().maxCoeff());
 }
