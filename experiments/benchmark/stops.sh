@@ -4,12 +4,13 @@
 # ends at t_max as a failed evaluation, so this rate matters for Tables 4 and 6.
 #
 #   experiments/benchmark/stops.sh [--n N] [--seed S] [--scene four_corner|two_corner]
-#                                  [--out DIR]
+#                                  [--symmetry none|half|quarter|eighth] [--rtol R] [--out DIR]
 #
 # Draws N parameter sets uniformly from the ICA box (src/drape_fit.hpp DrapeBounds: stiffness
 # 500-1200 N/m, damping 10-20 N s/m, elongation limit 5-20 %, L0 4-6 cm, topology a/b/c) and
 # an areal density from paper 1's three (27.6, 41.65, 58.26 g/m^2), Python's random.Random(S),
-# and runs each with rtol 1e-8 (the fits') as
+# and runs each (on the model.symmetry reduction given, default none) with rtol R (default 1e-8,
+# the fits') as
 #   cvode-bdf --newton-solver ldl, cvode-bdf --newton-solver cg-ldl (the default), static.
 # Writes DIR/stops.csv (one row per run: status, steps, final residual, t_final, CPU) and
 # DIR/summary.csv (per integrator: runs, equilibria, median CPU), DIR/manifest.json; prints the
@@ -21,19 +22,24 @@ KNITSIM=${KNITSIM:-$root/build/knitsim}
 N=30
 SEED=5
 SCENE=two_corner
+SYMMETRY=none
+RTOL=1e-8
 OUT=$root/out/stops
-usage="usage: $0 [--n N] [--seed S] [--scene four_corner|two_corner] [--out DIR]"
+usage="usage: $0 [--n N] [--seed S] [--scene four_corner|two_corner] [--symmetry none|half|quarter|eighth] [--rtol R] [--out DIR]"
 while [ $# -gt 0 ]; do
   case "$1" in
     --n) N=$2; shift ;;
     --seed) SEED=$2; shift ;;
     --scene) SCENE=$2; shift ;;
+    --symmetry) SYMMETRY=$2; shift ;;
+    --rtol) RTOL=$2; shift ;;
     --out) OUT=$2; shift ;;
     *) echo "$usage" >&2; exit 2 ;;
   esac
   shift
 done
 case "$SCENE" in four_corner|two_corner) ;; *) echo "$usage" >&2; exit 2 ;; esac
+case "$SYMMETRY" in none|half|quarter|eighth) ;; *) echo "$usage" >&2; exit 2 ;; esac
 [[ "$N" =~ ^[1-9][0-9]*$ ]] || { echo "stops: --n = $N: must be an integer >= 1" >&2; exit 2; }
 [ -x "$KNITSIM" ] || { echo "stops: $KNITSIM not built (run ./run.sh --build-only)" >&2; exit 2; }
 mkdir -p "$OUT/runs"
@@ -55,7 +61,8 @@ while read -r k c e L t rho; do
     read -r integ ns <<< "$variant"
     dir=$OUT/runs/$i-$integ-$ns
     rm -rf "$dir"
-    "$KNITSIM" drape --scene "$SCENE" --integrator "$integ" --newton-solver "$ns" --rtol 1e-8 \
+    "$KNITSIM" drape --scene "$SCENE" --integrator "$integ" --newton-solver "$ns" --rtol "$RTOL" \
+      --set model.symmetry="$SYMMETRY" \
       --set fabric.areal_density="$rho" --set model.stiffness="$k" --set model.damping="$c" \
       --set model.elongation_limit="$e" --set model.natural_length="$L" \
       --set model.topology="$t" --quiet --out "$dir" > /dev/null 2>&1 || true
@@ -94,10 +101,11 @@ for o in out:
 PY
 
 commit=$(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)
-python3 - "$OUT/manifest.json" "$KNITSIM" "$N" "$SEED" "$SCENE" "$commit" <<'PY'
+python3 - "$OUT/manifest.json" "$KNITSIM" "$N" "$SEED" "$SCENE" "$commit" "$SYMMETRY" "$RTOL" <<'PY'
 import json, sys, datetime, os
 json.dump({"experiment": "benchmark/stops",
-           "command": "experiments/benchmark/stops.sh --n %s --seed %s --scene %s" % tuple(sys.argv[3:6]),
+           "command": "experiments/benchmark/stops.sh --n %s --seed %s --scene %s --symmetry %s --rtol %s"
+                      % (tuple(sys.argv[3:6]) + tuple(sys.argv[7:9])),
            "knitsim": sys.argv[2], "git_commit": sys.argv[6],
            "created_utc": datetime.datetime.utcnow().isoformat() + "Z",
            "load_average": os.getloadavg(), "nproc": os.cpu_count()},
