@@ -49,6 +49,16 @@ double relative_error(const Eigen::SparseMatrix<double>& S, const Eigen::VectorX
   return (x - ref).cwiseAbs().maxCoeff() / ref.cwiseAbs().maxCoeff();
 }
 
+// S with the rows and columns of the unknowns i where zero(i) set to 0 (pattern kept).
+template <class Predicate>
+Eigen::SparseMatrix<double> zeroed(const Eigen::SparseMatrix<double>& S, Predicate zero) {
+  Eigen::SparseMatrix<double> m = S;
+  for (int j = 0; j < m.outerSize(); ++j)
+    for (int k = m.outerIndexPtr()[j]; k < m.outerIndexPtr()[j + 1]; ++k)
+      if (zero(j) || zero(m.innerIndexPtr()[k])) m.valuePtr()[k] = 0.0;
+  return m;
+}
+
 }  // namespace
 
 TEST_CASE(
@@ -89,11 +99,8 @@ TEST_CASE(
   CHECK(relative_error(S0, b, x) < 1e-10);
   CHECK(f.ldl_fallbacks() == (which == Backend::Supernodal ? 1 : 0));
 
-  Eigen::SparseMatrix<double> singular = S0;  // row and column 0 zero: a zero pivot
-  for (int j = 0; j < n; ++j)
-    for (int k = singular.outerIndexPtr()[j]; k < singular.outerIndexPtr()[j + 1]; ++k)
-      if (j == 0 || singular.innerIndexPtr()[k] == 0) singular.valuePtr()[k] = 0.0;
-  CHECK_FALSE(f.factorize(singular));
+  // Row and column 0 zero: a zero pivot.
+  CHECK_FALSE(f.factorize(zeroed(S0, [](int i) { return i == 0; })));
 }
 
 TEST_CASE(
@@ -233,6 +240,24 @@ Eigen::SparseMatrix<double> random_block_matrix(int nodes, int links, unsigned s
   return S;
 }
 
+// S with the unknowns `drop` removed (rows and columns).
+Eigen::SparseMatrix<double> without(const Eigen::SparseMatrix<double>& S,
+                                    const std::vector<bool>& drop) {
+  std::vector<int> index(S.rows(), -1);
+  int n = 0;
+  for (int i = 0; i < S.rows(); ++i)
+    if (!drop[i]) index[i] = n++;
+  std::vector<Eigen::Triplet<double>> t;
+  for (int j = 0; j < S.outerSize(); ++j)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(S, j); it; ++it)
+      if (index[it.row()] >= 0 && index[j] >= 0)
+        t.emplace_back(index[it.row()], index[j], it.value());
+  Eigen::SparseMatrix<double> m(n, n);
+  m.setFromTriplets(t.begin(), t.end());
+  m.makeCompressed();
+  return m;
+}
+
 }  // namespace
 
 TEST_CASE("BlockLdlt: solves indefinite block matrices, refuses singular pivots and recovers") {
@@ -252,11 +277,7 @@ TEST_CASE("BlockLdlt: solves indefinite block matrices, refuses singular pivots 
 
   // Node 7's coordinates zeroed: its pivot block (eliminated wherever AMD puts it) is
   // singular, whatever came before it.
-  Eigen::SparseMatrix<double> singular = S;
-  for (int j = 0; j < n; ++j)
-    for (int k = singular.outerIndexPtr()[j]; k < singular.outerIndexPtr()[j + 1]; ++k)
-      if (j / 3 == 7 || singular.innerIndexPtr()[k] / 3 == 7) singular.valuePtr()[k] = 0.0;
-  CHECK_FALSE(f.factorize(singular));
+  CHECK_FALSE(f.factorize(zeroed(S, [](int i) { return i / 3 == 7; })));
   REQUIRE(f.factorize(S));  // nothing left over from the failed factorisation
   f.solve(b.data(), x.data());
   CHECK(relative_error(S, b, x) < 1e-12);
@@ -333,28 +354,6 @@ TEST_CASE(
   CHECK(f.backend() == Backend::Simplicial);
 }
 
-namespace {
-
-// S with the unknowns `drop` removed (rows and columns).
-Eigen::SparseMatrix<double> without(const Eigen::SparseMatrix<double>& S,
-                                    const std::vector<bool>& drop) {
-  std::vector<int> index(S.rows(), -1);
-  int n = 0;
-  for (int i = 0; i < S.rows(); ++i)
-    if (!drop[i]) index[i] = n++;
-  std::vector<Eigen::Triplet<double>> t;
-  for (int j = 0; j < S.outerSize(); ++j)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(S, j); it; ++it)
-      if (index[it.row()] >= 0 && index[j] >= 0)
-        t.emplace_back(index[it.row()], index[j], it.value());
-  Eigen::SparseMatrix<double> m(n, n);
-  m.setFromTriplets(t.begin(), t.end());
-  m.makeCompressed();
-  return m;
-}
-
-}  // namespace
-
 TEST_CASE("BlockLdlt: nodes of 1 or 2 unknowns are padded to 3 and solved as exactly") {
   // Random indefinite blocks with one unknown of every 4th node and two of every 7th removed
   // (nodes 17 and 45 lose all three).
@@ -381,11 +380,7 @@ TEST_CASE("BlockLdlt: nodes of 1 or 2 unknowns are padded to 3 and solved as exa
   const int lone = 3;  // kept its third unknown only (node 17 lost all three)
   int at = 0;          // that unknown's index in S
   for (int i = 0; i < 3 * lone + 2; ++i) at += drop[i] ? 0 : 1;
-  Eigen::SparseMatrix<double> singular = S;
-  for (int j = 0; j < n; ++j)
-    for (int k = singular.outerIndexPtr()[j]; k < singular.outerIndexPtr()[j + 1]; ++k)
-      if (j == at || singular.innerIndexPtr()[k] == at) singular.valuePtr()[k] = 0.0;
-  CHECK_FALSE(f.factorize(singular));
+  CHECK_FALSE(f.factorize(zeroed(S, [at](int i) { return i == at; })));
   REQUIRE(f.factorize(S));
   f.solve(b.data(), x.data());
   CHECK(relative_error(S, b, x) < 1e-12);
