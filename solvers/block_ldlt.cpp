@@ -72,7 +72,8 @@ BlockPattern block_pattern(const Eigen::SparseMatrix<double>& S) {
   const int* cp = S.outerIndexPtr();
   const int* ri = S.innerIndexPtr();
   auto same_rows = [&](int a, int b) {
-    return cp[a + 1] - cp[a] == cp[b + 1] - cp[b] && std::equal(ri + cp[a], ri + cp[a + 1], ri + cp[b]);
+    return cp[a + 1] - cp[a] == cp[b + 1] - cp[b] &&
+           std::equal(ri + cp[a], ri + cp[a + 1], ri + cp[b]);
   };
   BlockPattern bp;
   bp.start.push_back(0);

@@ -54,8 +54,8 @@ class BlockLdlt {
   std::vector<std::array<int, 3>> at_;  // for each: S's value index of the block's column c, row 0
   std::vector<int> parent_, lp_, lnz_, li_, flag_, stack_;  // elimination tree, L's pattern
   std::vector<double> lx_;                                  // L's blocks, 9 per entry (row-major)
-  std::vector<double> pivot_;  // D_k = l d l^T, 6 per node: d0, d1, d2, l10, l20, l21
-  std::vector<double> work_;   // 9 per node: the row of L being formed; 3 per node in solve
+  std::vector<double> pivot_;      // D_k = l d l^T, 6 per node: d0, d1, d2, l10, l20, l21
+  std::vector<double> work_;       // 9 per node: the row of L being formed; 3 per node in solve
   std::vector<int> first_, size_;  // for the node eliminated k-th: its first unknown, its count
   bool uniform_ = true;            // every node has 3 unknowns (no padding)
 
