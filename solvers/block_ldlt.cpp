@@ -200,7 +200,9 @@ bool BlockLdlt::factorize(const Eigen::SparseMatrix<double>& S) {
 
 // Padded groups (Uniform false) enter as identity rows and columns: their entries of L stay
 // exactly 0 and their pivots 1, so the real unknowns' arithmetic is that of the unpadded
-// matrix. Uniform (every group 3, the spring networks) is the same loop with the sizes known.
+// matrix. Uniform (every group 3, the spring networks) is the same loop with the sizes known at
+// compile time: with them read at run time the four_corner factorisations execute 5.5 % more
+// instructions (65.5 vs 69.1 M, 1.1 % of the run; callgrind, same results bit for bit).
 template <bool Uniform>
 bool BlockLdlt::factorize_blocks(const double* s) {
   std::fill(lnz_.begin(), lnz_.end(), 0);
