@@ -108,10 +108,20 @@ void ReproOptions::validate() const {
     bad("four_corner_symmetry", to_string(four_corner_symmetry), "accepted none|quarter|eighth");
   DrapeFitOptions fit;  // the ICA options and the integrator name
   fit.ica = ica;
-  fit.integrator = integrator;
+  fit.integrator = repro_integrator(*this);
   fit.validate();
   lm.validate();
   synthetic.validate();
+}
+
+std::string repro_default_integrator() {
+  for (const IntegratorInfo& info : integrator_catalog())
+    if (info.name == "static") return info.name;
+  return default_integrator();
+}
+
+std::string repro_integrator(const ReproOptions& o) {
+  return o.integrator.empty() ? repro_default_integrator() : o.integrator;
 }
 
 ReproOptions repro_preset(const std::string& name) {
@@ -242,7 +252,7 @@ Scene sample_scene(const std::string& scene, int sample, const ReproOptions& o) 
 DrapeFitOptions fit_options(const ReproOptions& o, const IcaOptions& ica) {
   DrapeFitOptions f;
   f.ica = ica;
-  f.integrator = o.integrator;
+  f.integrator = repro_integrator(o);
   return f;
 }
 
@@ -552,7 +562,7 @@ json options_json(const ReproOptions& o) {
             {"replicates", o.taguchi_replicates},
             {"decades_levels", o.taguchi_decades}}},
           {"seed", o.seed},
-          {"integrator", o.integrator.empty() ? default_integrator() : o.integrator},
+          {"integrator", repro_integrator(o)},
           {"rtol", o.rtol},
           {"four_corner_symmetry", to_string(o.four_corner_symmetry)},
           {"synthetic",
@@ -1002,7 +1012,7 @@ ReproSummary run_repro(const ReproOptions& o, ReproTargets& targets, const fs::p
          << " countries, " << o.ica.imperialists << " imperialists, " << o.ica.decades
          << " decades, beta " << o.ica.beta << ", gamma " << o.ica.gamma << ", revolution "
          << o.ica.revolution_rate << ", xi " << o.ica.xi << "; base seed " << o.seed
-         << "; integrator " << (o.integrator.empty() ? default_integrator() : o.integrator)
+         << "; integrator " << repro_integrator(o)
          << ", rtol " << format_number(o.rtol) << "; four_corner integrated "
          << (o.four_corner_symmetry == DrapeSymmetry::None
                  ? std::string("whole")

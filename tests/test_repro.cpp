@@ -91,6 +91,14 @@ Scene sample_scene(const std::string& name, int sample) {
   return s;
 }
 
+// The fit options run_repro evaluates with: its default integrator, one thread.
+DrapeFitOptions repro_fit_options() {
+  DrapeFitOptions fo;
+  fo.ica.jobs = 1;
+  fo.integrator = repro_integrator(repro_preset("quick"));
+  return fo;
+}
+
 }  // namespace
 
 TEST_CASE("nice_ticks: 1-2-5 steps covering the range, at most max_ticks", "[plot]") {
@@ -323,8 +331,7 @@ TEST_CASE(
         Approx((x[0] - paper.stiffness) / paper.stiffness).epsilon(1e-5));
 
   // Our Table 4 error is objective() of the written parameters, recomputed.
-  DrapeFitOptions fo;
-  fo.ica.jobs = 1;
+  const DrapeFitOptions fo = repro_fit_options();
   const DrapeFitProblem four(sample_scene("four_corner", 1), target, fo);
   const DrapeEvaluation e4 = four.evaluate(x);
   REQUIRE_FALSE(e4.failed);
@@ -344,22 +351,19 @@ TEST_CASE(
   CHECK(std::stod(r6[col(h6, "paper_error")]) == paper.table6_error);
   const DrapeFitProblem two(sample_scene("two_corner", 1), target, fo);
   const DrapeEvaluation e6 = two.evaluate(x);
-  // The row records the re-run as it ended. A tiny-budget fit's parameters can end two_corner
-  // at t_max with the residual hovering at 1e-8..1e-7 (cvode-bdf's corrector noise at rtol
-  // 1e-8; ~10 % of random in-box two_corner drapes, README "Known limitations"), so both
-  // outcomes are checked rather than assumed.
+  // The row records the re-run as it ended (with cvode-bdf a tiny-budget fit's parameters
+  // could end two_corner at t_max, the corrector's noise hovering at 1e-8..1e-7; `static`, the
+  // repro default, polishes it: README "Known limitations").
   INFO("two_corner re-run: " << to_string(e6.status) << ", " << e6.message);
-  if (e6.failed) {
-    CHECK(r6[col(h6, "error")].empty());
-    CHECK(r6[col(h6, "drape_status")] == std::string(to_string(e6.status)) + ": " + e6.message);
-  } else {
-    CHECK(r6[col(h6, "drape_status")] == "equilibrium");
-    CHECK(std::stod(r6[col(h6, "error")]) == Approx(e6.objective).epsilon(1e-12));
-  }
+  REQUIRE_FALSE(e6.failed);
+  CHECK(r6[col(h6, "drape_status")] == "equilibrium");
+  CHECK(std::stod(r6[col(h6, "error")]) == Approx(e6.objective).epsilon(1e-12));
 
-  // The report and the manifest are there.
+  // The report and the manifest are there, naming the integrator.
   CHECK(fs::exists(d1 / "report.md"));
-  CHECK(fs::exists(d1 / "manifest.json"));
+  CHECK(knitsim::test::slurp(d1 / "report.md").find("; integrator static,") != std::string::npos);
+  CHECK(knitsim::test::slurp(d1 / "manifest.json").find("\"integrator\": \"static\"") !=
+        std::string::npos);
 }
 
 TEST_CASE("knitsim repro: bad input is one line, exit 2, nothing written", "[repro][cli]") {
@@ -425,7 +429,7 @@ TEST_CASE("knitsim repro killed after a unit and resumed writes the uninterrupte
   CHECK(std::equal(before.begin(), before.end(), after.begin()));
 
   // The integrator is part of the settings: resuming with another one is refused.
-  const Run other = run_knitsim(args + cut.string() + "' --resume --integrator static", tmp);
+  const Run other = run_knitsim(args + cut.string() + "' --resume --integrator cvode-bdf", tmp);
   CHECK(other.status == 2);
   CHECK(lines(other.err).size() == 1);
   CHECK(other.err.find("integrator") != std::string::npos);
@@ -457,8 +461,7 @@ TEST_CASE("repro table6 --optimizer ica,lm: LM tables, errors recomputed, the co
   // The error is objective() of the written parameters (LM scores the Newton-polished
   // equilibrium, objective() the integrator's, settled to equilibrium_tol: ~1e-9 apart).
   const std::vector<double> x = country(h, r);
-  DrapeFitOptions fo;
-  const DrapeFitProblem four(sample_scene("four_corner", 1), target, fo);
+  const DrapeFitProblem four(sample_scene("four_corner", 1), target, repro_fit_options());
   CHECK(std::stod(r[col(h, "error")]) == Approx(four.evaluate(x).objective).epsilon(1e-7));
 
   // table6_lm.csv: Table 6's columns plus evaluations and cpu_seconds of the fit.
