@@ -14,7 +14,7 @@
 # 3) of the three in turn (runs interleaved, so load drifts hit all three alike); default DIR
 # out/scaling-target.
 # --grids: cells per side to run instead of the mode's list; --solver: only the runs with this
-# label (cvode-bdf-ldl (--factorization auto: block below 20 000 unknowns, supernodal from
+# label (cvode-bdf-ldl (--factorization auto: block below 33 000 unknowns, supernodal from
 # there), cvode-bdf-ldl-simplicial, -block, -supernodal (the same with that --factorization:
 # run only at n >= 60, where the back ends part ways), cvode-bdf-klu,
 # cvode-bdf-gmres (its default preconditioner, the lagged
