@@ -51,6 +51,11 @@ void DrapeParams::validate() const {
     bad("model.elongation_limit", elongation_limit, "must be >= 0 percent (0 disables it)");
   if (!(natural_length > 0.0) || !std::isfinite(natural_length))
     bad("model.natural_length", natural_length, "must be > 0 m");
+  if (!(natural_length <= width / 1.5)) {  // round(W / L0) >= 2 cells per side
+    std::ostringstream os;
+    os << "must be <= fabric.width / 1.5 = " << width / 1.5 << " m (2 cells per side at least)";
+    bad("model.natural_length", natural_length, os.str());
+  }
   if (topology != 'a' && topology != 'b' && topology != 'c')
     throw std::invalid_argument(std::string("model.topology = ") + topology +
                                 ": must be one of a, b, c");

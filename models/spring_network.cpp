@@ -15,7 +15,6 @@ Vec3 PinPath::at(double t) const {
 }
 
 namespace {
-bool finite(Vec3 p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
 
 // A spring's force F on end a (free index fa) and -F on end b, into a 3-per-free-dof array;
 // a pinned end (index < 0) takes nothing.
@@ -44,7 +43,7 @@ SpringNetwork::SpringNetwork(SpringNetworkSpec spec) : spec_(std::move(spec)) {
   if (!(spec_.limit_stiffness_factor >= 0.0))
     throw std::invalid_argument("spring network: limit_stiffness_factor must be >= 0");
   for (const Vec3& p : spec_.positions)
-    if (!finite(p)) throw std::invalid_argument("spring network: non-finite particle position");
+    if (!is_finite(p)) throw std::invalid_argument("spring network: non-finite particle position");
 
   free_index_.assign(np, 0);
   pin_slot_.assign(np, -1);

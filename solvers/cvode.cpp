@@ -57,7 +57,7 @@
 // Schur complement S = D - gamma^2 B:
 //     z_v = S^-1 (r_v + gamma B r_x),  z_x = r_x + gamma z_v.
 //   block-jacobi  B = Ax's 3 x 3 diagonal block per particle p: S_p^-1 inverted exactly
-//                 (needs dof() a multiple of 3);
+//                 (needs every particle's x, y, z as unknowns: not on a mirror reduction);
 //   schur-ic      B = Ax, S scaled by M to the symmetric M D - gamma^2 K and approximated by
 //                 Eigen's incomplete Cholesky (which shifts the diagonal until the pivots
 //                 are positive: S is indefinite where springs are compressed);
@@ -315,11 +315,12 @@ class Cvode final : public Integrator {
       throw std::invalid_argument(os.str());
     }
     if (method_ == CvodeMethod::BdfGmres &&
-        opt.gmres_preconditioner == GmresPreconditioner::BlockJacobi && n % 3 != 0)
-      throw std::invalid_argument(info_.name +
-                                  ": block-Jacobi preconditioner needs dof() = "
-                                  "3 x particles, got " +
-                                  std::to_string(n));
+        opt.gmres_preconditioner == GmresPreconditioner::BlockJacobi &&
+        !has_node_triples(sys.stiffness_pattern()))
+      throw std::invalid_argument(
+          "--gmres-preconditioner block-jacobi: needs every particle's x, y, z as unknowns (a "
+          "whole sheet or a knit chart); this model has " +
+          std::to_string(n) + " unknowns (a mirror reduction?): use schur-ldl");
 
     s_.reset();  // free the previous run's SUNDIALS objects before making new ones
     auto s = std::make_unique<Session>();

@@ -69,7 +69,10 @@ void IntegratorOptions::validate() const {
   if (max_order < 0 || max_order > 12)
     bad_option("max_order", max_order, "must be in 0..12 (0 = method default)");
   if (max_steps <= 0) bad_option("max_steps", static_cast<double>(max_steps), "must be > 0");
-  if (!(t_max > 0.0) || !std::isfinite(t_max)) bad_option("t_max", t_max, "must be > 0 s");
+  // Bounded where the adaptive integrators still work: CVODE and ARKODE take t_max as their
+  // output and stop time, and their first-step heuristic fails beyond ~1e21 s (CV_ERR_FAILURE
+  // at t = 0) or at 1e-300 s ("tstop is behind current t").
+  if (!(t_max >= 1e-9 && t_max <= 1e15)) bad_option("t_max", t_max, "must be in [1e-9, 1e15] s");
   if (!(equilibrium_tol > 0.0) || !std::isfinite(equilibrium_tol))
     bad_option("equilibrium_tol", equilibrium_tol, "must be > 0");
   if (!(max_wall_seconds >= 0.0) || !std::isfinite(max_wall_seconds))
@@ -248,8 +251,7 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
   double t_prev = integ.time();
   while (true) {
     const Integrator::Step st = integ.step(opt.t_max);
-    ++steps;
-    if (!st.ok) {
+    if (!st.ok) {  // a failed step is not counted: the cap is on steps taken
       const bool diverged = !state_ok();
       if (!diverged && st.recoverable && restarts < opt.max_restarts && integ.restart()) {
         ++restarts;
@@ -259,6 +261,7 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
       if (restarts > 0) why += " (after " + std::to_string(restarts) + " restarts)";
       return finish(diverged ? RunStatus::Diverged : RunStatus::SolverFailure, why);
     }
+    ++steps;
     const double t = integ.time();
     if (observer) observer->on_step(t, t - t_prev, integ.last_order());
     t_prev = t;

@@ -49,7 +49,7 @@ struct IntegratorOptions {
   double dt_safety = 0.5;  // fraction of the predicted stability limit used when dt = 0
   int max_order = 0;       // cap on the method order (CVODE BDF <= 5, Adams <= 12); 0 = default
   long max_steps = 500'000'000;   // step cap per run
-  double t_max = 1e7;             // s, physical end time if no equilibrium is reached
+  double t_max = 1e7;             // s, physical end time if no equilibrium is reached, [1e-9, 1e15]
   double equilibrium_tol = 1e-8;  // static residual at which the run stops (dimensionless)
   double max_wall_seconds = 0.0;  // wall-clock cap per run, s; 0 = none
   // A request to stop from outside (e.g. the CLI's SIGINT/SIGTERM handler, src/interrupt.hpp):

@@ -131,21 +131,6 @@ void subtract_ax_product(SchurLdl& c, const double* a, const sunindextype* colpt
   }
 }
 
-// True if the pattern's columns come in triples 3p, 3p+1, 3p+2 with identical row lists.
-bool shares_node_columns(const CscPattern& kp) {
-  if (kp.cols % 3 != 0) return false;
-  for (int j = 0; j < kp.cols; j += 3) {
-    const int count = kp.colptr[j + 1] - kp.colptr[j];
-    for (int d = 1; d < 3; ++d) {
-      if (kp.colptr[j + d + 1] - kp.colptr[j + d] != count) return false;
-      if (!std::equal(kp.rowind.begin() + kp.colptr[j], kp.rowind.begin() + kp.colptr[j + 1],
-                      kp.rowind.begin() + kp.colptr[j + d]))
-        return false;
-    }
-  }
-  return true;
-}
-
 int setup(SUNLinearSolver LS, SUNMatrix A) {
   SchurLdl& c = *content(LS);
   const sunindextype* colptr = SUNSparseMatrix_IndexPointers(A);
@@ -254,7 +239,7 @@ SUNLinearSolver make_schur_ldl_solver(SUNContext ctx, const FirstOrderSystem& sy
     if (c->S.innerIndexPtr()[k] != kp.rowind[k]) return nullptr;
   c->diag.resize(n);
   for (int j = 0; j < n; ++j) c->diag[j] = kp.find(j, j);
-  c->node_columns = options.node_columns && shares_node_columns(kp);
+  c->node_columns = options.node_columns && has_node_triples(kp);
   c->factor.analyze(c->S);
 
   SUNLinearSolver LS = SUNLinSolNewEmpty(ctx);

@@ -93,7 +93,8 @@ void run(const DrapeArgs& args) {
     }
   }
 
-  const std::filesystem::path dir = make_output_dir(args.out, "drape-" + scene.name);
+  bool created = false;
+  const std::filesystem::path dir = make_output_dir(args.out, "drape-" + scene.name, &created);
   const InterruptScope interrupt;
   scene.options.interrupt = interrupt.flag();
   std::string steps_csv;
@@ -102,9 +103,14 @@ void run(const DrapeArgs& args) {
                           !args.quiet);
     StepLog steps(&progress);
     RunObserver* observer = args.step_history ? static_cast<RunObserver*>(&steps) : &progress;
-    DrapeResult r = run_drape(scene, integrator, observer, from ? &*from : nullptr);
-    steps_csv = steps.csv();
-    return r;
+    try {
+      DrapeResult r = run_drape(scene, integrator, observer, from ? &*from : nullptr);
+      steps_csv = steps.csv();
+      return r;
+    } catch (const std::invalid_argument&) {  // an option the model refuses at the start
+      remove_if_unused(dir, created);
+      throw;
+    }
   }();
   write_drape_outputs(dir, scene, result, args.target.empty() ? nullptr : &target_edges,
                       !args.no_pictures);

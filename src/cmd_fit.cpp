@@ -247,7 +247,13 @@ void run_lm_fit(const FitArgs& args, const Scene& base, const DrapeFitProblem& p
 void run(const FitArgs& args) {
   if (args.optimizer != "ica" && args.optimizer != "lm")
     throw std::invalid_argument("--optimizer = " + args.optimizer + ": accepted: ica, lm");
-  args.lm.validate();
+  try {
+    args.lm.validate();
+  } catch (const std::invalid_argument& e) {
+    rethrow_with_flag_names(e, {{"lm.starts_per_bracket", "--lm-starts"},
+                                {"lm.refine", "--lm-refine"},
+                                {"lm.max_evaluations", "--lm-evaluations"}});
+  }
   Scene base = load_scene(args.scene, args.sets);
   base.options.rtol = args.rtol;
   base.options.atol = args.atol;

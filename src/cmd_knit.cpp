@@ -317,9 +317,12 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
   write_file_atomic(dir / "typevalue.csv", csv);
 
   // The centrelines of each distinct state, computed once (the first frame is the rest state,
-  // the last usually the end state); a list, so references to its entries stay valid.
+  // the last usually the end state); a list, so references to its entries stay valid. A state
+  // that is not finite (a diverged run) has none: its points are still written, as they are.
   std::list<std::pair<std::vector<Vec3>, std::vector<CurveSamples>>> computed;
+  const std::vector<CurveSamples> no_lines;
   auto centerlines_of = [&](const std::vector<Vec3>& state) -> const std::vector<CurveSamples>& {
+    if (!std::all_of(state.begin(), state.end(), is_finite)) return no_lines;
     for (const auto& c : computed)
       if (std::equal(c.first.begin(), c.first.end(), state.begin(), state.end(),
                      [](Vec3 a, Vec3 b) { return a.x == b.x && a.y == b.y && a.z == b.z; }))

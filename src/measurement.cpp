@@ -13,8 +13,7 @@ namespace {
 [[noreturn]] void bad(const std::string& message) { throw std::invalid_argument(message); }
 
 void require_finite(Vec3 p, const char* what) {
-  if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-    bad(std::string(what) + ": non-finite coordinate (did the run diverge?)");
+  if (!is_finite(p)) bad(std::string(what) + ": non-finite coordinate (did the run diverge?)");
 }
 
 }  // namespace

@@ -198,8 +198,7 @@ void NurbsCurve::validate() const {
     if (!(weights[i] > 0.0) || !std::isfinite(weights[i]))
       bad("NURBS weight " + std::to_string(i) + ": must be > 0 and finite");
     const Vec3 p = control[i];
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-      bad("NURBS control point " + std::to_string(i) + " is not finite");
+    if (!is_finite(p)) bad("NURBS control point " + std::to_string(i) + " is not finite");
   }
 }
 

@@ -111,7 +111,7 @@ void write_json_atomic(const fs::path& path, const nlohmann::json& value) {
   write_file_atomic(path, value.dump(2) + "\n");
 }
 
-fs::path make_output_dir(const std::string& requested, const std::string& stem) {
+fs::path make_output_dir(const std::string& requested, const std::string& stem, bool* created_out) {
   std::error_code ec;
   fs::path dir;
   bool created = false;
@@ -144,7 +144,13 @@ fs::path make_output_dir(const std::string& requested, const std::string& stem) 
     if (created) fs::remove(dir, ec);
     throw std::invalid_argument("--out " + dir.string() + ": cannot write: " + std::strerror(err));
   }
+  if (created_out) *created_out = created;
   return dir;
+}
+
+void remove_if_unused(const fs::path& dir, bool created) {
+  std::error_code ec;
+  if (created && fs::is_empty(dir, ec) && !ec) fs::remove(dir, ec);
 }
 
 // ---- formatting --------------------------------------------------------------------------------
@@ -542,9 +548,7 @@ void write_drape_outputs(const fs::path& dir, const Scene& scene, const DrapeRes
   for (int p : g.network.spec().pinned) pinned[p] = 1;
 
   nlohmann::json summary = drape_summary(scene, r);
-  const bool finite = std::all_of(r.positions.begin(), r.positions.end(), [](const Vec3& p) {
-    return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
-  });
+  const bool finite = std::all_of(r.positions.begin(), r.positions.end(), is_finite);
   // The edges of a run that stopped early (a flat sheet, a diverged one) may not be measurable
   // (fit_polynomial needs 5 distinct abscissae): the outputs are still written, with the reason.
   std::vector<EdgeFit> edges;

@@ -40,8 +40,13 @@ void write_json_atomic(const std::filesystem::path& path, const nlohmann::json& 
 //     directory, with -2, -3, ... appended if that name is taken;
 //   otherwise `requested`, created with its parents if missing; an existing folder is reused
 //     and files of the same names in it are replaced.
-// Throws std::invalid_argument("--out DIR: cannot create|write ...: reason").
-std::filesystem::path make_output_dir(const std::string& requested, const std::string& stem);
+// Throws std::invalid_argument("--out DIR: cannot create|write ...: reason"). `created`, if
+// given, says whether the folder is new (for remove_if_unused).
+std::filesystem::path make_output_dir(const std::string& requested, const std::string& stem,
+                                      bool* created = nullptr);
+// Removes `dir` if `created` and it is still empty: for bad input found only once the run
+// starts (an integrator option the model refuses), so that nothing is left behind.
+void remove_if_unused(const std::filesystem::path& dir, bool created);
 
 // ---- formatting --------------------------------------------------------------------------------
 

@@ -22,7 +22,6 @@ constexpr double kPi = 3.14159265358979323846;
   throw std::invalid_argument(os.str());
 }
 
-bool finite(Vec3 p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
 Vec3 unit(Vec3 v) {
   const double n = norm(v);
   return n > 0.0 ? (1.0 / n) * v : v;
@@ -81,7 +80,7 @@ PixelProjection fitted(const RenderView& v, const std::vector<Vec3>& points, dou
   constexpr double inf = std::numeric_limits<double>::infinity();
   double a0 = inf, a1 = -inf, b0 = inf, b1 = -inf;
   for (const Vec3& q : points) {
-    if (!finite(q)) continue;
+    if (!is_finite(q)) continue;
     const double a = dot(q, p.right), b = dot(q, p.up);
     a0 = std::min(a0, a - pad);
     a1 = std::max(a1, a + pad);
@@ -270,7 +269,7 @@ Floor floor_under(const MeshScene& mesh, const RenderView& v) {
   constexpr double inf = std::numeric_limits<double>::infinity();
   double x0 = inf, x1 = -inf, y0 = inf, y1 = -inf, z0 = inf, z1 = -inf;
   for (const Vec3& q : mesh.points) {
-    if (!finite(q)) continue;
+    if (!is_finite(q)) continue;
     x0 = std::min(x0, q.x), x1 = std::max(x1, q.x);
     y0 = std::min(y0, q.y), y1 = std::max(y1, q.y);
     z0 = std::min(z0, q.z), z1 = std::max(z1, q.z);
@@ -329,7 +328,7 @@ void draw_floor(cairo_t* cr, const MeshScene& mesh, const Floor& f, const PixelP
     bool ok = true;
     for (int k = 0; k < 4; ++k) {
       const Vec3 w = mesh.points[q[k]];
-      ok = ok && finite(w);
+      ok = ok && is_finite(w);
       s[k] = p({w.x, w.y, f.z});
     }
     if (!ok) continue;
@@ -358,8 +357,8 @@ void draw_quads(cairo_t* cr, const MeshScene& mesh, const PixelProjection& p, do
   double edge_px = 0.0;  // sum of the projected quad diagonals
   for (size_t i = 0; i < mesh.quads.size(); ++i) {
     const auto& q = mesh.quads[i];
-    if (!(finite(mesh.points[q[0]]) && finite(mesh.points[q[1]]) && finite(mesh.points[q[2]]) &&
-          finite(mesh.points[q[3]])))
+    if (!(is_finite(mesh.points[q[0]]) && is_finite(mesh.points[q[1]]) &&
+          is_finite(mesh.points[q[2]]) && is_finite(mesh.points[q[3]])))
       continue;
     faces.push_back({0.25 * (s[q[0]].depth + s[q[1]].depth + s[q[2]].depth + s[q[3]].depth), i});
     edge_px += std::hypot(s[q[2]].x - s[q[0]].x, s[q[2]].y - s[q[0]].y);
@@ -445,7 +444,7 @@ void draw_tubes(const Canvas& c, const std::vector<Stroke>& strokes, const Pixel
   double d0 = std::numeric_limits<double>::infinity(), d1 = -d0;  // depth range, m
   for (const Stroke& s : strokes)
     for (const Vec3& q : s.points)
-      if (finite(q)) d0 = std::min(d0, p(q).depth), d1 = std::max(d1, p(q).depth);
+      if (is_finite(q)) d0 = std::min(d0, p(q).depth), d1 = std::max(d1, p(q).depth);
   const Vec3 light = light_direction(p);
   // The light's direction on screen.
   const double lx = dot(light, p.right), ly = -dot(light, p.up), ln = std::hypot(lx, ly);
@@ -490,9 +489,10 @@ void draw_tubes(const Canvas& c, const std::vector<Stroke>& strokes, const Pixel
   capsules.reserve(segments);
   for (const Stroke& s : strokes) {
     const auto& pts = s.points;
-    if (pts.size() == 1 && finite(pts[0])) capsules.push_back(capsule(s, pts[0], pts[0]));
+    if (pts.size() == 1 && is_finite(pts[0])) capsules.push_back(capsule(s, pts[0], pts[0]));
     for (size_t k = 0; k + 1 < pts.size(); ++k)
-      if (finite(pts[k]) && finite(pts[k + 1])) capsules.push_back(capsule(s, pts[k], pts[k + 1]));
+      if (is_finite(pts[k]) && is_finite(pts[k + 1]))
+        capsules.push_back(capsule(s, pts[k], pts[k + 1]));
   }
 
   // Bands of kBandPixels pixel rows; each capsule listed in every band it touches.
@@ -595,7 +595,7 @@ void render_mesh_png(const std::string& path, const MeshScene& mesh, const Rende
   if (floor.shown) draw_floor(c.cr.get(), mesh, floor, p, u);
   draw_quads(c.cr.get(), mesh, p, u);
   for (int m : mesh.markers)
-    if (finite(mesh.points[m])) draw_marker(c.cr.get(), p(mesh.points[m]), 5.5 * u);
+    if (is_finite(mesh.points[m])) draw_marker(c.cr.get(), p(mesh.points[m]), 5.5 * u);
   finish_and_write(c, path, p, view);
 }
 
@@ -606,7 +606,7 @@ void render_strokes_png(const std::string& path, const std::vector<Stroke>& stro
   Canvas c = blank_canvas(path, view);
   draw_tubes(c, strokes, p, view);
   for (const Vec3& m : markers)
-    if (finite(m)) draw_marker(c.cr.get(), p(m), 3.5 * u);
+    if (is_finite(m)) draw_marker(c.cr.get(), p(m), 3.5 * u);
   finish_and_write(c, path, p, view);
 }
 

@@ -207,7 +207,11 @@ void apply_toml(Scene& scene, const std::string& text, const std::string& source
       const std::string full = section_name + "." + std::string(name.str());
       const Key& key = find_key(full, where(node));
       if (key.kind == Kind::Number && node.is_number()) {
-        set_number(scene, key, node.value<double>().value(), shown(node), where(node));
+        // An integer beyond 2^53 has no exact double, so toml++'s value<double>() is empty:
+        // take the nearest double, and let the key's range check judge it.
+        const double v = node.is_integer() ? static_cast<double>(node.as_integer()->get())
+                                           : node.as_floating_point()->get();
+        set_number(scene, key, v, shown(node), where(node));
       } else if (key.kind == Kind::Integer && node.is_integer()) {
         set_from_text(scene, key, shown(node), shown(node), where(node));
       } else if (key.kind == Kind::Text && node.is_string()) {
@@ -331,7 +335,6 @@ DrapeResult run_drape(const Scene& scene, const std::string& integrator, RunObse
 }
 
 std::string target_scene_name(const Scene& scene) {
-  if (is_target_scene(scene.name)) return scene.name;
   if (scene.params.layout == PinLayout::FourCorner) return "four_corner";
   return scene.params.pin_span < 1.0 ? "two_corner_slack" : "two_corner";
 }

@@ -103,8 +103,8 @@ struct RunState {
 DrapeResult run_drape(const Scene& scene, const std::string& integrator,
                       RunObserver* observer = nullptr, const RunState* from = nullptr);
 
-// The target scene (src/targets.hpp) a scene's edges are compared with: its own name if it is
-// one of four_corner, two_corner, two_corner_slack, else the one its pins imply.
+// The target scene (src/targets.hpp) a scene's edges are compared with: the one its pins imply
+// (four_corner; two_corner; two_corner_slack when pins.span < 1), whatever the scene's name.
 std::string target_scene_name(const Scene& scene);
 
 }  // namespace knitsim

@@ -61,4 +61,18 @@ void csc_multiply(const CscPattern& A, const double* values, const double* x, do
   }
 }
 
+bool has_node_triples(const CscPattern& p) {
+  if (p.cols % 3 != 0) return false;
+  for (int j = 0; j < p.cols; j += 3) {
+    const int count = p.colptr[j + 1] - p.colptr[j];
+    for (int d = 1; d < 3; ++d) {
+      if (p.colptr[j + d + 1] - p.colptr[j + d] != count) return false;
+      if (!std::equal(p.rowind.begin() + p.colptr[j], p.rowind.begin() + p.colptr[j + 1],
+                      p.rowind.begin() + p.colptr[j + d]))
+        return false;
+    }
+  }
+  return true;
+}
+
 }  // namespace knitsim

@@ -33,4 +33,9 @@ CscPattern make_csc_pattern(int rows, int cols, std::vector<std::pair<int, int>>
 // y = A x for a CSC matrix (pattern + values).
 void csc_multiply(const CscPattern& A, const double* values, const double* x, double* y);
 
+// True if the columns come in triples 3p, 3p+1, 3p+2 with identical row lists: a spring
+// network whose unknowns are every particle's x, y, z (false on a mirror-reduced drape, whose
+// mirror-plane particles keep 1 or 2 coordinates).
+bool has_node_triples(const CscPattern& p);
+
 }  // namespace knitsim

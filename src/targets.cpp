@@ -230,7 +230,7 @@ Target parse_target_csv(const std::string& csv, const std::string& path) {
     if (line.empty() || line[0] == '#') continue;
     const std::string at = path + ":" + std::to_string(line_no) + ": ";
     if (!header_seen) {
-      if (line != kHeader) bad(at + "header = '" + line + "': must be " + kHeader);
+      if (line != kHeader) bad(at + "header = '" + printable(line) + "': must be " + kHeader);
       header_seen = true;
       continue;
     }
@@ -238,7 +238,7 @@ Target parse_target_csv(const std::string& csv, const std::string& path) {
     if (f.size() != 5)
       bad(at + std::to_string(f.size()) + " fields: each row has 5 (" + kHeader + ")");
     auto field_error = [&](const char* name, const std::string& value, const std::string& why) {
-      bad(at + "field " + name + " = '" + value + "': " + why);
+      bad(at + "field " + name + " = '" + printable(value) + "': " + why);
     };
     auto number = [&](const char* name, const std::string& text) {
       char* end = nullptr;

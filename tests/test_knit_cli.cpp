@@ -112,6 +112,30 @@ TEST_CASE("knitsim knit: the stabilised velocity_atol default is for adaptive me
   CHECK(summary["options"]["velocity_atol"] == 0.0);
 }
 
+TEST_CASE("knitsim knit: a run that ends in a non-finite state still writes its outputs") {
+  // Springs of 1e299 N/m overflow the forces in a few steps: the run ends `diverged` (exit 3)
+  // and summary.json and points.csv are written; the non-finite state has no centrelines (they
+  // used to be interpolated from NaN and abort the output with exit 2) and no state.json (there
+  // is nothing to --continue from).
+  const TempDir tmp("knit-diverged");
+  std::ofstream(tmp.path / "small.chart") << "KKKKK\nKKTKK\nKKKKK\n";
+  std::string err;
+  const int status = run_knit("--chart '" + (tmp.path / "small.chart").string() +
+                                  "' --set knit.wale_stiffness=1e299 --max-steps 3 --no-pictures "
+                                  "--quiet --out '" +
+                                  (tmp.path / "out").string() + "'",
+                              err);
+  INFO(err);
+  CHECK(status == 3);
+  CHECK(err.find("NURBS") == std::string::npos);
+  REQUIRE(fs::exists(tmp.path / "out" / "summary.json"));
+  const auto summary = nlohmann::json::parse(slurp(tmp.path / "out" / "summary.json"));
+  CHECK(summary["status"] != "equilibrium");
+  CHECK(summary["status"] == "diverged");
+  CHECK_FALSE(fs::exists(tmp.path / "out" / "state.json"));
+  CHECK(fs::exists(tmp.path / "out" / "points.csv"));
+}
+
 TEST_CASE("knitsim knit: bad input exits 2 with one line and writes nothing") {
   const fs::path tmp =
       fs::temp_directory_path() / ("knitsim-knit-cli-bad-" + std::to_string(getpid()));

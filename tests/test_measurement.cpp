@@ -524,6 +524,7 @@ TEST_CASE("malformed target files: one line naming file, line and field") {
   const std::vector<Case> cases = {
       {"empty file", "# nothing\n", "empty target file"},
       {"wrong header", "scene,edge,kind,x,y\n", ":1: header = 'scene,edge,kind,x,y'"},
+      {"NUL in the header", std::string("ab\0cd\n", 6), ":1: header = 'ab\\x00cd'"},
       {"no rows", head, "no data rows"},
       {"field count", head + "four_corner,top,point,0.1\n", ":2: 4 fields"},
       {"unknown scene", head + "three_corner,top,point,0,0\n", ":2: field scene = 'three_corner'"},

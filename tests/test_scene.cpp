@@ -140,7 +140,11 @@ TEST_CASE("bad values give one line naming the field and the accepted range") {
        "pins.layout = three_corner: must be one of four_corner, two_corner"},
       {"model.seed=-1", "model.seed = -1: must be an integer in 0..4294967295"},
       {"model.seed=1.5", "model.seed = 1.5: must be an integer in 0..4294967295"},
-      {"run.t_max=0", "run.t_max = 0: must be > 0 s"},
+      {"run.t_max=0", "run.t_max = 0: must be in [1e-9, 1e15] s"},
+      {"run.t_max=1e22", "run.t_max = 1e+22: must be in [1e-9, 1e15] s"},
+      {"model.natural_length=0.34",
+       "model.natural_length = 0.34: must be <= fabric.width / 1.5 = 0.333333 m (2 cells per "
+       "side at least)"},
       {"run.equilibrium_tol=abc", "run.equilibrium_tol = abc: must be a number > 0"},
       {"scene.name=a b", "scene.name = a b: must be a non-empty name of letters, digits, _ and -"},
   };
@@ -171,6 +175,12 @@ TEST_CASE("scene files: partial files, types, missing files and TOML syntax erro
   CHECK(
       load_error(nan.path.string()).rfind("model.damping = nan: must be a number >= 0 N s/m", 0) ==
       0);
+  // An integer with no exact double (beyond 2^53) is read as the nearest double, then
+  // range-checked like any number (it used to escape as "bad optional access").
+  TempScene big("big.toml", "[model]\nstiffness = 9007199254740993\n");
+  CHECK(load_scene(big.path.string()).params.stiffness == 9007199254740992.0);
+  TempScene big_t("big_t.toml", "[run]\nt_max = 9007199254740993\n");
+  CHECK(load_error(big_t.path.string()) == "run.t_max = 9.0072e+15: must be in [1e-9, 1e15] s");
   TempScene topo("topo.toml", "[model]\ntopology = 1\n");
   CHECK(load_error(topo.path.string()).rfind("model.topology = 1: must be one of a, b, c", 0) == 0);
 
@@ -187,6 +197,15 @@ TEST_CASE("scene files: partial files, types, missing files and TOML syntax erro
         "two_corner two_corner_slack)");
   CHECK(load_error(fs::temp_directory_path().string()) ==
         "scene: cannot read " + fs::temp_directory_path().string() + ": is a directory");
+}
+
+TEST_CASE("the target scene follows the pins, not the scene's name") {
+  CHECK(target_scene_name(load_scene("four_corner")) == "four_corner");
+  CHECK(target_scene_name(load_scene("four_corner", {"pins.layout=two_corner"})) == "two_corner");
+  CHECK(target_scene_name(load_scene("two_corner", {"pins.layout=four_corner"})) == "four_corner");
+  CHECK(target_scene_name(load_scene("two_corner", {"pins.span=0.8"})) == "two_corner_slack");
+  CHECK(target_scene_name(load_scene("two_corner_slack", {"pins.span=1"})) == "two_corner");
+  CHECK(target_scene_name(load_scene("four_corner", {"scene.name=two_corner"})) == "four_corner");
 }
 
 TEST_CASE("run options are validated under the names the user writes") {
