@@ -17,7 +17,6 @@
 
 #include "models/mirror_reduced.hpp"
 #include "src/cli_options.hpp"
-#include "src/targets.hpp"
 
 namespace knitsim {
 
