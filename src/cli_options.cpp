@@ -3,16 +3,38 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cerrno>
+#include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <limits>
+#include <type_traits>
 
 namespace knitsim {
 
+template <typename T>
+CLI::Option* add_seed_option(CLI::App* cmd, T& seed, const std::string& help) {
+  static_assert(std::is_unsigned_v<T>, "a seed is an unsigned integer");
+  const std::string range = "0.." + std::to_string(std::numeric_limits<T>::max());
+  auto check = [range](const std::string& text) -> std::string {
+    const bool digits = !text.empty() && std::all_of(text.begin(), text.end(),
+                                                     [](char c) { return c >= '0' && c <= '9'; });
+    if (digits) {
+      errno = 0;
+      const unsigned long long v = std::strtoull(text.c_str(), nullptr, 10);
+      if (errno != ERANGE && v <= std::numeric_limits<T>::max()) return "";
+    }
+    return "must be a decimal integer in " + range;
+  };
+  return cmd->add_option("--seed", seed, help)->check(check);
+}
+template CLI::Option* add_seed_option(CLI::App*, std::uint64_t&, const std::string&);
+template CLI::Option* add_seed_option(CLI::App*, unsigned&, const std::string&);
+
 void add_ica_options(CLI::App* cmd, IcaOptions& o) {
-  cmd->add_option("--seed", o.seed, "random seed")->capture_default_str();
+  add_seed_option(cmd, o.seed, "random seed")->capture_default_str();
   cmd->add_option("--jobs", o.jobs, "threads evaluating costs (same result for any value)")
       ->capture_default_str();
   cmd->add_option("--decades", o.decades, "MaxIt, number of decades (>= 1)")->capture_default_str();

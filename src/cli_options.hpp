@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -21,6 +22,12 @@ namespace knitsim {
 // The ICA flags (SPEC 2.10): --seed --jobs --decades --countries --imperialists --beta --gamma
 // --revolution --xi --stop-one-empire, bound to `o`.
 void add_ica_options(CLI::App* cmd, IcaOptions& o);
+
+// --seed bound to `seed` (std::uint64_t or unsigned): a decimal integer from 0 to the type's
+// maximum. CLI11 alone reads "-1" as the maximum (wrapped) and a value past it as the maximum
+// (saturated), both silently; these are refused with one line naming the range.
+template <typename T>
+CLI::Option* add_seed_option(CLI::App* cmd, T& seed, const std::string& help);
 
 // The absolute-tolerance flags of drape, knit and fit (IntegratorOptions::atol, velocity_atol):
 // --atol (m, and m/s for the velocities unless --velocity-atol is given) and --velocity-atol

@@ -167,7 +167,7 @@ void register_repro_command(CLI::App& app) {
   cmd->add_option("--countries", args->countries, "Override: ICA countries per fit");
   cmd->add_option("--imperialists", args->imperialists, "Override: ICA imperialists per fit");
   cmd->add_option("--replicates", args->replicates, "Override: Taguchi replicates per run");
-  cmd->add_option("--seed", args->seed, "Override: base seed of every unit (default 2017)");
+  add_seed_option(cmd, args->seed, "Override: base seed of every unit (default 2017)");
   cmd->add_option("--four-corner-symmetry", args->four_corner_symmetry,
                   "Integrate every four_corner fit and drape on this symmetry reduction: none | "
                   "quarter | eighth (default; the exact restriction to the symmetric states, "

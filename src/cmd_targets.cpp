@@ -152,7 +152,7 @@ void register_targets_command(CLI::App& app) {
   cmd->add_option("--set", args->set, "Target set: twin|cross|all")->capture_default_str();
   cmd->add_option("--samples", args->samples, "Samples: list or ranges within 1..9, e.g. 2,5-7")
       ->capture_default_str();
-  cmd->add_option("--seed", args->options.seed, "Base seed of the noise")->capture_default_str();
+  add_seed_option(cmd, args->options.seed, "Base seed of the noise")->capture_default_str();
   cmd->add_option("--noise-mm", args->options.noise_mm,
                   "Noise sigma per camera coordinate and photo, mm (>= 0)")
       ->capture_default_str();

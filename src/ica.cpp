@@ -34,6 +34,8 @@ void IcaOptions::validate() const {
   if (imperialists < 1) bad("imperialists", imperialists, "must be >= 1");
   if (countries <= imperialists)
     bad("countries", countries, "must be > imperialists (" + std::to_string(imperialists) + ")");
+  if (countries > max_countries)
+    bad("countries", countries, "must be <= " + std::to_string(max_countries));
   if (decades < 1) bad("decades", decades, "must be >= 1");
   if (!(beta > 0.0) || !std::isfinite(beta)) bad("beta", beta, "must be > 0");
   if (!(gamma >= 0.0 && gamma <= kPi)) bad("gamma", gamma, "must be in [0, pi] rad");

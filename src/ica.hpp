@@ -129,10 +129,13 @@ struct IcaState {
 };
 
 struct IcaOptions {
+  // Most countries validate() accepts (the paper's levels are 15..25): each holds a point of
+  // the problem's dimension.
+  static constexpr int max_countries = 10000;
   // Defaults: paper 1's Taguchi-best combination A3 B3 C1 D2 E1 F2 G2 of Table 1, with B and C
   // read swapped (B = number of countries, C = number of imperialists; SPEC 2.6).
   int decades = 40;              // MaxIt, Table 1 factor A (levels 10 / 20 / 40)
-  int countries = 25;            // N_country, factor B (15 / 20 / 25); > imperialists
+  int countries = 25;            // N_country, factor B (15 / 20 / 25); > imperialists, <= max
   int imperialists = 2;          // N_imp, factor C (2 / 5 / 10); >= 1
   double beta = 1.0;             // assimilation coefficient, factor D (0.5 / 1 / 2); > 0
   double gamma = 0.1;            // assimilation angle bound, rad, factor E (0.1/0.3/0.5); [0, pi]

@@ -115,8 +115,9 @@ void SyntheticOptions::validate() const {
   if (!std::isfinite(noise_mm) || noise_mm < 0.0)
     throw std::invalid_argument("noise_mm = " + std::to_string(noise_mm) +
                                 ": must be finite and >= 0 (mm)");
-  if (photos < 1)
-    throw std::invalid_argument("photos = " + std::to_string(photos) + ": must be >= 1");
+  if (photos < 1 || photos > max_photos)
+    throw std::invalid_argument("photos = " + std::to_string(photos) + ": must be in 1.." +
+                                std::to_string(max_photos));
 }
 
 const std::vector<std::string>& synthetic_scene_names() {

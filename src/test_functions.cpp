@@ -74,7 +74,9 @@ const TestFunction& find_test_function(const std::string& name) {
 
 Problem make_test_problem(const std::string& name, int dim) {
   const TestFunction& t = find_test_function(name);
-  if (dim < 1) throw std::invalid_argument("dim = " + std::to_string(dim) + ": must be >= 1");
+  if (dim < 1 || dim > max_test_dim)
+    throw std::invalid_argument("dim = " + std::to_string(dim) + ": must be in 1.." +
+                                std::to_string(max_test_dim));
   Problem p;
   p.lower.assign(dim, t.lower);
   p.upper.assign(dim, t.upper);

@@ -33,7 +33,12 @@ const std::vector<TestFunction>& test_function_catalog();
 // The function by name; throws std::invalid_argument listing the known names.
 const TestFunction& find_test_function(const std::string& name);
 
-// The function as an ICA problem in `dim` dimensions (dim >= 1, else std::invalid_argument).
+// Largest dimension make_test_problem accepts: the ICA holds countries x dim doubles (800 MB at
+// the largest countries, IcaOptions::max_countries); the test-function literature uses D <= 100.
+constexpr int max_test_dim = 10000;
+
+// The function as an ICA problem in `dim` dimensions (1 <= dim <= max_test_dim, else
+// std::invalid_argument "dim = D: must be in 1..10000").
 Problem make_test_problem(const std::string& name, int dim);
 
 }  // namespace knitsim

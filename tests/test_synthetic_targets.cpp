@@ -258,5 +258,5 @@ TEST_CASE("knitsim targets: bad input names the flag and writes nothing") {
   fails({"--samples", "1,"}, "--samples = 1,: accepted");
   fails({"--set", "both"}, "--set = both: accepted twin|cross|all");
   fails({"--noise-mm", "-1"}, "--noise-mm = ");
-  fails({"--photos", "0"}, "--photos = 0: must be >= 1");
+  fails({"--photos", "0"}, "--photos = 0: must be in 1..10000");
 }

@@ -130,6 +130,32 @@ TEST_CASE("drape: NaN and inf in --set, scene files and flags name the key and t
   CHECK(!fs::exists(tmp.path / "out"));
 }
 
+TEST_CASE("seeds, dimensions, countries and photos: refused outside their ranges, not wrapped") {
+  // Before: CLI11 read --seed -1 as 2^64 - 1 and 2^64 as 2^64 - 1, silently (a run that could
+  // not be repeated from what the user typed); --dim 2000000000 ended in std::bad_alloc after
+  // trying to allocate, and --countries and --photos had no upper bound.
+  TempDir tmp("validation-ranges");
+  const std::string out = " --out '" + (tmp.path / "out").string() + "'";
+  const std::string opt = "optimize --problem sphere --dim 2 --decades 1";
+  expect_bad_input(opt + " --seed -1",
+                   "--seed: must be a decimal integer in 0..18446744073709551615", tmp);
+  expect_bad_input(opt + " --seed 18446744073709551616", "--seed: must be a decimal integer", tmp);
+  expect_bad_input(opt + " --seed 0x10", "--seed: must be a decimal integer", tmp);
+  expect_bad_input("targets --seed 4294967296" + out,
+                   "--seed: must be a decimal integer in 0..4294967295", tmp);
+  expect_bad_input("repro table4 --seed -5" + out, "--seed: must be a decimal integer", tmp);
+  expect_bad_input("optimize --problem sphere --dim 2000000000",
+                   "--dim = 2000000000: must be in 1..10000", tmp);
+  expect_bad_input("optimize --problem sphere --dim 2 --countries 20000",
+                   "--countries = 20000: must be <= 10000", tmp);
+  expect_bad_input("targets --photos 100000" + out, "--photos = 100000: must be in 1..10000", tmp);
+  CHECK(!fs::exists(tmp.path / "out"));
+  // The largest values are accepted, and the seed is the one typed.
+  const Run r = run_knitsim(opt + " --seed 18446744073709551615", tmp);
+  CHECK(r.status == 0);
+  CHECK(r.out.find("seed 18446744073709551615,") != std::string::npos);
+}
+
 TEST_CASE("target CSV: a number with trailing bytes after a NUL is not a number") {
   // Before: strtod stopped at the NUL and the row was read as 0.04.
   const std::string csv =
