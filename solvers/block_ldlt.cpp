@@ -193,6 +193,23 @@ bool BlockLdlt::try_analyze(const Eigen::SparseMatrix<double>& S) {
   return true;
 }
 
+// Node i's three scalar columns hold, below the diagonal, its 3 b blocks' rows (b = its blocks
+// in L) plus 2, 1 and 0 entries of its own pivot block.
+double BlockLdlt::scalar_nonzeros() const {
+  double n = 0.0;
+  for (int i = 0; i < nb_; ++i) n += 9.0 * (lp_[i + 1] - lp_[i]) + 3.0;
+  return n;
+}
+
+double BlockLdlt::scalar_flops() const {
+  double f = 0.0;
+  for (int i = 0; i < nb_; ++i) {
+    const double c = 3.0 * (lp_[i + 1] - lp_[i]);
+    f += (c + 3) * (c + 3) + (c + 2) * (c + 2) + (c + 1) * (c + 1);
+  }
+  return f;
+}
+
 bool BlockLdlt::factorize(const Eigen::SparseMatrix<double>& S) {
   if (nb_ == 0) throw std::logic_error("BlockLdlt::factorize before analyze");
   return uniform_ ? factorize_blocks<true>(S.valuePtr()) : factorize_blocks<false>(S.valuePtr());

@@ -46,6 +46,10 @@ class BlockLdlt {
 
   // Stored entries of L (3 x 3 blocks, counted as scalars).
   long nonzeros_l() const { return 9L * lp_.back(); }
+  // Entries of L below the diagonal and flops of one factorisation, counted on the scalar
+  // columns (SymmetricFactor::cost): padded coordinates count, their zeros are computed too.
+  double scalar_nonzeros() const;
+  double scalar_flops() const;
 
  private:
   int nb_ = 0;                          // nodes (blocks per side)

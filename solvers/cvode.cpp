@@ -445,10 +445,7 @@ class Cvode final : public Integrator {
     add_newton_solver_counts(s_->ls.get(), st);  // the solver's own counts survive a restart
     if (method_ == CvodeMethod::BdfGmres) {
       const auto& k = static_cast<const KrylovProblem&>(*s_->problem);
-      if (k.preconditioner == GmresPreconditioner::SchurLdl) {
-        st.factorization = to_string(k.ldl.backend());
-        st.ldl_fallbacks = k.ldl.ldl_fallbacks();
-      }
+      if (k.preconditioner == GmresPreconditioner::SchurLdl) k.ldl.fill_stats(st);
     }
     st.max_order_used = max_order_used_;
   }

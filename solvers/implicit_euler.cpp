@@ -91,10 +91,7 @@ class ImplicitEuler final : public Integrator {
     s.jac_evals = jac_;
     s.lin_setups = setups_;
     s.factorisations = setups_;
-    if (factor_) {
-      s.factorization = to_string(factor_->backend());
-      s.ldl_fallbacks = factor_->ldl_fallbacks();
-    }
+    if (factor_) factor_->fill_stats(s);
     s.dt = dt_;
     s.max_order_used = 1;
   }

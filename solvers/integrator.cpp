@@ -160,7 +160,11 @@ void add_counters(RunStats& total, const RunStats& part) {
   total.nonlin_fails += part.nonlin_fails;
   total.err_test_fails += part.err_test_fails;
   total.ldl_fallbacks += part.ldl_fallbacks;
-  if (total.factorization.empty()) total.factorization = part.factorization;
+  if (total.factorization.empty()) {
+    total.factorization = part.factorization;
+    total.factor_nonzeros = part.factor_nonzeros;
+    total.factor_flops = part.factor_flops;
+  }
   total.max_order_used = std::max(total.max_order_used, part.max_order_used);
 }
 

@@ -155,6 +155,11 @@ struct RunStats {
   // definite).
   std::string factorization;
   long ldl_fallbacks = 0;
+  // One factorisation of S by that back end (SymmetricFactor::fill_stats): entries of L below
+  // the diagonal, and floating-point operations in CHOLMOD's count, sum over L's columns of
+  // (entries + 1)^2. 0 where the run factorises no S (explicit methods, KLU).
+  double factor_nonzeros = 0.0;
+  double factor_flops = 0.0;
   long lin_iters = 0;  // Krylov iterations (GMRES, or CG inside SchurCgLdl)
   long nonlin_iters = 0;
   long nonlin_fails = 0;

@@ -205,11 +205,11 @@ bool is_schur_ldl_solver(SUNLinearSolver LS) {
 SchurCounts schur_counts(SUNLinearSolver LS) {
   const SchurLdl& c = *content(LS);
   SchurCounts counts = c.counts;
-  counts.ldl_fallbacks = c.factor.ldl_fallbacks();
-  counts.backend = c.factor.backend();
   counts.node_columns = c.node_columns;
   return counts;
 }
+
+const SymmetricFactor& schur_factor(SUNLinearSolver LS) { return content(LS)->factor; }
 
 SUNLinearSolver make_schur_ldl_solver(SUNContext ctx, const FirstOrderSystem& sys,
                                       const SchurOptions& options) {

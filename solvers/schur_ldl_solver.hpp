@@ -47,6 +47,7 @@
 #include <sundials/sundials_linearsolver.h>
 
 #include "solvers/integrator.hpp"
+#include "solvers/symmetric_factor.hpp"
 #include "src/first_order.hpp"
 
 namespace knitsim::detail {
@@ -68,9 +69,7 @@ struct SchurOptions {
 struct SchurCounts {
   long setups = 0;
   long factorisations = 0;  // numeric factorisations of S
-  long ldl_fallbacks = 0;   // supernodal LL^T factorisations redone as LDL^T
-  // The factorisation back end (SymmetricFactor::backend: Simplicial or Supernodal).
-  IntegratorOptions::Factorization backend = IntegratorOptions::Factorization::Simplicial;
+  // The back end, its LDL^T fallbacks and its cost: schur_factor(LS).
   long cg_solves = 0;      // solves finished by CG
   long cg_iterations = 0;  // CG iterations, including those of solves CG gave up on
   bool node_columns = false;  // the right-hand side's product is taken particle by particle
@@ -86,5 +85,8 @@ bool is_schur_ldl_solver(SUNLinearSolver LS);
 
 // Counts of a solver made by make_schur_ldl_solver.
 SchurCounts schur_counts(SUNLinearSolver LS);
+
+// The factorisation of S inside a solver made by make_schur_ldl_solver.
+const SymmetricFactor& schur_factor(SUNLinearSolver LS);
 
 }  // namespace knitsim::detail

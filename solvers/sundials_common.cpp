@@ -282,8 +282,7 @@ void add_newton_solver_counts(SUNLinearSolver ls, RunStats& st) {
   const knitsim::detail::SchurCounts c = knitsim::detail::schur_counts(ls);
   st.factorisations = c.factorisations;
   st.lin_iters += c.cg_iterations;
-  st.factorization = to_string(c.backend);
-  st.ldl_fallbacks = c.ldl_fallbacks;
+  knitsim::detail::schur_factor(ls).fill_stats(st);
 }
 
 NewtonMatrix::NewtonMatrix(const FirstOrderSystem& fo, MatrixKind kind, SUNContext ctx)

@@ -168,6 +168,37 @@ void SymmetricFactor::solve(const Eigen::Ref<const Eigen::VectorXd>& b,
 
 SymmetricFactor::Backend SymmetricFactor::backend() const { return impl_->chosen; }
 
+double SymmetricFactor::factor_nonzeros() const {
+  const Impl& c = *impl_;
+  if (c.chosen == Backend::Supernodal)  // CHOLMOD's lnz counts the diagonal
+    return c.L ? c.cm.lnz - static_cast<double>(c.L->n) : 0.0;
+  if (!c.ldlt_analysed) return 0.0;
+  if (c.ldlt_kind == Backend::Block) return c.block.scalar_nonzeros();
+  return static_cast<double>(c.ldlt.matrixL().nestedExpression().nonZeros());
+}
+
+double SymmetricFactor::factor_flops() const {
+  const Impl& c = *impl_;
+  if (c.chosen == Backend::Supernodal) return c.L ? c.cm.fl : 0.0;
+  if (!c.ldlt_analysed) return 0.0;
+  if (c.ldlt_kind == Backend::Block) return c.block.scalar_flops();
+  // Eigen's LDL^T stores the entries below the diagonal, column by column.
+  const auto& L = c.ldlt.matrixL().nestedExpression();
+  double f = 0.0;
+  for (Eigen::Index j = 0; j < L.outerSize(); ++j) {
+    const double cj = L.outerIndexPtr()[j + 1] - L.outerIndexPtr()[j];
+    f += (cj + 1) * (cj + 1);
+  }
+  return f;
+}
+
+void SymmetricFactor::fill_stats(RunStats& st) const {
+  st.factorization = to_string(backend());
+  st.ldl_fallbacks = ldl_fallbacks();
+  st.factor_nonzeros = factor_nonzeros();
+  st.factor_flops = factor_flops();
+}
+
 long SymmetricFactor::ldl_fallbacks() const { return impl_->fallbacks; }
 
 }  // namespace knitsim::detail

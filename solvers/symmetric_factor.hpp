@@ -67,6 +67,17 @@ class SymmetricFactor {
   // Factorisations the supernodal back end handed to LDL^T because S was not positive definite.
   long ldl_fallbacks() const;
 
+  // Size and cost of one numeric factorisation of the analysed pattern by the chosen back end,
+  // in CHOLMOD's convention: with c_j the entries of L below the diagonal in column j,
+  // nonzeros = sum_j c_j and flops = sum_j (c_j + 1)^2 (a multiply and an add count 2). The
+  // block back end counts its padded coordinates; the supernodal one reports CHOLMOD's count
+  // for the exact pattern, before amalgamation adds explicit zeros to the supernodes. Both 0
+  // before analyze(). On a 2-D grid these grow like N log N and N^1.5 under nested dissection.
+  double factor_nonzeros() const;
+  double factor_flops() const;
+  // Writes backend(), ldl_fallbacks(), factor_nonzeros() and factor_flops() into st.
+  void fill_stats(RunStats& st) const;
+
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;

@@ -316,6 +316,8 @@ nlohmann::json to_json(const RunStats& s) {
           {"factorisations", s.factorisations},
           {"factorization", s.factorization},
           {"ldl_fallbacks", s.ldl_fallbacks},
+          {"factor_nonzeros", s.factor_nonzeros},
+          {"factor_flops", s.factor_flops},
           {"lin_iters", s.lin_iters},
           {"nonlin_iters", s.nonlin_iters},
           {"nonlin_fails", s.nonlin_fails},

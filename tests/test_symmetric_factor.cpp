@@ -416,3 +416,45 @@ TEST_CASE("BlockLdlt: the mirror-reduced drapes are blocked and solve as the sca
   CHECK(relative_error(S, b, xb) < 1e-10);
   CHECK((xb - xs).cwiseAbs().maxCoeff() <= 1e-10 * xs.cwiseAbs().maxCoeff());
 }
+
+TEST_CASE("SymmetricFactor: factor size and flops, the same count from every back end") {
+  // A chain of m particles, each coupled to the next by a dense 3 x 3 block (positive definite:
+  // diagonally dominant). No ordering fills a path in, so L has below the diagonal, per
+  // particle but the last, its next particle's block (9) and 3 entries of its own pivot block
+  // (2 + 1 + 0), the last particle 3: scalar column counts 5, 4, 3 (..., 2, 1, 0), so
+  // nonzeros = 12 (m - 1) + 3 and flops = sum (c + 1)^2 = 77 (m - 1) + 14.
+  const int m = 40, n = 3 * m;
+  std::vector<Eigen::Triplet<double>> t;
+  for (int p = 0; p < m; ++p)
+    for (int q = std::max(0, p - 1); q <= std::min(m - 1, p + 1); ++q)
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) {
+          const double value = p == q ? (r == c ? 20.0 + r : 0.5) : -1.0 - 0.1 * (r + c);
+          t.emplace_back(3 * p + r, 3 * q + c, value);
+        }
+  Eigen::SparseMatrix<double> S(n, n);
+  S.setFromTriplets(t.begin(), t.end());
+  S.makeCompressed();
+  const Backend which = GENERATE(Backend::Simplicial, Backend::Block, Backend::Supernodal);
+  CAPTURE(to_string(which));
+  detail::SymmetricFactor f(which);
+  CHECK(f.factor_flops() == 0.0);
+  f.analyze(S);
+  REQUIRE(f.factorize(S));
+  CHECK(f.backend() == which);
+  CHECK(f.factor_nonzeros() == 12.0 * (m - 1) + 3);
+  CHECK(f.factor_flops() == 77.0 * (m - 1) + 14);
+  RunStats st;
+  f.fill_stats(st);
+  CHECK(st.factorization == to_string(which));
+  CHECK(st.factor_flops == f.factor_flops());
+
+  // On a drape grid the back ends order differently; each reports a fill at least S's lower
+  // triangle and flops of at least one (c + 1)^2 per column.
+  const Eigen::SparseMatrix<double> D = drape_schur(100.0, 0.0);
+  detail::SymmetricFactor g(which);
+  g.analyze(D);
+  REQUIRE(g.factorize(D));
+  CHECK(g.factor_nonzeros() >= (D.nonZeros() - D.rows()) / 2);
+  CHECK(g.factor_flops() >= g.factor_nonzeros() + D.rows());
+}

@@ -43,6 +43,9 @@ def medians(rows):
         timed = sorted((r for r in rs if r["cpu_seconds"]), key=lambda r: float(r["cpu_seconds"]))
         pick = dict(timed[(len(timed) - 1) // 2] if timed else rs[0])
         cpus = [float(r["cpu_seconds"]) for r in timed]
+        flops = pick.get("factor_flops") or ""
+        work = float(flops) * int(pick["factorisations"]) / 1e9 if flops and pick["factorisations"] else ""
+        pick.update(factorisation_gflop=work)
         pick.update(rounds=len(rs), cpu_min=min(cpus) if cpus else "",
                     cpu_max=max(cpus) if cpus else "",
                     cpu_median=statistics.median(cpus) if cpus else "")
@@ -55,7 +58,7 @@ def main(out):
     with open(out + "/median.csv", "w", newline="") as f:
         keys = ["solver", "n", "particles", "integrated_dof", "status", "steps", "factorisations",
                 "rounds", "cpu_median", "cpu_min", "cpu_max", "centre_sag_m", "residual",
-                "factorization"]
+                "factorization", "factor_nonzeros", "factor_flops", "factorisation_gflop"]
         w = csv.DictWriter(f, fieldnames=keys, extrasaction="ignore")
         w.writeheader()
         w.writerows(rows)

@@ -82,7 +82,7 @@ else GRIDS="10 20 40 60 80 100 140"; MAX_WALL=${MAX_WALL:-1800}; fi
 [ -z "$GRIDS_OPT" ] || GRIDS=$GRIDS_OPT
 mkdir -p "$OUT/runs"
 runs_csv=$OUT/runs.csv
-echo "n,particles,dof,natural_length_m,damping_Ns_per_m,solver,status,t_final,steps,rhs_evals,jac_evals,lin_setups,nonlin_iters,residual,centre_sag_m,cpu_seconds,wall_seconds,max_rss_kb,integrated_dof,factorisations,round,factorization" > "$runs_csv"
+echo "n,particles,dof,natural_length_m,damping_Ns_per_m,solver,status,t_final,steps,rhs_evals,jac_evals,lin_setups,nonlin_iters,residual,centre_sag_m,cpu_seconds,wall_seconds,max_rss_kb,integrated_dof,factorisations,round,factorization,factor_nonzeros,factor_flops" > "$runs_csv"
 
 # One drape: run n solver integrator [knitsim options...]; appends a row to runs.csv (ROUND:
 # the repeat, in the folder name and the last column).
@@ -109,14 +109,14 @@ except (OSError, ValueError):
 n = int(n)
 if s is None:  # the run failed before writing its summary (e.g. out of memory): keep a row
     print(",".join([str(n), str((n + 1) ** 2), "", L0, c, solver, "failed"] + [""] * 10 +
-                   [rss.group(1) if rss else "", "", "", rnd, ""]))
+                   [rss.group(1) if rss else "", "", "", rnd, "", "", ""]))
 else:
     print(",".join(str(v) for v in [n, s["grid"]["particles"], s["grid"]["dof"],
           L0, c, solver, s["status"], repr(s["t_final"]), s["steps"], s["rhs_evals"],
           s["jac_evals"], s["lin_setups"], s["nonlin_iters"], repr(s["residual"]),
           repr(s["centre_sag_m"]), repr(s["cpu_seconds"]), repr(s["wall_seconds"]),
           rss.group(1) if rss else "", s["grid"]["integrated_dof"], s["factorisations"], rnd,
-          s.get("factorization", "")]))
+          s.get("factorization", ""), s.get("factor_nonzeros", ""), s.get("factor_flops", "")]))
 PY
   tail -n 1 "$runs_csv"
 }
