@@ -47,7 +47,8 @@ class BlockLdlt {
   // Stored entries of L (3 x 3 blocks, counted as scalars).
   long nonzeros_l() const { return 9L * lp_.back(); }
   // Entries of L below the diagonal and flops of one factorisation, counted on the scalar
-  // columns (SymmetricFactor::cost): padded coordinates count, their zeros are computed too.
+  // columns (SymmetricFactor::factor_flops): padded coordinates count, their zeros are computed
+  // too.
   double scalar_nonzeros() const;
   double scalar_flops() const;
 

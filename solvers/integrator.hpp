@@ -150,7 +150,7 @@ struct RunStats {
   long jac_evals = 0;
   long lin_setups = 0;
   long factorisations = 0;  // numeric factorisations of the Newton matrix (<= lin_setups)
-  // The back end the run factorises S with ("simplicial" or "supernodal"; empty if the
+  // The back end the run factorises S with ("simplicial", "block" or "supernodal"; empty if the
   // integrator has none) and its supernodal factorisations redone as LDL^T (S not positive
   // definite).
   std::string factorization;

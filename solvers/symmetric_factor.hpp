@@ -72,7 +72,8 @@ class SymmetricFactor {
   // nonzeros = sum_j c_j and flops = sum_j (c_j + 1)^2 (a multiply and an add count 2). The
   // block back end counts its padded coordinates; the supernodal one reports CHOLMOD's count
   // for the exact pattern, before amalgamation adds explicit zeros to the supernodes. Both 0
-  // before analyze(). On a 2-D grid these grow like N log N and N^1.5 under nested dissection.
+  // before analyze(). On a 2-D grid nested dissection's theory has them grow like N log N and
+  // N^1.5; on the four_corner drapes (AMD) the flops grew like N^1.75 (experiments/scaling).
   double factor_nonzeros() const;
   double factor_flops() const;
   // Writes backend(), ldl_fallbacks(), factor_nonzeros() and factor_flops() into st.
