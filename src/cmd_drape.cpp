@@ -55,13 +55,16 @@ std::string human_summary(const Scene& scene, const DrapeResult& r, const std::s
             {"t_final", format_number(s.t_final, 6) + " s"},
             {"steps", std::to_string(s.steps) + " (RHS " + std::to_string(s.rhs_evals) + ", Jac " +
                           std::to_string(s.jac_evals) + ", LS setups " +
-                          std::to_string(s.lin_setups) + ")"},
-            {"residual", format_number(s.residual, 3) + " (tol " +
-                             format_number(scene.options.equilibrium_tol, 3) + ")"},
-            {"centre sag", format_number(100 * r.centre_sag, 4) + " cm"},
-            {"max strain", format_number(100 * r.max_strain, 3) + " %"},
-            {"wall", format_number(1e3 * s.wall_seconds, 4) + " ms"},
-            {"outputs", dir + "/"}};
+                          std::to_string(s.lin_setups) + ")"}};
+  if (const std::string la = linear_algebra_summary(s); !la.empty())
+    t.rows.push_back({"linear algebra", la});
+  t.rows.insert(t.rows.end(),
+                {{"residual", format_number(s.residual, 3) + " (tol " +
+                                  format_number(scene.options.equilibrium_tol, 3) + ")"},
+                 {"centre sag", format_number(100 * r.centre_sag, 4) + " cm"},
+                 {"max strain", format_number(100 * r.max_strain, 3) + " %"},
+                 {"wall", format_number(1e3 * s.wall_seconds, 4) + " ms"},
+                 {"outputs", dir + "/"}});
   return t.text();
 }
 

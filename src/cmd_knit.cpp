@@ -466,22 +466,25 @@ void run(const KnitArgs& args) {
   if (!args.quiet) {
     Table t;
     t.columns = {"knit", name + " (" + args.chart + ")"};
-    t.rows = {
-        {"chart", std::to_string(chart.wales) + " wales x " + std::to_string(chart.courses) +
-                      " courses, " + std::to_string(model.points.size()) + " points, " +
-                      std::to_string(model.network.spec().springs.size()) + " springs"},
-        {"integrator", stats.integrator},
-        {"status", std::string(to_string(stats.status)) + " (" + stats.message + ")"},
-        {"t_final", format_number(stats.t_final, 6) + " s"},
-        {"steps", std::to_string(stats.steps) + " (RHS " + std::to_string(stats.rhs_evals) +
-                      ", Jac " + std::to_string(stats.jac_evals) + ")"},
-        {"residual",
-         format_number(stats.residual, 3) + " (tol " + format_number(opt.equilibrium_tol, 3) + ")"},
-        {"max displacement",
-         format_number(max_displacement_over_r(model, all_points(model, stats.t_final, x)), 4) +
-             " r"},
-        {"wall", format_number(1e3 * stats.wall_seconds, 4) + " ms"},
-        {"outputs", dir.string() + "/"}};
+    t.rows = {{"chart", std::to_string(chart.wales) + " wales x " + std::to_string(chart.courses) +
+                            " courses, " + std::to_string(model.points.size()) + " points, " +
+                            std::to_string(model.network.spec().springs.size()) + " springs"},
+              {"integrator", stats.integrator},
+              {"status", std::string(to_string(stats.status)) + " (" + stats.message + ")"},
+              {"t_final", format_number(stats.t_final, 6) + " s"},
+              {"steps", std::to_string(stats.steps) + " (RHS " + std::to_string(stats.rhs_evals) +
+                            ", Jac " + std::to_string(stats.jac_evals) + ")"}};
+    if (const std::string la = linear_algebra_summary(stats); !la.empty())
+      t.rows.push_back({"linear algebra", la});
+    t.rows.insert(
+        t.rows.end(),
+        {{"residual", format_number(stats.residual, 3) + " (tol " +
+                          format_number(opt.equilibrium_tol, 3) + ")"},
+         {"max displacement",
+          format_number(max_displacement_over_r(model, all_points(model, stats.t_final, x)), 4) +
+              " r"},
+         {"wall", format_number(1e3 * stats.wall_seconds, 4) + " ms"},
+         {"outputs", dir.string() + "/"}});
     std::cout << t.text() << std::flush;
   }
   exit_with_run_status("knit", stats, interrupt, dir.string());

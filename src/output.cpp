@@ -161,6 +161,15 @@ std::string format_number(double value, int digits) {
   return buf;
 }
 
+std::string linear_algebra_summary(const RunStats& s) {
+  if (s.factorisations == 0 || !(s.factor_flops > 0.0)) return "";
+  return std::to_string(s.factorisations) + " factorisations of S (" + s.factorization +
+         (s.factorization == "supernodal" ? " LL^T, " : " LDL^T, ") +
+         format_number(s.factor_flops, 3) + " flops each, " +
+         format_number(s.factor_flops * static_cast<double>(s.factorisations) / 1e9, 3) +
+         " GFlop in all)";
+}
+
 void append_number(std::string& out, double value) {
   char buf[32];  // the longest shortest form, e.g. -2.2250738585072014e-308, has 24 characters
   out.append(buf, std::to_chars(buf, buf + sizeof buf, value).ptr);

@@ -97,6 +97,12 @@ TEST_CASE("a settled drape: exit 0, summary, nodes, VTK, PNG and manifest agree"
   // 96 unknowns in 3 x 3 particle blocks: the automatic factorisation is the block LDL^T.
   CHECK(summary["options"]["factorization"] == "auto");
   CHECK(summary["factorization"] == "block");
+  // One factorisation's cost, and the summary line that prints it for the run's factorisations.
+  const double flops = summary["factor_flops"].get<double>();
+  CHECK(flops >= summary["factor_nonzeros"].get<double>() + 96);
+  CHECK(r.out.find("linear algebra  " + std::to_string(summary["factorisations"].get<long>()) +
+                   " factorisations of S (block LDL^T, " + format_number(flops, 3) +
+                   " flops each") != std::string::npos);
 
   // nodes.csv: (n+1)^2 rows; the 4 corners pinned at z = 0; the centre sag is theirs.
   const auto rows = lines(slurp(out / "nodes.csv"));
@@ -198,6 +204,17 @@ TEST_CASE("knitsim list shows the registry and the built-in scenes") {
 }
 
 TEST_CASE("output writers: tables, VTK, atomic files and output folders") {
+  RunStats st;  // an explicit run: no line
+  CHECK(linear_algebra_summary(st).empty());
+  st.factorisations = 125;  // KLU or block-Jacobi GMRES: factorisations, but no cost counted
+  CHECK(linear_algebra_summary(st).empty());
+  st.factorization = "block";
+  st.factor_flops = 2.12e9;
+  CHECK(linear_algebra_summary(st) ==
+        "125 factorisations of S (block LDL^T, 2.12e+09 flops each, 265 GFlop in all)");
+  st.factorization = "supernodal";
+  CHECK(linear_algebra_summary(st).find("(supernodal LL^T, ") != std::string::npos);
+
   Table t;
   t.columns = {"a", "b"};
   t.rows = {{"1", "x,y"}, {"say \"hi\"", ""}};
