@@ -60,7 +60,8 @@ void append_integer(std::string& out, long long value);
 
 // The "linear algebra" line of drape's and knit's summaries: "125 factorisations of S (block
 // LDL^T, 2.12e+09 flops each, 265 GFlop in all)"; "" where the run factorised no S by
-// SymmetricFactor (the explicit methods, KLU, block-Jacobi GMRES).
+// SymmetricFactor (the explicit methods, KLU, block-Jacobi GMRES). `static`'s count includes
+// the few KLU factorisations of K (the same pattern) of its Newton polish.
 std::string linear_algebra_summary(const RunStats& s);
 
 // A table of text cells, printable three ways. Every row has columns.size() cells.
