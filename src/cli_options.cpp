@@ -38,7 +38,9 @@ void add_ica_options(CLI::App* cmd, IcaOptions& o) {
   cmd->add_option("--jobs", o.jobs, "threads evaluating costs (same result for any value)")
       ->capture_default_str();
   cmd->add_option("--decades", o.decades, "MaxIt, number of decades (>= 1)")->capture_default_str();
-  cmd->add_option("--countries", o.countries, "number of countries (> imperialists)")
+  cmd->add_option("--countries", o.countries,
+                  "number of countries (> imperialists, <= " +
+                      std::to_string(IcaOptions::max_countries) + ")")
       ->capture_default_str();
   cmd->add_option("--imperialists", o.imperialists, "number of imperialists (>= 1)")
       ->capture_default_str();

@@ -69,7 +69,8 @@ void register_optimize_command(CLI::App& app) {
       "optimize", "Run the Imperialist Competitive Algorithm on a standard test function");
   cmd->add_option("--problem", args->problem, "sphere | rastrigin | rosenbrock | griewank | ackley")
       ->required();
-  cmd->add_option("--dim", args->dim, "dimension D >= 1")->required();
+  cmd->add_option("--dim", args->dim, "dimension D, 1.." + std::to_string(max_test_dim))
+      ->required();
   add_ica_options(cmd, o);
   cmd->callback([args] { run(*args); });
 }

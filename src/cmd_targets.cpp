@@ -156,7 +156,9 @@ void register_targets_command(CLI::App& app) {
   cmd->add_option("--noise-mm", args->options.noise_mm,
                   "Noise sigma per camera coordinate and photo, mm (>= 0)")
       ->capture_default_str();
-  cmd->add_option("--photos", args->options.photos, "Photos averaged per point (>= 1)")
+  cmd->add_option(
+         "--photos", args->options.photos,
+         "Photos averaged per point (1.." + std::to_string(SyntheticOptions::max_photos) + ")")
       ->capture_default_str();
   cmd->add_option("--out", args->out,
                   "Output folder (default: a fresh out/targets-<YYYYmmdd-HHMMSS>)");
