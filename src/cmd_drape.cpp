@@ -117,7 +117,10 @@ void run(const DrapeArgs& args) {
   }();
   write_drape_outputs(dir, scene, result, args.target.empty() ? nullptr : &target_edges,
                       !args.no_pictures);
-  if (args.step_history) write_file_atomic(dir / "steps.csv", steps_csv);
+  if (args.step_history)
+    write_file_atomic(dir / "steps.csv", steps_csv);
+  else
+    remove_stale_output(dir / "steps.csv");
   if (!args.quiet) std::cout << human_summary(scene, result, dir.string()) << std::flush;
   exit_with_run_status("drape", result.stats, interrupt, dir.string());
 }

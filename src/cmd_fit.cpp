@@ -267,6 +267,7 @@ void run(const FitArgs& args) {
     throw std::invalid_argument("--resume: needs --out, the folder of the fit to continue");
   if (args.resume && args.optimizer != "ica")
     throw std::invalid_argument("--resume: only with --optimizer ica");
+  refuse_fresh_start_over_checkpoint(args.out, {kCheckpointFile}, args.resume);
   const nlohmann::json config = checkpoint_config(args, base, options);
   if (args.resume)
     options.ica.resume_from = read_checkpoint(args.out + "/" + kCheckpointFile, config);

@@ -347,8 +347,12 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
   if (!args.no_pictures) {
     render_front(dir / "before.png", m, rest, centerlines_of(rest), name + ": at rest");
     render_front(dir / "after.png", m, pos, lines, name + ": " + state);
+  } else {
+    remove_stale_output(dir / "before.png");
+    remove_stale_output(dir / "after.png");
   }
 
+  remove_stale_output(dir / "frames");  // an earlier run's may have had more frames
   fs::create_directories(dir / "frames");
   nlohmann::json frame_list = nlohmann::json::array();
   for (size_t f = 0; f < frames.size(); ++f) {

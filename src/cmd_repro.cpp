@@ -111,6 +111,7 @@ void run(const ReproArgs& a, const CLI::App& cmd) {
     throw std::invalid_argument("--resume: needs --out, the folder of the interrupted run");
   if (process_count() > 1 && a.out.empty())
     throw std::invalid_argument("--out: required under MPI (every rank must use one folder)");
+  refuse_fresh_start_over_checkpoint(a.out, repro_checkpoint_files(), a.resume);
   ReproTargets targets(o);
   std::filesystem::path dir;
   if (process_rank() == 0)
@@ -155,8 +156,9 @@ void register_repro_command(CLI::App& app) {
   cmd->add_option("--targets", args->targets,
                   "Folder of committed targets <set>_sample<s>.csv (default: the source tree's "
                   "paper_repro/data/targets; missing files are generated)");
-  cmd->add_option("--samples", args->samples, "Override: samples of Tables 4/6, e.g. 1-9 or 2,5-7")
-      ->delimiter(',');
+  // One string, parsed by parse_sample_list: a CLI11 delimiter would split "2,5-7" into
+  // three values and refuse them.
+  cmd->add_option("--samples", args->samples, "Override: samples of Tables 4/6, e.g. 1-9 or 2,5-7");
   cmd->add_option("--sets", args->sets, "Override: target sets, twin,cross")->delimiter(',');
   cmd->add_option("--optimizer", args->optimizers,
                   "Optimizers of Tables 4 and 6: ica (default), lm (multi-start "

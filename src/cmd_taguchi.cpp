@@ -4,7 +4,8 @@
 //   knitsim taguchi --responses FILE.csv [--columns 1,2,5,9,10,12,13] [--out DIR]
 //
 // FILE.csv: 27 lines (runs in the standard L27 order), each with the r replicate responses
-// separated by commas; optional header line; blank and '#' lines ignored. Prints the tables
+// separated by commas; optional header line (a first column named "run" numbers the runs
+// 1..27 and is not a replicate); blank and '#' lines ignored. Prints the tables
 // and writes sn.csv, effects.csv, anova.csv and manifest.json into --out, by default the
 // folder <FILE stem>_taguchi next to FILE. Bad input (file, runs, values, columns): one line
 // naming the line / run / column, exit 2, nothing written.
@@ -77,7 +78,9 @@ void register_taguchi_command(CLI::App& app) {
   auto args = std::make_shared<TaguchiArgs>();
   CLI::App* cmd = app.add_subcommand(
       "taguchi", "Taguchi L27 analysis: S/N, main effects, optimal levels, ANOVA");
-  cmd->add_option("--responses", args->responses, "CSV: 27 runs x r replicate responses")
+  cmd->add_option("--responses", args->responses,
+                  "CSV: 27 runs x r replicate responses (header optional; a first column named run "
+                  "numbers the runs 1..27)")
       ->required();
   cmd->add_option("--columns", args->columns, "L27 columns of the factors A, B, ...")
       ->delimiter(',')

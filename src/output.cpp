@@ -111,6 +111,27 @@ void write_json_atomic(const fs::path& path, const nlohmann::json& value) {
   write_file_atomic(path, value.dump(2) + "\n");
 }
 
+namespace {
+
+// An existing --out folder is reused only by the command that wrote it: its manifest.json
+// naming another command (e.g. a fit's folder given to drape) means results this run would
+// overwrite or leave mixed with its own. Folders without a manifest, or whose manifest
+// predates the "command" field, are reused as before.
+void refuse_other_commands_folder(const fs::path& dir, const std::string& requested) {
+  std::error_code ec;
+  const fs::path path = dir / "manifest.json";
+  if (!fs::is_regular_file(path, ec)) return;
+  std::ifstream in(path);
+  const nlohmann::json m = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+  if (!m.is_object() || !m.contains("command") || !m["command"].is_string()) return;
+  const std::string owner = m["command"].get<std::string>();
+  if (owner.empty() || owner == command_name()) return;
+  throw std::invalid_argument("--out " + requested + ": holds the results of `knitsim " + owner +
+                              "` (its manifest.json); give another folder or remove that one");
+}
+
+}  // namespace
+
 fs::path make_output_dir(const std::string& requested, const std::string& stem, bool* created_out) {
   std::error_code ec;
   fs::path dir;
@@ -130,6 +151,7 @@ fs::path make_output_dir(const std::string& requested, const std::string& stem, 
     dir = requested;
     if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
       throw std::invalid_argument("--out " + requested + ": exists and is not a folder");
+    refuse_other_commands_folder(dir, requested);
     created = !fs::exists(dir, ec);
     fs::create_directories(dir, ec);
     if (ec) throw std::invalid_argument("--out " + requested + ": cannot create: " + ec.message());
@@ -146,6 +168,23 @@ fs::path make_output_dir(const std::string& requested, const std::string& stem, 
   }
   if (created_out) *created_out = created;
   return dir;
+}
+
+void refuse_fresh_start_over_checkpoint(const std::string& out,
+                                        const std::vector<std::string>& checkpoints, bool resume) {
+  if (resume || out.empty()) return;
+  std::error_code ec;
+  for (const std::string& name : checkpoints)
+    if (fs::exists(fs::path(out) / name, ec))
+      throw std::invalid_argument("--out " + out + ": holds the checkpoint " + name +
+                                  " of an earlier run; add --resume to continue it, or remove "
+                                  "the file (or give another folder) to start afresh");
+}
+
+void remove_stale_output(const fs::path& file) {
+  std::error_code ec;
+  fs::remove_all(file, ec);
+  if (ec) throw std::runtime_error("cannot remove " + file.string() + ": " + ec.message());
 }
 
 void remove_if_unused(const fs::path& dir, bool created) {
@@ -344,9 +383,17 @@ std::string& command_line_store() {
   static std::string line;
   return line;
 }
+std::string& command_name_store() {
+  static std::string name;
+  return name;
+}
 }  // namespace
 
+const std::string& command_name() { return command_name_store(); }
+
 void set_command_line(int argc, const char* const* argv) {
+  // knitsim has no options before its subcommand (--help and --version stop there).
+  command_name_store() = argc > 1 && argv[1][0] != '-' ? argv[1] : "";
   std::string line;
   for (int i = 0; i < argc; ++i) {
     std::string arg = argv[i];
@@ -377,6 +424,7 @@ nlohmann::json manifest(const nlohmann::json& options) {
           {"version", KNITSIM_VERSION},
           {"git_commit", KNITSIM_GIT_COMMIT},
           {"build_type", KNITSIM_BUILD_TYPE},
+          {"command", command_name()},
           {"command_line", command_line_store()},
           {"created_utc", utc_stamp()},
           {"options", options},
@@ -570,6 +618,7 @@ void write_drape_outputs(const fs::path& dir, const Scene& scene, const DrapeRes
       summary["edges_error"] = e.what();
     }
   }
+  if (edges.empty()) remove_stale_output(dir / "edges.csv");
   if (!edges.empty()) {
     write_file_atomic_with(dir / "edges.csv",
                            [&](const std::string& tmp) { write_edges_csv(edges, tmp); });
@@ -589,6 +638,8 @@ void write_drape_outputs(const fs::path& dir, const Scene& scene, const DrapeRes
   if (target)
     write_file_atomic_with(dir / "target_edges.csv",
                            [&](const std::string& tmp) { write_edges_csv(*target, tmp); });
+  else
+    remove_stale_output(dir / "target_edges.csv");
   write_json_atomic(dir / "summary.json", summary);
 
   std::ostringstream nodes;
@@ -625,7 +676,10 @@ void write_drape_outputs(const fs::path& dir, const Scene& scene, const DrapeRes
   vtk.point_vectors.push_back({"displacement", displacement});
   write_file_atomic(dir / "drape.vtk", to_vtk(vtk));
 
-  if (picture) write_drape_picture(dir / "drape.png", scene, r, quads);
+  if (picture)
+    write_drape_picture(dir / "drape.png", scene, r, quads);
+  else
+    remove_stale_output(dir / "drape.png");
   write_json_atomic(dir / "manifest.json", manifest({{"scene", scene.name},
                                                      {"source", scene.source},
                                                      {"integrator", r.stats.integrator},

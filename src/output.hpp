@@ -39,11 +39,22 @@ void write_json_atomic(const std::filesystem::path& path, const nlohmann::json& 
 //   requested empty: a fresh folder out/<stem>-YYYYmmdd-HHMMSS (local time) under the working
 //     directory, with -2, -3, ... appended if that name is taken;
 //   otherwise `requested`, created with its parents if missing; an existing folder is reused
-//     and files of the same names in it are replaced.
+//     and files of the same names in it are replaced -- unless its manifest.json names another
+//     command than this process's (command_name()): that folder holds another command's
+//     results, and the call throws rather than overwrite them.
 // Throws std::invalid_argument("--out DIR: cannot create|write ...: reason"). `created`, if
 // given, says whether the folder is new (for remove_if_unused).
 std::filesystem::path make_output_dir(const std::string& requested, const std::string& stem,
                                       bool* created = nullptr);
+// For the commands that checkpoint (fit, repro): throws std::invalid_argument if `out` names a
+// folder holding one of `checkpoints` and the run is not `resume`d -- starting afresh would
+// overwrite the earlier run's work, which a forgotten --resume should not cost.
+void refuse_fresh_start_over_checkpoint(const std::string& out,
+                                        const std::vector<std::string>& checkpoints, bool resume);
+// Removes `file` if it exists: an optional output this run does not write (a picture under
+// --no-pictures, steps.csv without --step-history, ...). Left in a reused --out folder, an
+// earlier run's file would read as this run's.
+void remove_stale_output(const std::filesystem::path& file);
 // Removes `dir` if `created` and it is still empty: for bad input found only once the run
 // starts (an integrator option the model refuses), so that nothing is left behind.
 void remove_if_unused(const std::filesystem::path& dir, bool created);
@@ -95,9 +106,11 @@ nlohmann::json to_json(const DrapeLmOptions& o);     // field names as in DrapeL
 
 // The process command line, recorded once by main() for the manifests.
 void set_command_line(int argc, const char* const* argv);
+// The subcommand of that line (argv[1]: drape, fit, ...), "" before set_command_line.
+const std::string& command_name();
 // manifest.json: program and version, git commit (at configure time), build type, command
-// line, `options` as given, library versions (SUNDIALS, Eigen, cairo, toml++, CLI11,
-// nlohmann-json), compiler, UTC creation time. No host or user names.
+// (command_name()) and command line, `options` as given, library versions (SUNDIALS, Eigen, cairo,
+// toml++, CLI11, nlohmann-json), compiler, UTC creation time. No host or user names.
 nlohmann::json manifest(const nlohmann::json& options);
 
 // ---- drape outputs -----------------------------------------------------------------------------

@@ -929,11 +929,11 @@ ReproSummary run_repro(const ReproOptions& o, ReproTargets& targets, const fs::p
   // Checkpoint <name>.jsonl in the output folder, shared settings (src/work_units.hpp).
   const auto unit_options = [&](const std::string& name) {
     WorkUnitOptions wo;
-    wo.checkpoint = (dir / (name + ".jsonl")).string();
+    wo.checkpoint = (dir / name).string();
     wo.resume = resume;
     wo.config = config;
     wo.progress = o.progress;
-    wo.label = "repro " + name;
+    wo.label = "repro " + name.substr(0, name.find('.'));  // "repro fits"
     return wo;
   };
   std::vector<json> fit_results;
@@ -942,7 +942,7 @@ ReproSummary run_repro(const ReproOptions& o, ReproTargets& targets, const fs::p
       print_stage(o, "fits: " + std::to_string(ica_runs) + " ICA runs (" + std::to_string(o.runs) +
                          " per set x sample, ~" + std::to_string(ica_evaluation_estimate(o.ica)) +
                          " drapes per run), " + std::to_string(lm_fits) + " LM fits");
-    fit_results = run_work_units(units, unit_options("fits"));
+    fit_results = run_work_units(units, unit_options(repro_checkpoint_files()[0]));
   }
 
   // ---- Taguchi ----
@@ -966,7 +966,7 @@ ReproSummary run_repro(const ReproOptions& o, ReproTargets& targets, const fs::p
       print_stage(o, "taguchi: L27 x " + std::to_string(o.taguchi_replicates) + " ICA runs on " +
                          to_string(o.taguchi_set) + "_sample" + std::to_string(o.taguchi_sample) +
                          ", ~" + std::to_string(drapes) + " drapes");
-    taguchi_results = run_work_units(tunits, unit_options("taguchi"));
+    taguchi_results = run_work_units(tunits, unit_options(repro_checkpoint_files()[1]));
   }
   ReproSummary summary;
   if (!root) return summary;

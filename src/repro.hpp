@@ -200,6 +200,13 @@ struct ReproSummary {
   std::vector<std::string> files;         // written, relative to the output folder
 };
 
+// The checkpoints run_repro keeps in its folder (JSON lines, src/work_units.hpp): the fits'
+// and the Taguchi experiment's.
+inline const std::vector<std::string>& repro_checkpoint_files() {
+  static const std::vector<std::string> names = {"fits.jsonl", "taguchi.jsonl"};
+  return names;
+}
+
 // Runs the reproduction into `dir` (existing, writable); on ranks other than 0 it only computes
 // units and returns an empty summary. `options` must be valid.
 ReproSummary run_repro(const ReproOptions& options, ReproTargets& targets,

@@ -1,6 +1,7 @@
 #include "src/taguchi.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <istream>
@@ -184,6 +185,7 @@ std::vector<std::vector<double>> read_responses_csv(std::istream& in) {
   std::string line;
   int line_no = 0;
   bool first = true;
+  bool run_column = false;  // the header names column 1 "run": it numbers the runs
   while (std::getline(in, line)) {
     ++line_no;
     const std::string t = trim(line);
@@ -194,13 +196,27 @@ std::vector<std::vector<double>> read_responses_csv(std::istream& in) {
     for (std::size_t c = 0; c < fields.size(); ++c) ok[c] = parse_number(fields[c], values[c]);
     const bool is_header = first && std::none_of(ok.begin(), ok.end(), [](bool b) { return b; });
     first = false;
-    if (is_header) continue;
+    if (is_header) {
+      std::string name = fields[0];
+      std::transform(name.begin(), name.end(), name.begin(),
+                     [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
+      run_column = name == "run";
+      continue;
+    }
     const std::string where =
         "line " + std::to_string(line_no) + " (run " + std::to_string(rows.size() + 1) + ")";
     for (std::size_t c = 0; c < fields.size(); ++c)
       if (!ok[c])
         throw std::invalid_argument(where + ", column " + std::to_string(c + 1) + ": '" +
                                     fields[c] + "' is not a finite number");
+    if (run_column) {
+      if (values.size() < 2 || values[0] != static_cast<double>(rows.size() + 1))
+        throw std::invalid_argument(
+            where + ", column 1 (run): " + (values.empty() ? std::string("missing") : fields[0]) +
+            ", expected " + std::to_string(rows.size() + 1) +
+            " followed by the replicates (runs in L27 order)");
+      values.erase(values.begin());
+    }
     if (!rows.empty() && values.size() != rows[0].size())
       throw std::invalid_argument(where + ": " + std::to_string(values.size()) +
                                   " values, run 1 has " + std::to_string(rows[0].size()));

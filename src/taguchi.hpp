@@ -101,7 +101,9 @@ TaguchiAnalysis analyze_l27(const std::vector<std::vector<double>>& responses,
 
 // Reads responses as CSV: one line per run (27), comma-separated replicates, every line the
 // same count. Blank lines and lines starting with '#' are skipped. The first remaining line
-// is a header (skipped) iff none of its fields is a number. Throws std::invalid_argument
+// is a header (skipped) iff none of its fields is a number; if the header names column 1
+// "run" (any case), that column numbers the runs: it must read 1, 2, ..., 27 and is not a
+// replicate (taguchi_sn_table's layout). Throws std::invalid_argument
 // "line L (run R), column C: ..." on a field that is not a finite number, a ragged line, or
 // a run count other than 27.
 std::vector<std::vector<double>> read_responses_csv(std::istream& in);

@@ -384,6 +384,18 @@ TEST_CASE("knitsim repro: bad input is one line, exit 2, nothing written", "[rep
     CHECK(knitsim::test::lines(run.err).size() == 1);
     CHECK_FALSE(fs::exists(out));
   }
+  // --samples takes the comma lists its help shows: a list is read as a whole (the error
+  // names the list and the range), and a valid list passes on to the next check.
+  const fs::path out = tmp.path / "out";
+  const auto err_of = [&](const std::string& args) {
+    const knitsim::test::Run run =
+        knitsim::test::run_knitsim("repro " + args + " --out '" + out.string() + "'", tmp);
+    CHECK(run.status == 2);
+    CHECK_FALSE(fs::exists(out));
+    return run.err;
+  };
+  CHECK(err_of("table4 --samples 1,10").find("--samples = 1,10: accepted") != std::string::npos);
+  CHECK(err_of("table4 --samples 2,5-7 --jobs 0").find("--jobs") != std::string::npos);
 }
 
 TEST_CASE("knitsim repro killed after a unit and resumed writes the uninterrupted tables",

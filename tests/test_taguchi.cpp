@@ -205,6 +205,19 @@ TEST_CASE("response CSV: optional header, comments, errors with line and column"
   for (int run = 0; run < kL27Runs; ++run) body += "1,2\n";
   CHECK(error(body).empty());  // no header
   CHECK(error("a,b\n" + body).empty());
+  // A header naming column 1 "run": that column numbers the runs and is not a replicate.
+  std::ostringstream numbered;
+  numbered << "Run,r1,r2\n";
+  for (int run = 0; run < kL27Runs; ++run) numbered << run + 1 << "," << run << ",2\n";
+  std::istringstream numbered_in(numbered.str());
+  const auto numbered_rows = read_responses_csv(numbered_in);
+  REQUIRE(numbered_rows.size() == 27);
+  CHECK(numbered_rows[26] == std::vector<double>{26.0, 2.0});
+  std::string misnumbered = numbered.str();
+  misnumbered.replace(misnumbered.find("\n3,"), 3, "\n4,");  // run 3 numbered 4
+  CHECK(error(misnumbered) ==
+        "line 4 (run 3), column 1 (run): 4, expected 3 followed by the replicates (runs in L27 "
+        "order)");
   CHECK(error(body + "1,2\n") == "28 runs (data lines) read, an L27 experiment has 27");
   std::string bad = body;
   bad.replace(bad.find("1,2\n", 4 * 4), 4, "1,x\n");  // run 5

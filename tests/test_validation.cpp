@@ -193,3 +193,53 @@ TEST_CASE("an unwritable --out fails before any work, for every command that wri
       CHECK(!fs::exists(bad));
     }
 }
+
+TEST_CASE("a reused --out: another command's results and checkpoints are kept, stale files go") {
+  TempDir tmp("validation-reuse");
+  const fs::path target = fs::path(KNITSIM_FUZZ_CORPUS) / "target" / "points_four_corner.csv";
+  const std::string small = " --set model.natural_length=0.1";
+  const std::string fit = "fit --scene four_corner" + small + " --target '" + target.string() +
+                          "' --decades 1 --countries 4 --imperialists 1 --quiet";
+  // A fit's folder given to drape: refused, the fit's files untouched (drape used to replace
+  // its summary.json and manifest.json).
+  const fs::path fitted = tmp.path / "fitted";
+  REQUIRE(run_knitsim(fit + " --out '" + fitted.string() + "'", tmp).status == 0);
+  const std::string summary = slurp(fitted / "summary.json"),
+                    manifest = slurp(fitted / "manifest.json");
+  CHECK(manifest.find("\"command\": \"fit\"") != std::string::npos);
+  expect_bad_input("drape" + small + " --out '" + fitted.string() + "'",
+                   "--out " + fitted.string() + ": holds the results of `knitsim fit`", tmp);
+  CHECK(slurp(fitted / "summary.json") == summary);
+  CHECK(slurp(fitted / "manifest.json") == manifest);
+
+  // The same fit again without --resume: refused, the checkpoint kept (it used to be
+  // replaced); with --resume it goes on.
+  const std::string checkpoint = slurp(fitted / "ica_checkpoint.json");
+  expect_bad_input(fit + " --out '" + fitted.string() + "'",
+                   "holds the checkpoint ica_checkpoint.json of an earlier run; add --resume", tmp);
+  CHECK(slurp(fitted / "ica_checkpoint.json") == checkpoint);
+  CHECK(run_knitsim(fit + " --resume --out '" + fitted.string() + "'", tmp).status == 0);
+
+  // repro: its checkpoint of fits, likewise (checked before any target is made or fit run).
+  const fs::path repro = tmp.path / "repro";
+  fs::create_directories(repro);
+  std::ofstream(repro / "fits.jsonl") << "{\"config\": {}}\n";
+  expect_bad_input("repro table4 --samples 1 --out '" + repro.string() + "'",
+                   "holds the checkpoint fits.jsonl of an earlier run", tmp);
+  CHECK(slurp(repro / "fits.jsonl") == "{\"config\": {}}\n");
+
+  // A drape folder reused by drape: the optional outputs this run does not write go (a
+  // two_corner run used to leave the four_corner picture and steps.csv beside its summary).
+  const fs::path drape = tmp.path / "drape";
+  REQUIRE(
+      run_knitsim("drape" + small + " --step-history --quiet --out '" + drape.string() + "'", tmp)
+          .status == 0);
+  REQUIRE(fs::exists(drape / "drape.png"));
+  REQUIRE(fs::exists(drape / "steps.csv"));
+  REQUIRE(
+      run_knitsim("drape" + small + " --no-pictures --quiet --out '" + drape.string() + "'", tmp)
+          .status == 0);
+  CHECK(!fs::exists(drape / "drape.png"));
+  CHECK(!fs::exists(drape / "steps.csv"));
+  CHECK(fs::exists(drape / "summary.json"));
+}
