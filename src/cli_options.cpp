@@ -12,6 +12,8 @@
 #include <limits>
 #include <type_traits>
 
+#include "src/output.hpp"
+
 namespace knitsim {
 
 template <typename T>
@@ -32,6 +34,60 @@ CLI::Option* add_seed_option(CLI::App* cmd, T& seed, const std::string& help) {
 }
 template CLI::Option* add_seed_option(CLI::App*, std::uint64_t&, const std::string&);
 template CLI::Option* add_seed_option(CLI::App*, unsigned&, const std::string&);
+
+namespace {
+
+// Length of the '-' of `text` (0 or 1) if it is a decimal integer ([-]digits; no '-' when
+// `is_unsigned`), -1 otherwise.
+int decimal_sign(const std::string& text, bool is_unsigned) {
+  const size_t sign = !is_unsigned && !text.empty() && text[0] == '-' ? 1 : 0;
+  if (text.size() == sign || text.find_first_not_of("0123456789", sign) != std::string::npos)
+    return -1;
+  return static_cast<int>(sign);
+}
+
+}  // namespace
+
+void require_well_formed_values(CLI::App& app) {
+  // A transform runs before every check: the checks of an option (--seed's own) see "10".
+  const auto drop_leading_zeros = [](bool is_unsigned) {
+    return CLI::Validator(
+        [is_unsigned](std::string& text) {
+          const int sign = decimal_sign(text, is_unsigned);
+          if (sign >= 0) {  // CLI11 would read a leading 0 as octal
+            const size_t first = std::min(text.find_first_not_of('0', sign), text.size() - 1);
+            text.erase(sign, first - sign);
+          }
+          return std::string();
+        },
+        "");
+  };
+  const auto integer = [](bool is_unsigned) {
+    return CLI::Validator(
+        [is_unsigned](const std::string& text) -> std::string {
+          if (decimal_sign(text, is_unsigned) < 0)
+            return is_unsigned ? "must be a decimal integer >= 0" : "must be a decimal integer";
+          errno = 0;
+          if (is_unsigned)
+            (void)std::strtoull(text.c_str(), nullptr, 10);
+          else
+            (void)std::strtoll(text.c_str(), nullptr, 10);
+          return errno == ERANGE ? "out of range: " + text : "";
+        },
+        "");
+  };
+  const CLI::Validator not_empty(
+      [](const std::string& text) { return text.empty() ? "must not be empty" : ""; }, "");
+  for (CLI::App* cmd : app.get_subcommands([](CLI::App*) { return true; }))
+    for (CLI::Option* opt : cmd->get_options([](CLI::Option*) { return true; })) {
+      const std::string type = opt->get_type_name();
+      if (type == "INT" || type == "UINT") {
+        opt->transform(drop_leading_zeros(type == "UINT"));
+        opt->check(integer(type == "UINT"));
+      }
+      if (type == "TEXT") opt->check(not_empty);
+    }
+}
 
 void add_ica_options(CLI::App* cmd, IcaOptions& o) {
   add_seed_option(cmd, o.seed, "random seed")->capture_default_str();
@@ -188,6 +244,12 @@ void rethrow_with_flag_names(const std::invalid_argument& e,
       if (msg.rfind(field + " = ", 0) == 0)
         throw std::invalid_argument(flag + msg.substr(field.size()));
   throw e;
+}
+
+void refuse_at_run_start(const std::invalid_argument& e, const std::filesystem::path& dir,
+                         bool created) {
+  remove_if_unused(dir, created);
+  rethrow_with_flag_names(e, run_option_names());
 }
 
 const std::vector<std::pair<std::string, std::string>>& run_option_names() {

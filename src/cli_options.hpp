@@ -3,6 +3,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <filesystem>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -18,6 +19,14 @@ class Option;
 }  // namespace CLI
 
 namespace knitsim {
+
+// Makes every integer option of `app`'s subcommands (CLI11 type INT or UINT) take decimal text
+// only: CLI11 alone reads "010" as octal 8, "0x10" as 16, "-1" into an unsigned option as its
+// maximum and a value past 64 bits as the largest one (--max-steps 1e20 digits), all silently.
+// Leading zeros are dropped (010 is ten); anything else that is not a decimal integer, or does
+// not fit 64 bits, is refused with one line naming the option. Text options (TEXT) refuse an
+// empty value: `--integrator ""` silently meant the default. Call once, after registering.
+void require_well_formed_values(CLI::App& app);
 
 // The ICA flags (SPEC 2.10): --seed --jobs --decades --countries --imperialists --beta --gamma
 // --revolution --xi --stop-one-empire, bound to `o`.
@@ -63,6 +72,12 @@ void copy_run_flags(const IntegratorOptions& flags, IntegratorOptions& into);
 [[noreturn]] void rethrow_with_flag_names(
     const std::invalid_argument& e,
     const std::vector<std::pair<std::string, std::string>>& extra = {});
+
+// Bad input found only once a run has started (an option the integrator refuses for this
+// model, e.g. --max-order 9 with cvode-bdf): removes the run's --out folder `dir` if the run
+// `created` it and it is still empty, then rethrows `e` with the run options' flag names.
+[[noreturn]] void refuse_at_run_start(const std::invalid_argument& e,
+                                      const std::filesystem::path& dir, bool created);
 
 // The IntegratorOptions fields as the user writes them, for rethrow_with_flag_names: the keys
 // run.t_max and run.equilibrium_tol (scene files, drape/knit --set) and the flags --rtol, --atol,

@@ -110,9 +110,8 @@ void run(const DrapeArgs& args) {
       DrapeResult r = run_drape(scene, integrator, observer, from ? &*from : nullptr);
       steps_csv = steps.csv();
       return r;
-    } catch (const std::invalid_argument&) {  // an option the model refuses at the start
-      remove_if_unused(dir, created);
-      throw;
+    } catch (const std::invalid_argument& e) {  // an option the model refuses at the start
+      refuse_at_run_start(e, dir, created);
     }
   }();
   write_drape_outputs(dir, scene, result, args.target.empty() ? nullptr : &target_edges,

@@ -447,7 +447,8 @@ void run(const KnitArgs& args) {
   }
 
   const std::string name = fs::path(args.chart).stem().string();
-  const fs::path dir = make_output_dir(args.out, "knit-" + name);
+  bool created = false;
+  const fs::path dir = make_output_dir(args.out, "knit-" + name, &created);
   const InterruptScope interrupt;
   opt.interrupt = interrupt.flag();
   RunStats stats;
@@ -459,9 +460,16 @@ void run(const KnitArgs& args) {
     recorder.record(t0, x.data(), model.network.dof(), model.network.static_residual(t0, x.data()));
     StepLog steps(&recorder);
     RunObserver* observer = args.step_history ? static_cast<RunObserver*>(&steps) : &recorder;
-    stats = run_to_equilibrium(model.network, *integ, opt, x, v, observer, t0);
+    try {
+      stats = run_to_equilibrium(model.network, *integ, opt, x, v, observer, t0);
+    } catch (const std::invalid_argument& e) {  // an option the model refuses at the start
+      refuse_at_run_start(e, dir, created);
+    }
     frames = recorder.frames();
-    if (args.step_history) write_file_atomic(dir / "steps.csv", steps.csv());
+    if (args.step_history)
+      write_file_atomic(dir / "steps.csv", steps.csv());
+    else
+      remove_stale_output(dir / "steps.csv");
   }
   write_outputs(dir, args, model, opt, stats, x, frames, t0);
   write_run_state(

@@ -111,7 +111,15 @@ void run(const ReproArgs& a, const CLI::App& cmd) {
     throw std::invalid_argument("--resume: needs --out, the folder of the interrupted run");
   if (process_count() > 1 && a.out.empty())
     throw std::invalid_argument("--out: required under MPI (every rank must use one folder)");
-  refuse_fresh_start_over_checkpoint(a.out, repro_checkpoint_files(), a.resume);
+  // Rank 0 decides (under mpirun it would otherwise find the checkpoint it has just begun).
+  std::string refusal;
+  if (process_rank() == 0) try {
+      refuse_fresh_start_over_checkpoint(a.out, repro_checkpoint_files(), a.resume);
+    } catch (const std::invalid_argument& e) {
+      refusal = e.what();
+    }
+  broadcast(refusal);
+  if (!refusal.empty()) throw std::invalid_argument(refusal);
   ReproTargets targets(o);
   std::filesystem::path dir;
   if (process_rank() == 0)

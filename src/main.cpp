@@ -15,6 +15,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "src/cli_options.hpp"
 #include "src/commands.hpp"
 #include "src/output.hpp"
 #include "src/work_units.hpp"
@@ -44,6 +45,7 @@ int main(int argc, char** argv) {
   knitsim::register_fit_command(app);
   knitsim::register_targets_command(app);
   knitsim::register_repro_command(app);
+  knitsim::require_well_formed_values(app);
   // Under mpirun only repro distributes its work; any other command would run once per process
   // and every process would write the same files.
   if (knitsim::process_count() > 1 && (argc < 2 || std::string(argv[1]) != "repro")) {

@@ -177,7 +177,8 @@ bool mpi_running() {
 }
 #endif
 
-// Rank 0's `text` on every rank.
+}  // namespace
+
 void broadcast(std::string& text) {
 #ifdef KNITSIM_HAVE_MPI
   if (process_count() == 1) return;
@@ -189,6 +190,8 @@ void broadcast(std::string& text) {
   (void)text;
 #endif
 }
+
+namespace {
 
 // A unit's serialised result on its way to rank 0: "[index,result]".
 std::string result_message(int index, const std::string& result) {

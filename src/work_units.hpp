@@ -43,6 +43,10 @@ std::string first_config_difference(const nlohmann::json& saved, const nlohmann:
 // MPI (when built with it; otherwise one process of rank 0 of 1).
 int process_rank();
 int process_count();
+// Rank 0's `text` on every rank (nothing to do in one process). Collective: every rank calls
+// it, at the same point. For a decision only rank 0 can make (it alone owns the output folder)
+// that every rank must then act on alike.
+void broadcast(std::string& text);
 // Owns MPI_Init/MPI_Finalize for main(); a no-op without MPI.
 class ProcessGroup {
  public:

@@ -243,3 +243,32 @@ TEST_CASE("a reused --out: another command's results and checkpoints are kept, s
   CHECK(!fs::exists(drape / "steps.csv"));
   CHECK(fs::exists(drape / "summary.json"));
 }
+
+TEST_CASE("option values: integers decimal, 64-bit overflow refused, text not empty") {
+  TempDir tmp("validation-integers");
+  const std::string out = " --out '" + (tmp.path / "o").string() + "'";
+  // --max-steps (a long): 1e20 was read as 2^63 - 1, silently; 0x10 as 16 and 010 as 8.
+  expect_bad_input("drape --max-steps 99999999999999999999" + out,
+                   "--max-steps: out of range: 99999999999999999999", tmp);
+  expect_bad_input("drape --max-steps 0x10" + out, "--max-steps: must be a decimal integer", tmp);
+  expect_bad_input("drape --max-restarts 1.5" + out, "--max-restarts: must be a decimal integer",
+                   tmp);
+  expect_bad_input("knit --frames +3" + out, "--frames: must be a decimal integer", tmp);
+  // An empty text value: `--integrator ''` ran the default integrator.
+  expect_bad_input("drape --integrator ''" + out, "--integrator: must not be empty", tmp);
+  CHECK(!fs::exists(tmp.path / "o"));
+  const Run r = run_knitsim("drape --max-steps 010 --no-pictures --quiet" + out, tmp);
+  CHECK(r.status == 3);  // stopped by the step cap of ten, not eight
+  CHECK(slurp(tmp.path / "o" / "summary.json").find("\"steps\": 10,") != std::string::npos);
+}
+
+TEST_CASE("an integrator option refused at run start names its flag and leaves no folder") {
+  TempDir tmp("validation-run-start");
+  const fs::path chart = tmp.path / "c.chart";
+  std::ofstream(chart) << "KKK\nKTK\nKKK\n";
+  for (const std::string& cmd : {std::string("drape"), "knit --chart '" + chart.string() + "'"}) {
+    expect_bad_input(cmd + " --max-order 9 --out '" + (tmp.path / "o").string() + "'",
+                     "--max-order = 9: must be in 0..5 for cvode-bdf", tmp);
+    CHECK(!fs::exists(tmp.path / "o"));
+  }
+}

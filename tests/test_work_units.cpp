@@ -330,6 +330,13 @@ TEST_CASE("mpirun -np 2 knitsim repro writes the single-process table4.csv", "[.
   REQUIRE(two == 0);
   CHECK(slurp(dir / "two" / "table4.csv") == slurp(dir / "one" / "table4.csv"));
   CHECK(lines_of(slurp(dir / "two" / "fits.jsonl")).size() == 1 + 4);
+  // Again into the same folder without --resume: refused by every rank alike (rank 0 decides;
+  // a per-rank check hung, rank 1 finding the checkpoint rank 0 had just begun).
+  const std::string checkpoint = slurp(dir / "two" / "fits.jsonl");
+  CHECK(run(std::string("'") + KNITSIM_MPIEXEC + "' -np 2 --oversubscribe" +
+                (::geteuid() == 0 ? " --allow-run-as-root " : " "),
+            dir / "two") == 2);
+  CHECK(slurp(dir / "two" / "fits.jsonl") == checkpoint);
   fs::remove_all(dir);
 }
 #endif
