@@ -59,6 +59,12 @@ for rep in $(seq 1 "$REPEATS"); do
   drape four_corner cvode-bdf "eighth$rep" --set model.symmetry=eighth
   drape two_corner cvode-bdf "half$rep" --set model.symmetry=half
 done
+# The cheapest settled four_corner run of the work-precision study: implicit-euler at a fixed
+# dt of 100 s (a step chosen from that study, not automatic; on two_corner a large fixed step
+# lands on another equilibrium, experiments/work_precision). Row four_corner/dt100s.
+for rep in $(seq 1 "$REPEATS"); do
+  drape four_corner implicit-euler "dt100s$rep" --dt 100
+done
 
 # Euler: its predicted stability limit from a one-step run, then 0.9 x that step.
 drape four_corner euler probe --max-steps 1
@@ -79,7 +85,8 @@ out = []
 def med(rs, k): return statistics.median(float(r[k]) for r in rs)
 for scene, integ, part in [("four_corner", "cvode-bdf", ""), ("two_corner", "cvode-bdf", ""),
                            ("four_corner", "cvode-bdf", "eighth"),
-                           ("two_corner", "cvode-bdf", "half")]:
+                           ("two_corner", "cvode-bdf", "half"),
+                           ("four_corner", "implicit-euler", "dt100s")]:
     rs = [r for r in rows if r["scene"] == scene and r["integrator"] == integ and
           r["repeat"].rstrip("0123456789") == part]
     out.append(dict(scene=scene + ("/" + part if part else ""), integrator=integ, runs=len(rs),
@@ -104,12 +111,19 @@ else:
                     wall_seconds=float(eu["wall_seconds"]), cpu_seconds=float(eu["cpu_seconds"]),
                     measured="yes"))
 euler_row = out[-1]
+# The fixed-step run's equilibrium against cvode-bdf's: largest node distance, m.
+import os
+def nodes(label):
+    path = os.path.join(os.path.dirname(sys.argv[1]), "runs", label, "nodes.csv")
+    return [(float(r["x"]), float(r["y"]), float(r["z"])) for r in csv.DictReader(open(path))]
+dx = max(max(abs(a - b) for a, b in zip(p, q)) for p, q in
+         zip(nodes("four_corner-implicit-euler-dt100s1"), nodes("four_corner-cvode-bdf-1")))
 w = csv.DictWriter(open(sys.argv[2], "w", newline=""), fieldnames=list(out[0].keys()))
 w.writeheader(); w.writerows(out)
-print("%-18s %-10s %4s %-13s %11s %11s %10s %10s  %s" % ("scene", "integrator", "runs",
+print("%-18s %-14s %4s %-13s %11s %11s %10s %10s  %s" % ("scene", "integrator", "runs",
       "status", "t_final s", "steps", "wall s", "cpu s", "measured"))
 for o in out:
-    print("%-18s %-10s %4d %-13s %11.4g %11.4g %10.4g %10.4g  %s" % (o["scene"], o["integrator"],
+    print("%-18s %-14s %4d %-13s %11.4g %11.4g %10.4g %10.4g  %s" % (o["scene"], o["integrator"],
           o["runs"], o["status"], o["t_final"], o["steps"], o["wall_seconds"], o["cpu_seconds"],
           o["measured"]))
 print("euler / cvode-bdf on four_corner, same residual: wall %.3g, cpu %.3g" % (
@@ -117,6 +131,8 @@ print("euler / cvode-bdf on four_corner, same residual: wall %.3g, cpu %.3g" % (
       euler_row["cpu_seconds"] / out[0]["cpu_seconds"]))
 print("euler time per step: %.3g us wall, %.3g us cpu (dt = %s s)" % (per_step * 1e6,
       per_step_cpu * 1e6, eu["dt"]))
+print("four_corner implicit-euler dt 100 s vs cvode-bdf: equilibria %.2g m apart (largest node "
+      "distance)" % dx)
 PY
 commit=$(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)
 python3 - "$OUT/manifest.json" "$KNITSIM" "$QUICK" "$REPEATS" "$commit" <<'PY'
