@@ -246,6 +246,21 @@ void rethrow_with_flag_names(const std::invalid_argument& e,
   throw e;
 }
 
+void warn(const std::string& message) {
+  std::cerr << "knitsim " << command_name() << ": warning: " << message << std::endl;
+}
+
+void warn_about_run(const std::string& damping_key, double damping, const IntegratorInfo& integ,
+                    const IntegratorOptions& flags, double t_max) {
+  if (damping == 0.0 && integ.name != "implicit-euler")
+    warn(damping_key + " = 0: with no damping nothing comes to rest (only implicit-euler's " +
+         "numerical damping settles it); " + integ.name + " runs on to run.t_max = " +
+         format_number(t_max, 6) + " s, hours with the defaults: cap it with --max-wall");
+  if (flags.dt > 0.0 && integ.adaptive)
+    warn("--dt is for the fixed-step integrators; " + integ.name +
+         " chooses its own steps and ignores it");
+}
+
 void refuse_at_run_start(const std::invalid_argument& e, const std::filesystem::path& dir,
                          bool created) {
   remove_if_unused(dir, created);

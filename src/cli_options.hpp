@@ -73,6 +73,16 @@ void copy_run_flags(const IntegratorOptions& flags, IntegratorOptions& into);
     const std::invalid_argument& e,
     const std::vector<std::pair<std::string, std::string>>& extra = {});
 
+// One line on stderr, "knitsim <command>: warning: <message>": input that is valid but will not
+// do what it seems to. The run goes on.
+void warn(const std::string& message);
+// drape's and knit's warnings before a run: no damping (`damping_key` is 0: only
+// implicit-euler's numerical damping settles such a run, any other integrator goes on to
+// `t_max`, for hours with the defaults), and --dt given (`flags.dt` > 0) to an adaptive
+// integrator, which ignores it.
+void warn_about_run(const std::string& damping_key, double damping, const IntegratorInfo& integ,
+                    const IntegratorOptions& flags, double t_max);
+
 // Bad input found only once a run has started (an option the integrator refuses for this
 // model, e.g. --max-order 9 with cvode-bdf): removes the run's --out folder `dir` if the run
 // `created` it and it is still empty, then rethrows `e` with the run options' flag names.

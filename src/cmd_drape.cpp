@@ -74,8 +74,9 @@ void run(const DrapeArgs& args) {
   scene.validate();
 
   const std::string integrator = args.integrator.empty() ? default_integrator() : args.integrator;
+  std::unique_ptr<Integrator> integ;
   try {
-    make_integrator(integrator);
+    integ = make_integrator(integrator);
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(std::string("--") + e.what());  // "--integrator = X: ..."
   }
@@ -98,6 +99,8 @@ void run(const DrapeArgs& args) {
 
   bool created = false;
   const std::filesystem::path dir = make_output_dir(args.out, "drape-" + scene.name, &created);
+  warn_about_run("model.damping", scene.params.damping, integ->info(), args.options,
+                 scene.options.t_max);
   const InterruptScope interrupt;
   scene.options.interrupt = interrupt.flag();
   std::string steps_csv;

@@ -449,6 +449,7 @@ void run(const KnitArgs& args) {
   const std::string name = fs::path(args.chart).stem().string();
   bool created = false;
   const fs::path dir = make_output_dir(args.out, "knit-" + name, &created);
+  warn_about_run("knit.damping", params.damping, integ->info(), args.options, opt.t_max);
   const InterruptScope interrupt;
   opt.interrupt = interrupt.flag();
   RunStats stats;

@@ -46,6 +46,19 @@ int main(int argc, char** argv) {
   knitsim::register_targets_command(app);
   knitsim::register_repro_command(app);
   knitsim::require_well_formed_values(app);
+  app.set_version_flag("--version", knitsim::version_string());
+  // CLI11 reports an unknown command as "A subcommand is required": name it instead.
+  if (argc > 1 && argv[1][0] != '-') {
+    std::string names;
+    bool known = false;
+    for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+      known = known || sub->check_name(argv[1]);
+    }
+    if (!known)
+      return fail(2, "unknown command '" + knitsim::printable(argv[1]) + "': one of " + names +
+                         " (see knitsim --help)");
+  }
   // Under mpirun only repro distributes its work; any other command would run once per process
   // and every process would write the same files.
   if (knitsim::process_count() > 1 && (argc < 2 || std::string(argv[1]) != "repro")) {
@@ -59,6 +72,8 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
   } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::RuntimeError& e) {
     return e.get_exit_code();

@@ -391,6 +391,11 @@ std::string& command_name_store() {
 
 const std::string& command_name() { return command_name_store(); }
 
+std::string version_string() {
+  return std::string("knitsim ") + KNITSIM_VERSION + " (commit " + KNITSIM_GIT_COMMIT + ", " +
+         KNITSIM_BUILD_TYPE + ")";
+}
+
 void set_command_line(int argc, const char* const* argv) {
   // knitsim has no options before its subcommand (--help and --version stop there).
   command_name_store() = argc > 1 && argv[1][0] != '-' ? argv[1] : "";

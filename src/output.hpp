@@ -106,6 +106,8 @@ nlohmann::json to_json(const DrapeLmOptions& o);     // field names as in DrapeL
 
 // The process command line, recorded once by main() for the manifests.
 void set_command_line(int argc, const char* const* argv);
+// "knitsim <version> (commit <hash>, <build type>)", for --version.
+std::string version_string();
 // The subcommand of that line (argv[1]: drape, fit, ...), "" before set_command_line.
 const std::string& command_name();
 // manifest.json: program and version, git commit (at configure time), build type, command

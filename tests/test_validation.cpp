@@ -272,3 +272,40 @@ TEST_CASE("an integrator option refused at run start names its flag and leaves n
     CHECK(!fs::exists(tmp.path / "o"));
   }
 }
+
+TEST_CASE("valid but misleading input: one warning line, the run goes on") {
+  TempDir tmp("validation-warnings");
+  const auto run = [&](const std::string& args) {
+    return run_knitsim("drape --set model.natural_length=0.1 --no-pictures --quiet --out '" +
+                           (tmp.path / "o").string() + "' " + args,
+                       tmp);
+  };
+  // No damping: it used to run for hours without a word (capped here at 0.2 s of wall time).
+  const Run undamped = run("--set model.damping=0 --max-wall 0.2");
+  CHECK(undamped.status == 3);
+  CHECK(undamped.err.find("knitsim drape: warning: model.damping = 0: with no damping nothing "
+                          "comes to rest") != std::string::npos);
+  // --dt with an adaptive integrator is ignored: said so, and the result is the plain run's.
+  const Run plain = run("");
+  REQUIRE(plain.status == 0);
+  CHECK(plain.err.empty());
+  const std::string nodes = slurp(tmp.path / "o" / "nodes.csv");
+  const Run with_dt = run("--dt 5");
+  CHECK(with_dt.status == 0);
+  CHECK(count_lines(with_dt.err) == 1);
+  CHECK(with_dt.err.find("warning: --dt is for the fixed-step integrators; cvode-bdf chooses "
+                         "its own steps and ignores it") != std::string::npos);
+  CHECK(slurp(tmp.path / "o" / "nodes.csv") == nodes);
+  // Where it applies: no warning.
+  CHECK(run("--integrator implicit-euler --dt 100").err.empty());
+}
+
+TEST_CASE("an unknown command is named; --version answers") {
+  TempDir tmp("validation-command");
+  // It used to say "A subcommand is required".
+  expect_bad_input("frob --out x", "unknown command 'frob': one of drape, knit, list", tmp);
+  const Run version = run_knitsim("--version", tmp);
+  CHECK(version.status == 0);
+  CHECK(version.out.rfind("knitsim ", 0) == 0);
+  CHECK(version.out.find("(commit ") != std::string::npos);
+}
