@@ -378,27 +378,39 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
         KnitSpringKind::Shear, KnitSpringKind::Bending})
     springs[to_string(kind)] = m.count(kind);
   nlohmann::json options = to_json(opt);
-  const nlohmann::json summary = {{"chart", name},
-                                  {"chart_file", args.chart},
-                                  {"status", to_string(stats.status)},
-                                  {"message", stats.message},
-                                  {"integrator", stats.integrator},
-                                  {"t_start", t_start},
-                                  {"t_final", stats.t_final},
-                                  {"residual", stats.residual},
-                                  {"wall_seconds", stats.wall_seconds},
-                                  {"stats", to_json(stats)},
-                                  {"wales", m.chart.wales},
-                                  {"courses", m.chart.courses},
-                                  {"points", m.points.size()},
-                                  {"loops", m.loops.size()},
-                                  {"springs", m.network.spec().springs.size()},
-                                  {"springs_by_kind", springs},
-                                  {"dof", m.network.dof()},
-                                  {"max_displacement_over_r", max_displacement_over_r(m, pos)},
-                                  {"frames", frame_list},
-                                  {"params", params_json(m.params)},
-                                  {"options", options}};
+  const nlohmann::json summary = {
+      {"chart", name},
+      {"chart_file", args.chart},
+      {"status", to_string(stats.status)},
+      {"message", stats.message},
+      {"integrator", stats.integrator},
+      {"t_start", t_start},
+      {"t_final", stats.t_final},
+      {"residual", stats.residual},
+      {"wall_seconds", stats.wall_seconds},
+      {"stats", to_json(stats)},
+      {"wales", m.chart.wales},
+      {"courses", m.chart.courses},
+      {"points", m.points.size()},
+      {"loops", m.loops.size()},
+      {"springs", m.network.spec().springs.size()},
+      {"springs_by_kind", springs},
+      {"dof", m.network.dof()},
+      {"max_displacement_over_r", max_displacement_over_r(m, pos)},
+      {"frames", frame_list},
+      {"params", params_json(m.params)},
+      {"options", options},
+      {"units", summary_units({{"residual, residual_floor",
+                                "1: the static residual (SPEC 2.3), max "
+                                "over free points of |net force| / (k_w r), "
+                                "a wale spring stretched by one loop radius "
+                                "(with gravity: or the mean point weight, "
+                                "the smaller)"},
+                               {"max_displacement_over_r", "1: largest displacement / loop radius"},
+                               {"params",
+                                "loop_radius m; wale_stiffness, "
+                                "course_stiffness N/m; damping N s/m; "
+                                "areal_density g/m^2; stabiliser_ratio 1"}})}};
   write_json_atomic(dir / "summary.json", summary);
   write_json_atomic(dir / "manifest.json", manifest({{"chart", args.chart},
                                                      {"integrator", stats.integrator},

@@ -445,6 +445,20 @@ nlohmann::json manifest(const nlohmann::json& options) {
 
 // ---- drape outputs -----------------------------------------------------------------------------
 
+nlohmann::json summary_units(const nlohmann::json& model) {
+  nlohmann::json units = {
+      {"t_start, t_final", "s"},
+      {"dt", "s: the fixed step of euler, verlet, implicit-euler; 0 for adaptive integrators"},
+      {"dt_estimated, dt_predicted", "s: stability limits of the explicit methods (SPEC 2.4)"},
+      {"wall_seconds, cpu_seconds", "s (cpu: this process, all threads)"},
+      {"factor_flops", "floating-point operations of one factorisation of S (CHOLMOD's count)"},
+      {"factor_nonzeros", "entries of one factor L"},
+      {"steps, rhs_evals, jac_evals, lin_setups, lin_iters, nonlin_iters, factorisations",
+       "counts"}};
+  units.update(model);
+  return units;
+}
+
 nlohmann::json drape_summary(const Scene& scene, const DrapeResult& r) {
   const SpringNetwork& net = r.grid.network;
   nlohmann::json j = to_json(r.stats);
@@ -461,6 +475,20 @@ nlohmann::json drape_summary(const Scene& scene, const DrapeResult& r) {
   j["centre_sag_m"] = r.centre_sag;
   j["params"] = to_json(scene.params);
   j["options"] = to_json(scene.options);
+  j["units"] = summary_units(
+      {{"residual, residual_floor",
+        "1: the static residual (SPEC 2.3), max over free particles of |spring force + weight| "
+        "/ mean particle weight; residual_floor: its round-off bound"},
+       {"centre_sag_m", "m"},
+       {"max_strain", "1: (L - L0) / L0 of the most stretched spring, a fraction (stdout: %)"},
+       {"objective", "%: the Eq. 5 error against --target"},
+       {"edge_coefficients",
+        "1: p0..p4 of d(s) = sum p_i s^i, s and d lengths divided by the "
+        "edge's reference length (edges.csv; src/measurement.hpp)"},
+       {"params",
+        "width, natural_length, perturbation m; areal_density g/m^2; stiffness N/m; "
+        "damping N s/m; elongation_limit %; pin_span a fraction of the width; "
+        "pin_move_time s"}});
   return j;
 }
 

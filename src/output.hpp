@@ -117,6 +117,11 @@ nlohmann::json manifest(const nlohmann::json& options);
 
 // ---- drape outputs -----------------------------------------------------------------------------
 
+// summary.json's "units": what each number of a run summary is measured in, for a reader
+// without the source. `model` maps the model's own numbers (drape or knit: the residual's
+// scale, centre_sag_m, params, ...) to their units; times, steps and cost figures are shared.
+nlohmann::json summary_units(const nlohmann::json& model);
+
 // summary.json: scene, source, status, message, integrator, t_final, residual, wall time, all
 // RunStats counters, grid size and counts, max strain, centre sag, params, options.
 nlohmann::json drape_summary(const Scene& scene, const DrapeResult& result);

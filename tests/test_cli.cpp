@@ -92,6 +92,13 @@ TEST_CASE("a settled drape: exit 0, summary, nodes, VTK, PNG and manifest agree"
   REQUIRE(n == 5);  // floor(0.5 / 0.1 + 0.5)
   CHECK(summary["grid"]["particles"] == 36);
   CHECK(summary["grid"]["dof"] == 3 * 32);
+  // Units for a reader without the source: every top-level number that is not a count has one.
+  const auto& units = summary["units"];
+  CHECK(units["centre_sag_m"] == "m");
+  CHECK(units["max_strain"].get<std::string>().find("a fraction") != std::string::npos);
+  for (const char* key : {"t_start, t_final", "dt", "residual, residual_floor", "edge_coefficients",
+                          "params", "wall_seconds, cpu_seconds", "factor_flops"})
+    CHECK(units.contains(key));
   CHECK(summary["residual"].get<double>() <= summary["options"]["equilibrium_tol"].get<double>());
   CHECK(summary["steps"].get<long>() > 0);
   // 96 unknowns in 3 x 3 particle blocks: the automatic factorisation is the block LDL^T.

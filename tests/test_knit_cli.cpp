@@ -82,6 +82,9 @@ TEST_CASE("knitsim knit: a small tuck chart settles and its outputs agree with t
   CHECK(summary["status"] == "equilibrium");
   // --newton-solver and --max-order reach the integrator
   CHECK(summary["options"]["newton_solver"] == "ldl");
+  CHECK(summary["units"]["residual, residual_floor"].get<std::string>().find("(k_w r)") !=
+        std::string::npos);
+  CHECK(summary["units"]["params"].get<std::string>().find("loop_radius m") != std::string::npos);
   CHECK(summary["options"]["max_order"] == 3);
   CHECK(summary["options"]["velocity_atol"] == 1e-3);  // the stabilised chart's default
   CHECK(summary["stats"]["factorisations"] == summary["stats"]["lin_setups"]);
