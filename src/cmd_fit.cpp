@@ -29,6 +29,7 @@
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <fstream>
+#include <initializer_list>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -63,7 +64,32 @@ struct FitArgs {
   std::string out;
   bool resume = false;
   bool quiet = false;
+  std::vector<std::string> ignored;  // flags given that the chosen optimizer does not read
 };
+
+// The flags among `names` given on the command line.
+std::vector<std::string> given_flags(const CLI::App* cmd,
+                                     std::initializer_list<const char*> names) {
+  std::vector<std::string> given;
+  for (const char* name : names)
+    if (cmd->count(name) > 0) given.emplace_back(name);
+  return given;
+}
+
+// One warning for flags the run will not read, and for a stability-limited integrator, whose
+// every drape of the fit takes minutes (warned, not refused: the paper's own method).
+void warn_about_fit(const FitArgs& args, const std::string& integrator) {
+  if (!args.ignored.empty()) {
+    std::string list;
+    for (const std::string& flag : args.ignored) list += (list.empty() ? "" : ", ") + flag;
+    warn(list + (args.ignored.size() == 1 ? " is" : " are") + " not read by --optimizer " +
+         args.optimizer);
+  }
+  if (make_integrator(integrator)->info().explicit_method)
+    warn("--integrator " + integrator +
+         ": stability-limited, so each drape of the fit takes minutes (four_corner with euler: "
+         "~10 min), against milliseconds with cvode-bdf or static");
+}
 
 constexpr const char* kCheckpointFile = "ica_checkpoint.json";
 
@@ -283,6 +309,7 @@ void run(const FitArgs& args) {
     rethrow_with_flag_names(e, {{"integrator", "--integrator"}});
   }
   dir = make_output_dir(args.out, "fit-" + base.name);
+  warn_about_fit(args, problem->integrator());
   if (args.optimizer == "lm") return run_lm_fit(args, base, *problem, dir);
 
   if (!args.quiet) {
@@ -415,7 +442,13 @@ void register_fit_command(CLI::App& app) {
                 "Continue the interrupted fit in --out from its ica_checkpoint.json (same "
                 "options needed; any --jobs); starts afresh if there is none");
   cmd->add_flag("--quiet", args->quiet, "Nothing on stdout");
-  cmd->callback([args] { run(*args); });
+  cmd->callback([args, cmd] {
+    args->ignored = args->optimizer == "lm"
+                        ? given_flags(cmd, {"--decades", "--countries", "--imperialists", "--beta",
+                                            "--gamma", "--revolution", "--xi", "--stop-one-empire"})
+                        : given_flags(cmd, {"--lm-starts", "--lm-refine", "--lm-evaluations"});
+    run(*args);
+  });
 }
 
 }  // namespace knitsim

@@ -298,6 +298,18 @@ TEST_CASE("valid but misleading input: one warning line, the run goes on") {
   CHECK(slurp(tmp.path / "o" / "nodes.csv") == nodes);
   // Where it applies: no warning.
   CHECK(run("--integrator implicit-euler --dt 100").err.empty());
+
+  // fit --optimizer lm with ICA flags: they were ignored without a word.
+  const fs::path target = fs::path(KNITSIM_FUZZ_CORPUS) / "target" / "points_four_corner.csv";
+  const Run lm = run_knitsim(
+      "fit --scene four_corner --set model.natural_length=0.1 --target '" + target.string() +
+          "' --optimizer lm --lm-starts 1 --lm-refine 1 --lm-evaluations 2 --countries 7 "
+          "--stop-one-empire --quiet --out '" +
+          (tmp.path / "lm").string() + "'",
+      tmp);
+  CHECK(lm.err.find("knitsim fit: warning: --countries, --stop-one-empire are not read by "
+                    "--optimizer lm") != std::string::npos);
+  CHECK(count_lines(lm.err) == 1);
 }
 
 TEST_CASE("an unknown command is named; --version answers") {
