@@ -574,7 +574,11 @@ SavedRun parse_run_state(const std::string& text, const std::string& command) {
     saved.model = state.at("model");
     if (!saved.model.is_object()) throw std::invalid_argument("model is not an object");
   } catch (const nlohmann::json::exception& e) {
-    throw std::invalid_argument(printable(e.what()));
+    // Without the library's "[json.exception.parse_error.101] " tag: what went wrong, where.
+    std::string what = e.what();
+    if (what.rfind("[json.exception.", 0) == 0 && what.find("] ") != std::string::npos)
+      what.erase(0, what.find("] ") + 2);
+    throw std::invalid_argument("not a valid state file: " + printable(what));
   }
   return saved;
 }

@@ -374,12 +374,17 @@ TEST_CASE("knitsim drape --continue: a run continued where it stopped is the uni
   CHECK(json("bdf", "summary.json").at("centre_sag_m").get<double>() ==
         Approx(json("reference", "summary.json").at("centre_sag_m").get<double>()).epsilon(1e-8));
 
-  // Refused with one line and nothing written: no drape folder, another model, t_max passed.
+  // Refused with one line and nothing written: no drape folder, another model, t_max passed,
+  // a state file that is not JSON (said without the JSON library's exception tag).
+  fs::create_directories(tmp.path / "garbled");
+  std::ofstream(tmp.path / "garbled" / "state.json") << "{\"t\": 1e400}\n";
   struct Bad {
     std::string args, says;
   };
   for (const Bad& b :
        {Bad{"--continue '" + tmp.path.string() + "'", "not the output folder of a knitsim drape"},
+        Bad{"--continue '" + (tmp.path / "garbled").string() + "'",
+            "state.json: not a valid state file: number overflow parsing '1e400'"},
         Bad{"--continue '" + (tmp.path / "first").string() + "' --set model.stiffness=900",
             "model.stiffness = 900"},
         Bad{"--continue '" + (tmp.path / "first").string() + "' --set run.t_max=1e-3",
