@@ -221,6 +221,9 @@ class Integrator {
 // Registry: every integrator by name (SPEC 2.4).
 const std::vector<IntegratorInfo>& integrator_catalog();
 std::unique_ptr<Integrator> make_integrator(const std::string& name);  // throws invalid_argument
+// The SuiteSparse release (CHOLMOD, KLU) the solvers were compiled against, e.g. "5.12.0",
+// for manifests.
+std::string suitesparse_version();
 
 // Observer of a run: on_step after every step (t after it, h = its size -- 0 for a step that did
 // not advance time, e.g. a static polish attempt -- and the method order used), on_check at every

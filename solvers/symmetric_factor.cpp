@@ -202,3 +202,12 @@ void SymmetricFactor::fill_stats(RunStats& st) const {
 long SymmetricFactor::ldl_fallbacks() const { return impl_->fallbacks; }
 
 }  // namespace knitsim::detail
+
+namespace knitsim {
+
+std::string suitesparse_version() {
+  return std::to_string(SUITESPARSE_MAIN_VERSION) + "." + std::to_string(SUITESPARSE_SUB_VERSION) +
+         "." + std::to_string(SUITESPARSE_SUBSUB_VERSION);
+}
+
+}  // namespace knitsim

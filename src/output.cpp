@@ -18,6 +18,7 @@
 #include "src/cli_options.hpp"
 #include "src/lm_fit.hpp"
 #include "src/render.hpp"
+#include "src/work_units.hpp"
 
 // KNITSIM_GIT_COMMIT: the commit this binary was built from (generated at every build by
 // src/git_commit.cmake); the rest set by CMakeLists.txt on this file only (configure-time facts).
@@ -439,6 +440,8 @@ nlohmann::json manifest(const nlohmann::json& options) {
             {"cairo", cairo_version_string()},
             {"tomlplusplus", KNITSIM_TOMLPP_VERSION},
             {"cli11", CLI11_VERSION},
+            {"suitesparse", suitesparse_version()},
+            {"mpi", mpi_library_version()},
             {"nlohmann_json", json_version}}},
           {"compiler", compiler}};
 }

@@ -112,7 +112,8 @@ std::string version_string();
 const std::string& command_name();
 // manifest.json: program and version, git commit (at configure time), build type, command
 // (command_name()) and command line, `options` as given, library versions (SUNDIALS, Eigen, cairo,
-// toml++, CLI11, nlohmann-json), compiler, UTC creation time. No host or user names.
+// toml++, CLI11, nlohmann-json, SuiteSparse, MPI), compiler, UTC creation time. No host or user
+// names.
 nlohmann::json manifest(const nlohmann::json& options);
 
 // ---- drape outputs -----------------------------------------------------------------------------

@@ -391,6 +391,18 @@ int process_rank() {
   return 0;
 }
 
+std::string mpi_library_version() {
+#ifdef KNITSIM_HAVE_MPI
+  char text[MPI_MAX_LIBRARY_VERSION_STRING];
+  int length = 0;
+  MPI_Get_library_version(text, &length);  // allowed before MPI_Init
+  const std::string version(text, static_cast<std::size_t>(length));
+  return version.substr(0, version.find_first_of(",\n"));  // "Open MPI v4.1.4, package: ..."
+#else
+  return "none";
+#endif
+}
+
 int process_count() {
 #ifdef KNITSIM_HAVE_MPI
   if (mpi_running()) {

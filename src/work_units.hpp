@@ -43,6 +43,9 @@ std::string first_config_difference(const nlohmann::json& saved, const nlohmann:
 // MPI (when built with it; otherwise one process of rank 0 of 1).
 int process_rank();
 int process_count();
+// The MPI library this binary is built with ("Open MPI v4.1.4"; "none" without MPI), for
+// manifests.
+std::string mpi_library_version();
 // Rank 0's `text` on every rank (nothing to do in one process). Collective: every rank calls
 // it, at the same point. For a decision only rank 0 can make (it alone owns the output folder)
 // that every rank must then act on alike.

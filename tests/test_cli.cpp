@@ -148,6 +148,9 @@ TEST_CASE("a settled drape: exit 0, summary, nodes, VTK, PNG and manifest agree"
         std::string::npos);
   CHECK(!manifest["git_commit"].get<std::string>().empty());
   CHECK(manifest["libraries"]["sundials"].get<std::string>().rfind("6.", 0) == 0);
+  CHECK(manifest["libraries"]["suitesparse"].get<std::string>().rfind("5.", 0) == 0);
+  CHECK(manifest["libraries"].contains("mpi"));
+  CHECK(manifest["command"] == "drape");
   CHECK(summary["integrator"] == "implicit-euler");
   CHECK(manifest["options"]["integrator"] == "implicit-euler");
   for (const auto& e : fs::directory_iterator(out)) CHECK(e.path().extension() != ".tmp");
