@@ -131,10 +131,11 @@ void run(const DrapeArgs& args) {
 
 void register_drape_command(CLI::App& app) {
   auto args = std::make_shared<DrapeArgs>();
-  CLI::App* cmd =
-      app.add_subcommand("drape",
-                         "Hang a fabric (paper 1) and run it to equilibrium; writes summary.json, "
-                         "nodes.csv, drape.vtk, drape.png and manifest.json into --out");
+  CLI::App* cmd = app.add_subcommand(
+      "drape",
+      "Hang a fabric (paper 1) and run it to equilibrium; writes summary.json, "
+      "nodes.csv, edges.csv, drape.vtk, drape.png, state.json and manifest.json into "
+      "--out");
   cmd->add_option("--scene", args->scene,
                   "Built-in scene (four_corner, two_corner, two_corner_slack) or a TOML file")
       ->capture_default_str();
