@@ -93,22 +93,33 @@ void add_ica_options(CLI::App* cmd, IcaOptions& o) {
   add_seed_option(cmd, o.seed, "random seed")->capture_default_str();
   cmd->add_option("--jobs", o.jobs, "threads evaluating costs (same result for any value)")
       ->capture_default_str();
-  cmd->add_option("--decades", o.decades, "MaxIt, number of decades (>= 1)")->capture_default_str();
+  cmd->add_option("--decades", o.decades, "MaxIt, number of decades (>= 1)")
+      ->capture_default_str()
+      ->group(kIcaOptionGroup);
   cmd->add_option("--countries", o.countries,
                   "number of countries (> imperialists, <= " +
                       std::to_string(IcaOptions::max_countries) + ")")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->group(kIcaOptionGroup);
   cmd->add_option("--imperialists", o.imperialists, "number of imperialists (>= 1)")
-      ->capture_default_str();
-  cmd->add_option("--beta", o.beta, "assimilation coefficient (> 0)")->capture_default_str();
+      ->capture_default_str()
+      ->group(kIcaOptionGroup);
+  cmd->add_option("--beta", o.beta, "assimilation coefficient (> 0)")
+      ->capture_default_str()
+      ->group(kIcaOptionGroup);
   cmd->add_option("--gamma", o.gamma, "assimilation angle bound, rad (0 .. pi)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->group(kIcaOptionGroup);
   cmd->add_option("--revolution", o.revolution_rate, "revolution rate (0 .. 1)")
-      ->capture_default_str();
-  cmd->add_option("--xi", o.xi, "colonies' share of the empire cost (>= 0)")->capture_default_str();
+      ->capture_default_str()
+      ->group(kIcaOptionGroup);
+  cmd->add_option("--xi", o.xi, "colonies' share of the empire cost (>= 0)")
+      ->capture_default_str()
+      ->group(kIcaOptionGroup);
   cmd->add_flag("--stop-one-empire", o.stop_when_one_empire,
                 "stop as soon as one empire is left (paper's literal step 9; default: run all "
-                "decades)");
+                "decades)")
+      ->group(kIcaOptionGroup);
 }
 
 CLI::Option* add_atol_options(CLI::App* cmd, double& atol, double& velocity_atol) {

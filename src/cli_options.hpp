@@ -28,6 +28,10 @@ namespace knitsim {
 // empty value: `--integrator ""` silently meant the default. Call once, after registering.
 void require_well_formed_values(CLI::App& app);
 
+// The --help group of the ICA's own flags (all of add_ica_options but --seed and --jobs, which
+// other optimizers read too): how `fit --optimizer lm` finds the ICA flags it ignores.
+inline constexpr const char* kIcaOptionGroup = "ICA options";
+
 // The ICA flags (SPEC 2.10): --seed --jobs --decades --countries --imperialists --beta --gamma
 // --revolution --xi --stop-one-empire, bound to `o`.
 void add_ica_options(CLI::App* cmd, IcaOptions& o);

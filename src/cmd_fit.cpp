@@ -29,7 +29,6 @@
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <fstream>
-#include <initializer_list>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -67,12 +66,14 @@ struct FitArgs {
   std::vector<std::string> ignored;  // flags given that the chosen optimizer does not read
 };
 
-// The flags among `names` given on the command line.
-std::vector<std::string> given_flags(const CLI::App* cmd,
-                                     std::initializer_list<const char*> names) {
+constexpr const char* kLmOptionGroup = "LM options (--optimizer lm)";
+
+// The flags of --help group `group` given on the command line, in their help order.
+std::vector<std::string> given_flags(CLI::App* cmd, const std::string& group) {
   std::vector<std::string> given;
-  for (const char* name : names)
-    if (cmd->count(name) > 0) given.emplace_back(name);
+  for (const CLI::Option* opt :
+       cmd->get_options([&](CLI::Option* o) { return o->get_group() == group && o->count() > 0; }))
+    given.push_back(opt->get_name());
   return given;
 }
 
@@ -424,12 +425,15 @@ void register_fit_command(CLI::App& app) {
   cmd->add_option("--lm-starts", args->lm.starts_per_bracket,
                   "lm: screened starts per topology and grid-size bracket (k at the box "
                   "centre, then seeded random k)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->group(kLmOptionGroup);
   cmd->add_option("--lm-refine", args->lm.refine, "lm: best screened starts refined by LM")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->group(kLmOptionGroup);
   cmd->add_option("--lm-evaluations", args->lm.lm.max_evaluations,
                   "lm: drape evaluations per refined start at most")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->group(kLmOptionGroup);
   cmd->add_option("--integrator", args->integrator,
                   "Integrator of every evaluation (knitsim list integrators); default cvode-bdf");
   cmd->add_option("--rtol", args->rtol, "Relative tolerance of every drape run (adaptive methods)")
@@ -443,10 +447,7 @@ void register_fit_command(CLI::App& app) {
                 "options needed; any --jobs); starts afresh if there is none");
   cmd->add_flag("--quiet", args->quiet, "Nothing on stdout");
   cmd->callback([args, cmd] {
-    args->ignored = args->optimizer == "lm"
-                        ? given_flags(cmd, {"--decades", "--countries", "--imperialists", "--beta",
-                                            "--gamma", "--revolution", "--xi", "--stop-one-empire"})
-                        : given_flags(cmd, {"--lm-starts", "--lm-refine", "--lm-evaluations"});
+    args->ignored = given_flags(cmd, args->optimizer == "lm" ? kIcaOptionGroup : kLmOptionGroup);
     run(*args);
   });
 }
