@@ -24,6 +24,11 @@
 // optimizer, --integrator as given, bounds, ICA options except --jobs) must equal this run's,
 // else exit 2 naming the first difference; without a checkpoint in DIR the fit starts afresh
 // (so a job script may always pass --resume).
+// Ctrl-C or SIGTERM during an ICA fit ends it at the end of the current decade (the drapes in
+// flight finish, so the checkpoint stays whole): summary.json (status "interrupted", the best
+// country so far, fitted_drape_status "not_run"), history.csv and manifest.json are written, no
+// drape/, and the exit code is 128 + signal; `--resume` then finishes the fit, bit-identical to
+// an uninterrupted one. A second signal kills at once (src/interrupt.hpp).
 // Exit 3 (after writing) when every evaluation failed or the fitted drape's re-run does not
 // reach equilibrium.
 #include <CLI/CLI.hpp>
@@ -303,6 +308,10 @@ void run(const FitArgs& args) {
     write_file_atomic(dir / kCheckpointFile,
                       nlohmann::json{{"config", config}, {"state", to_json(state)}}.dump() + "\n");
   };
+  // Ctrl-C or SIGTERM ends the ICA at the end of its current decade, whose checkpoint is then
+  // written; the handlers are installed once the fit starts (the LM fit has none).
+  std::unique_ptr<InterruptScope> interrupt;
+  options.ica.stop_requested = [&interrupt] { return interrupt && interrupt->signal() != 0; };
   std::unique_ptr<DrapeFitProblem> problem;
   try {
     problem = std::make_unique<DrapeFitProblem>(base, target, options);
@@ -329,7 +338,9 @@ void run(const FitArgs& args) {
     }
     std::cout << std::flush;
   }
+  interrupt = std::make_unique<InterruptScope>();
   const DrapeFitResult fit = fit_drape(*problem);
+  const bool interrupted = fit.status == IcaStatus::Interrupted;
 
   Table history;
   history.columns = {"decade", "best", "mean", "empires", "evaluations"};
@@ -346,13 +357,18 @@ void run(const FitArgs& args) {
   }
   write_file_atomic(dir / "history.csv", history.csv());
 
-  // The fitted drape, re-run (deterministic: the same run the ICA scored).
-  const Scene fitted = problem->scene_of(fit.best_x);
-  const DrapeResult drape = run_drape(fitted, problem->integrator());
-  const std::filesystem::path drape_dir = dir / "drape";
-  std::filesystem::create_directories(drape_dir);
-  write_drape_outputs(drape_dir, fitted, drape, &problem->measured());
-  const bool drape_ok = drape.stats.status == RunStatus::Equilibrium;
+  // The fitted drape, re-run (deterministic: the same run the ICA scored); not for a fit cut
+  // short, whose best country is provisional.
+  std::string drape_status = "not_run";
+  if (!interrupted) {
+    const Scene fitted = problem->scene_of(fit.best_x);
+    const DrapeResult drape = run_drape(fitted, problem->integrator());
+    const std::filesystem::path drape_dir = dir / "drape";
+    std::filesystem::create_directories(drape_dir);
+    write_drape_outputs(drape_dir, fitted, drape, &problem->measured());
+    drape_status = to_string(drape.stats.status);
+  }
+  const bool drape_ok = drape_status == to_string(RunStatus::Equilibrium);
 
   const nlohmann::json bounds = bounds_json(problem->options().bounds);
   const nlohmann::json settings = {{"scene", base.name},
@@ -376,7 +392,7 @@ void run(const FitArgs& args) {
   summary["wall_seconds"] = fit.wall_seconds;
   summary["best_country"] = fit.best_x;
   summary["history"] = history_json;
-  summary["fitted_drape_status"] = to_string(drape.stats.status);
+  summary["fitted_drape_status"] = drape_status;
   if (options.ica.resume_from) summary["resumed_from_decade"] = options.ica.resume_from->decade;
   write_json_atomic(dir / "summary.json", summary);
   write_json_atomic(dir / "manifest.json", manifest(settings));
@@ -396,6 +412,13 @@ void run(const FitArgs& args) {
               {"wall", format_number(fit.wall_seconds, 4) + " s"},
               {"outputs", dir.string() + "/"}};
     std::cout << t.text() << std::flush;
+  }
+  if (interrupted) {
+    std::cerr << "knitsim fit: interrupted by " << interrupt->signal_name() << " after decade "
+              << fit.history.back().decade << " of " << args.ica.decades
+              << "; the best so far is written to " << dir.string()
+              << "/; the same command with --resume goes on from there" << std::endl;
+    throw CLI::RuntimeError(interrupt->exit_code());
   }
   if (fit.status == IcaStatus::AllFailed || !drape_ok) throw CLI::RuntimeError(3);
 }

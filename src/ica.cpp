@@ -209,6 +209,8 @@ const char* to_string(IcaStatus s) {
       return "one_empire";
     case IcaStatus::AllFailed:
       return "all_failed";
+    case IcaStatus::Interrupted:
+      return "interrupted";
   }
   return "unknown";
 }
@@ -548,8 +550,10 @@ IcaResult Ica::run() {
   auto one_empire_left = [&] {
     return decade > 0 && options_.stop_when_one_empire && empires_.size() == 1;
   };
+  auto asked_to_stop = [&] { return options_.stop_requested && options_.stop_requested(); };
   bool stopped = one_empire_left();
-  while (!stopped && decade < options_.decades) {
+  bool interrupted = !stopped && decade < options_.decades && asked_to_stop();
+  while (!stopped && !interrupted && decade < options_.decades) {
     ++decade;
     move_colonies();
     evaluate_colonies();
@@ -558,10 +562,12 @@ IcaResult Ica::run() {
     record(decade);
     save(decade);
     stopped = one_empire_left();
+    interrupted = !stopped && decade < options_.decades && asked_to_stop();
   }
   r.decades = decade;
   r.status = stopped ? IcaStatus::OneEmpire : IcaStatus::DecadeLimit;
   if (!evaluate_.found) r.status = IcaStatus::AllFailed;
+  if (interrupted) r.status = IcaStatus::Interrupted;
   r.best_x = evaluate_.best_x;
   r.best_cost = evaluate_.found ? evaluate_.best_cost : options_.failure_cost;
   r.evaluations = evaluate_.evaluations;

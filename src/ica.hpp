@@ -157,6 +157,10 @@ struct IcaOptions {
   // (dimension, decade, counts).
   std::function<void(const IcaState&)> on_decade;
   std::shared_ptr<const IcaState> resume_from;
+  // Asked after every decade's on_decade (never in the middle of one, so the saved state is
+  // whole): true ends the run there with status Interrupted, unless that was the last decade
+  // or the step-9 rule stops it anyway. knitsim fit sets it to "SIGINT or SIGTERM received".
+  std::function<bool()> stop_requested;
 
   // Throws std::invalid_argument naming the bad field and its accepted range.
   void validate() const;
@@ -224,6 +228,7 @@ enum class IcaStatus {
   DecadeLimit,  // ran all `decades` decades
   OneEmpire,    // stopped early: one empire left (stop_when_one_empire)
   AllFailed,    // finished, but every evaluation failed: best_x is not a valid point
+  Interrupted,  // stopped early at the end of a decade by `stop_requested` (checkpoint saved)
 };
 const char* to_string(IcaStatus s);
 

@@ -1,8 +1,8 @@
 // Resumable ICA runs (src/ica.hpp checkpoints, knitsim fit --resume): the twister's state round
 // trip, a run continued from any decade's saved state (through JSON) is bit-identical to the
 // uninterrupted run, states that do not fit are refused, and `knitsim fit` killed with SIGKILL
-// after a decade then resumed writes the same best country, objective and history as a run
-// never interrupted.
+// after a decade, or stopped by SIGTERM at a decade's end, then resumed writes the same best
+// country, objective and history as a run never interrupted.
 #include <signal.h>
 #include <sys/types.h>
 #include <sys/wait.h>
@@ -105,6 +105,42 @@ int interrupted_run(const std::string& args, const std::filesystem::path& out, i
   return status;
 }
 
+// The arguments of a small, fast fit on a 30 cm four_corner sheet (add --decades, --seed,
+// --out): its target, given by coefficients, is written into tmp (any valid target serves: the
+// tests compare two fits of it): d(s) = 0.3 s - 0.3 s^2 on every edge.
+std::string small_fit_args(const knitsim::test::TempDir& tmp) {
+  std::ofstream t(tmp.path / "target.csv");
+  t << "scene,edge,kind,a,b\n";
+  for (const char* edge : {"top", "bottom", "left", "right"})
+    for (int i = 0; i <= 4; ++i)
+      t << "four_corner," << edge << ",coeff," << i << ","
+        << (i == 1   ? "0.3"
+            : i == 2 ? "-0.3"
+                     : "0")
+        << "\n";
+  return "fit --scene four_corner --set fabric.width=0.3 --target '" +
+         (tmp.path / "target.csv").string() + "' --countries 6 --imperialists 2 --quiet";
+}
+
+// Waits (at most 60 s) until the fit `pid` writing into `out` has checkpointed decade 1 or
+// later, or has ended (its wait status then in `status`); returns the checkpoint's decade, -1
+// if none was seen.
+int wait_for_decade_one(pid_t pid, const std::filesystem::path& out, int& status) {
+  const std::filesystem::path checkpoint = out / "ica_checkpoint.json";
+  int decade = -1;
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (decade < 1 && std::chrono::steady_clock::now() < give_up &&
+         ::waitpid(pid, &status, WNOHANG) == 0) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    if (std::filesystem::exists(checkpoint))  // written atomically: always whole
+      decade = nlohmann::json::parse(knitsim::test::slurp(checkpoint))
+                   .at("state")
+                   .at("decade")
+                   .get<int>();
+  }
+  return decade;
+}
+
 // The run in dir/second (continued with --continue from dir/first) ended where dir/whole (one
 // uninterrupted run) did, bit for bit -- state.json and `file` (nodes.csv, points.csv) -- and
 // says it started at first's t_final.
@@ -195,6 +231,35 @@ TEST_CASE("resume with the step-9 rule: a run that stopped at one empire stays s
   }
 }
 
+TEST_CASE("stop_requested ends a run at the end of a decade, and resuming it finishes the run",
+          "[resume]") {
+  const Problem p = failing_rastrigin();
+  const IcaOptions o = small_options();
+  std::vector<IcaState> states;
+  const IcaResult ref = run_saving(p, o, states);
+  for (int asked_after : {0, 7, 19, 20}) {
+    INFO("stop asked once decade " << asked_after << " was saved");
+    IcaOptions cut = o;
+    int saved = -1;
+    cut.on_decade = [&saved](const IcaState& s) { saved = s.decade; };
+    cut.stop_requested = [&saved, asked_after] { return saved >= asked_after; };
+    const IcaResult r = run_ica(p, cut);
+    if (asked_after == o.decades) {  // asked after the last decade: the run is complete
+      check_same_run(r, ref);
+      continue;
+    }
+    CHECK(r.status == IcaStatus::Interrupted);
+    CHECK(r.decades == asked_after);
+    CHECK(saved == asked_after);
+    CHECK(r.history.size() == static_cast<std::size_t>(asked_after) + 1);
+    CHECK(r.evaluations == states[asked_after].evaluations);
+    CHECK(r.best_x == states[asked_after].best_x);
+    IcaOptions again = o;
+    again.resume_from = through_json(states[asked_after]);
+    check_same_run(run_ica(p, again), ref);
+  }
+}
+
 TEST_CASE("a state that does not fit the options or is incomplete is refused", "[resume]") {
   const Problem p = failing_rastrigin();
   IcaOptions o = small_options();
@@ -229,22 +294,7 @@ TEST_CASE("knitsim fit killed after a decade and resumed equals an uninterrupted
           "[resume][cli]") {
   using namespace knitsim::test;
   TempDir tmp("resume");
-  // A four_corner target given by coefficients (any valid target serves: the test compares two
-  // fits of it): d(s) = 0.3 s - 0.3 s^2 on every edge.
-  {
-    std::ofstream t(tmp.path / "target.csv");
-    t << "scene,edge,kind,a,b\n";
-    for (const char* edge : {"top", "bottom", "left", "right"})
-      for (int i = 0; i <= 4; ++i)
-        t << "four_corner," << edge << ",coeff," << i << ","
-          << (i == 1   ? "0.3"
-              : i == 2 ? "-0.3"
-                       : "0")
-          << "\n";
-  }
-  const std::string args = "fit --scene four_corner --set fabric.width=0.3 --target '" +
-                           (tmp.path / "target.csv").string() +
-                           "' --decades 5 --countries 6 --imperialists 2 --quiet";
+  const std::string args = small_fit_args(tmp) + " --decades 5";
   const fs::path whole = tmp.path / "whole", cut = tmp.path / "cut";
   const Run reference = run_knitsim(args + " --seed 3 --out '" + whole.string() + "'", tmp);
   REQUIRE(reference.status == 0);
@@ -252,15 +302,8 @@ TEST_CASE("knitsim fit killed after a decade and resumed equals an uninterrupted
   // The same fit, killed once its checkpoint holds decade 1 or later.
   const pid_t pid = start_knitsim(args + " --seed 3 --out '" + cut.string() + "'", tmp);
   REQUIRE(pid > 0);
-  const fs::path checkpoint = cut / "ica_checkpoint.json";
-  int decade = -1, status = 0;
-  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  while (decade < 1 && std::chrono::steady_clock::now() < give_up &&
-         ::waitpid(pid, &status, WNOHANG) == 0) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    if (fs::exists(checkpoint))  // written atomically: always whole
-      decade = nlohmann::json::parse(slurp(checkpoint)).at("state").at("decade").get<int>();
-  }
+  int status = 0;
+  const int decade = wait_for_decade_one(pid, cut, status);
   ::kill(pid, SIGKILL);
   ::waitpid(pid, &status, 0);
   INFO("checkpoint decade " << decade << "; " << slurp(tmp.path / "background-stderr.txt"));
@@ -291,6 +334,58 @@ TEST_CASE("knitsim fit killed after a decade and resumed equals an uninterrupted
     CHECK(b.at(key) == a.at(key));
   }
   CHECK(slurp(cut / "history.csv") == slurp(whole / "history.csv"));
+}
+
+TEST_CASE(
+    "knitsim fit stopped by SIGTERM: ends at the decade's end with the best so far, exit 143; "
+    "--resume finishes it",
+    "[resume][cli]") {
+  using namespace knitsim::test;
+  TempDir tmp("fit-interrupt");
+  const std::string args = small_fit_args(tmp) + " --decades 60 --seed 3";
+  const fs::path whole = tmp.path / "whole", cut = tmp.path / "cut";
+  const Run reference = run_knitsim(args + " --out '" + whole.string() + "'", tmp);
+  REQUIRE(reference.status == 0);
+
+  const pid_t pid = start_knitsim(args + " --out '" + cut.string() + "'", tmp);
+  REQUIRE(pid > 0);
+  int status = 0;
+  REQUIRE(wait_for_decade_one(pid, cut, status) >= 1);
+  ::kill(pid, SIGTERM);
+  ::waitpid(pid, &status, 0);
+  const std::string err = slurp(tmp.path / "background-stderr.txt");
+  INFO(err);
+  REQUIRE(WIFEXITED(status));  // the handler ran: not killed by the signal
+  CHECK(WEXITSTATUS(status) == 128 + SIGTERM);
+  CHECK(lines(err).size() == 1);
+  CHECK(err.find("knitsim fit: interrupted by SIGTERM after decade ") != std::string::npos);
+  CHECK(err.find("with --resume") != std::string::npos);
+  const nlohmann::json summary = nlohmann::json::parse(slurp(cut / "summary.json"));
+  const nlohmann::json state =
+      nlohmann::json::parse(slurp(cut / "ica_checkpoint.json")).at("state");
+  CHECK(summary.at("status") == "interrupted");
+  CHECK(summary.at("fitted_drape_status") == "not_run");
+  CHECK(!fs::exists(cut / "drape"));
+  // The summary is the checkpoint's decade: the one the run stopped after, written whole.
+  const int decade = state.at("decade").get<int>();
+  CHECK(decade < 60);
+  CHECK(summary.at("history").back().at("decade") == decade);
+  CHECK(summary.at("evaluations") == state.at("evaluations"));
+  CHECK(summary.at("best_country") == state.at("best_x"));
+  CHECK(fs::exists(cut / "manifest.json"));
+
+  // --resume finishes it: the uninterrupted fit, bit for bit.
+  const Run resumed = run_knitsim(args + " --out '" + cut.string() + "' --resume", tmp);
+  REQUIRE(resumed.status == 0);
+  const nlohmann::json a = nlohmann::json::parse(slurp(whole / "summary.json"));
+  const nlohmann::json b = nlohmann::json::parse(slurp(cut / "summary.json"));
+  CHECK(b.at("resumed_from_decade") == decade);
+  for (const char* key : {"best_country", "objective", "params", "history", "evaluations",
+                          "failed_evaluations", "status", "fitted_drape_status"}) {
+    INFO(key);
+    CHECK(b.at(key) == a.at(key));
+  }
+  CHECK(fs::exists(cut / "drape" / "nodes.csv"));
 }
 
 TEST_CASE(
