@@ -100,7 +100,10 @@ class ImplicitEuler final : public Integrator {
   IntegratorInfo info_{"implicit-euler",
                        "backward Euler linearised once per step (Baraff-Witkin), fixed dt, "
                        "sparse LDL^T",
-                       1, false, false};
+                       1,
+                       false,
+                       false,
+                       true};
   const MechanicalSystem* sys_ = nullptr;
   int n_ = 0;
   double t_ = 0.0, dt_ = 1.0;

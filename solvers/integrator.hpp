@@ -182,6 +182,9 @@ struct IntegratorInfo {
   int order = 0;  // classical order (0 = variable / not applicable)
   bool adaptive = false;
   bool explicit_method = false;
+  // Its numerical damping (a large fixed step of an L-stable method) brings even an undamped
+  // system to rest, so damping = 0 is no cause for a warning.
+  bool damps_numerically = false;
 };
 
 class Integrator {

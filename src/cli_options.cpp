@@ -263,7 +263,7 @@ void warn(const std::string& message) {
 
 void warn_about_run(const std::string& damping_key, double damping, const IntegratorInfo& integ,
                     const IntegratorOptions& flags, double t_max) {
-  if (damping == 0.0 && integ.name != "implicit-euler")
+  if (damping == 0.0 && !integ.damps_numerically)
     warn(damping_key + " = 0: with no damping nothing comes to rest (only implicit-euler's " +
          "numerical damping settles it); " + integ.name + " runs on to run.t_max = " +
          format_number(t_max, 6) + " s, hours with the defaults: cap it with --max-wall");

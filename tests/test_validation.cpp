@@ -298,6 +298,11 @@ TEST_CASE("valid but misleading input: one warning line, the run goes on") {
   CHECK(slurp(tmp.path / "o" / "nodes.csv") == nodes);
   // Where it applies: no warning.
   CHECK(run("--integrator implicit-euler --dt 100").err.empty());
+  // Its numerical damping settles an undamped sheet at its default step (1 s; at 10 s and more
+  // the first undamped steps run away: status diverged).
+  const Run numerically_damped = run("--integrator implicit-euler --set model.damping=0");
+  CHECK(numerically_damped.status == 0);
+  CHECK(numerically_damped.err.empty());
 
   // fit --optimizer lm with ICA flags: they were ignored without a word.
   const fs::path target = fs::path(KNITSIM_FUZZ_CORPUS) / "target" / "points_four_corner.csv";
