@@ -59,9 +59,7 @@ std::vector<std::string> provenance(SyntheticSet set, const PaperSample& sample,
                                     const SyntheticOptions& o) {
   const std::string seed = std::to_string(o.seed);
   std::vector<std::string> lines = {
-      std::string("Synthetic target (SPEC 2.8, src/synthetic_targets.hpp): ") + to_string(set) +
-          ", sample " + std::to_string(sample.sample) +
-          " of paper 1 (Mozafary & Payvandy 2017, Tables 2 and 4).",
+      synthetic_target_title(set, sample.sample),
       std::string("Regenerate: knitsim targets --set ") + to_string(set) + " --samples " +
           std::to_string(sample.sample) + " --seed " + seed + " --noise-mm " +
           shortest(o.noise_mm) + " --photos " + std::to_string(o.photos) + " --out DIR",

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <ctime>
+#include <fstream>
 #include <iostream>
 #include <limits>
 #include <set>
@@ -173,6 +174,22 @@ std::vector<std::pair<SyntheticSet, int>> needed_targets(const ReproOptions& o) 
   return {need.begin(), need.end()};
 }
 
+// A target file written by `knitsim targets` names its set and sample in its first line; one
+// that names another (a file renamed or copied under this sample's name) would fit this
+// sample's fabric to another sample's edges: refused. Files without that line are read as
+// they are.
+void refuse_other_samples_target(const fs::path& file, SyntheticSet set, int sample) {
+  std::ifstream in(file);
+  std::string first;
+  std::getline(in, first);
+  const std::string title_start = "# Synthetic target ";
+  if (first.rfind(title_start, 0) != 0) return;
+  if (first != "# " + synthetic_target_title(set, sample))
+    throw std::invalid_argument("--targets: " + file.string() + " is not the target of " +
+                                to_string(set) + " sample " + std::to_string(sample) +
+                                ": its first line says \"" + first.substr(2) + "\"");
+}
+
 }  // namespace
 
 ReproTargets::ReproTargets(const ReproOptions& options) : synthetic_(options.synthetic) {
@@ -181,6 +198,7 @@ ReproTargets::ReproTargets(const ReproOptions& options) : synthetic_(options.syn
     if (options.targets_dir.empty()) continue;
     const fs::path file = fs::path(options.targets_dir) / synthetic_target_file(set, sample);
     if (!fs::exists(file)) continue;
+    refuse_other_samples_target(file, set, sample);
     e.target = read_target_csv(file.string());
     e.loaded = true;
     e.source = file.string();

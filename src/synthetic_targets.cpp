@@ -170,4 +170,10 @@ std::string synthetic_target_file(SyntheticSet set, int sample) {
   return std::string(to_string(set)) + "_sample" + std::to_string(sample) + ".csv";
 }
 
+std::string synthetic_target_title(SyntheticSet set, int sample) {
+  return std::string("Synthetic target (SPEC 2.8, src/synthetic_targets.hpp): ") + to_string(set) +
+         ", sample " + std::to_string(sample) +
+         " of paper 1 (Mozafary & Payvandy 2017, Tables 2 and 4).";
+}
+
 }  // namespace knitsim

@@ -93,4 +93,8 @@ Target make_synthetic_target(const PaperSample& sample, SyntheticSet set,
 // paper_repro/data/targets/.
 std::string synthetic_target_file(SyntheticSet set, int sample);
 
+// The first '#' line `knitsim targets` writes into that file (without the "# "): it names the
+// set and the sample, so a reader can tell a file renamed or copied under another sample's name.
+std::string synthetic_target_title(SyntheticSet set, int sample);
+
 }  // namespace knitsim

@@ -396,6 +396,18 @@ TEST_CASE("knitsim repro: bad input is one line, exit 2, nothing written", "[rep
   };
   CHECK(err_of("table4 --samples 1,10").find("--samples = 1,10: accepted") != std::string::npos);
   CHECK(err_of("table4 --samples 2,5-7 --jobs 0").find("--jobs") != std::string::npos);
+  // A target file under another sample's name: its first line says which it is. Sample 2's
+  // target copied as twin_sample1.csv would have fitted sample 1's fabric to sample 2's edges.
+  const fs::path targets = tmp.path / "targets";
+  fs::create_directories(targets);
+  fs::copy_file(fs::path(KNITSIM_PAPER_DATA) / "targets" / "twin_sample2.csv",
+                targets / "twin_sample1.csv");
+  const std::string swapped =
+      err_of("table4 --samples 1 --sets twin --targets '" + targets.string() + "'");
+  CHECK(knitsim::test::lines(swapped).size() == 1);
+  CHECK(swapped.find("twin_sample1.csv is not the target of twin sample 1: its first line says "
+                     "\"Synthetic target (SPEC 2.8, src/synthetic_targets.hpp): twin, sample 2") !=
+        std::string::npos);
 }
 
 TEST_CASE("knitsim repro killed after a unit and resumed writes the uninterrupted tables",
