@@ -44,7 +44,7 @@ def cases(quick):
         return [("stiffness", {"stiffness": 1e5})]
     out = [("base", {})]
     out += [("stiffness", {"stiffness": k}) for k in (500.0, 1e5)]
-    out += [("damping", {"damping": c}) for c in (2.0, 0.5, 0.0)]
+    out += [("damping", {"damping": c}) for c in (20.0, 2.0, 0.5, 0.0)]
     out += [("areal_density", {"areal_density": 58.26})]
     out += [("mesh", {"natural_length": 0.04})]
     out += [("extreme", {"stiffness": 1e5, "damping": 0.0, "areal_density": 27.6})]
