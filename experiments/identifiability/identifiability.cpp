@@ -77,8 +77,22 @@ int main(int argc, char** argv) {
   std::string targets_dir = "paper_repro/data/targets";
   std::vector<int> samples;
   std::vector<SyntheticSet> sets;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string flag = argv[i], value = argv[i + 1];
+  const auto usage = [&](std::ostream& os) {
+    os << "usage: " << argv[0]
+       << " [--out DIR] [--samples 1,2,...] [--sets twin,cross] [--targets DIR]\n";
+  };
+  for (int i = 1; i < argc; i += 2) {
+    const std::string flag = argv[i];
+    if (flag == "--help" || flag == "-h") {
+      usage(std::cout);
+      return 0;
+    }
+    if (i + 1 == argc) {  // a flag without its value
+      std::cerr << argv[0] << ": " << flag << " needs a value\n";
+      usage(std::cerr);
+      return 2;
+    }
+    const std::string value = argv[i + 1];
     if (flag == "--out") {
       out_dir = value;
     } else if (flag == "--targets") {
@@ -90,8 +104,7 @@ int main(int argc, char** argv) {
       for (std::string item; std::getline(ss, item, ',');)
         sets.push_back(synthetic_set_from_name(item));
     } else {
-      std::cerr << "usage: " << argv[0]
-                << " [--out DIR] [--samples 1,2,...] [--sets twin,cross] [--targets DIR]\n";
+      usage(std::cerr);
       return 2;
     }
   }
