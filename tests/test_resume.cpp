@@ -122,12 +122,16 @@ std::string small_fit_args(const knitsim::test::TempDir& tmp) {
          (tmp.path / "target.csv").string() + "' --countries 6 --imperialists 2 --quiet";
 }
 
-// Waits (at most 60 s) until the fit `pid` writing into `out` has checkpointed decade 1 or
-// later, or has ended (its wait status then in `status`); returns the checkpoint's decade, -1
-// if none was seen.
-int wait_for_decade_one(pid_t pid, const std::filesystem::path& out, int& status) {
+// Starts the fit `args` writing into `out`, sends it `signal` once its checkpoint holds decade 1
+// or later (or at the latest 60 s after the start) and waits for it to end; returns its wait
+// status, and in `decade` the checkpoint's decade seen before the signal (-1 if none).
+int fit_signalled_after_decade_one(const std::string& args, const std::filesystem::path& out,
+                                   int signal, const knitsim::test::TempDir& tmp, int& decade) {
+  const pid_t pid = knitsim::test::start_knitsim(args + " --out '" + out.string() + "'", tmp);
+  if (pid <= 0) return -1;
   const std::filesystem::path checkpoint = out / "ica_checkpoint.json";
-  int decade = -1;
+  int status = 0;
+  decade = -1;
   const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
   while (decade < 1 && std::chrono::steady_clock::now() < give_up &&
          ::waitpid(pid, &status, WNOHANG) == 0) {
@@ -138,7 +142,23 @@ int wait_for_decade_one(pid_t pid, const std::filesystem::path& out, int& status
                    .at("decade")
                    .get<int>();
   }
-  return decade;
+  ::kill(pid, signal);
+  ::waitpid(pid, &status, 0);
+  return status;
+}
+
+// The fit resumed in `cut` wrote what the uninterrupted fit in `whole` did, bit for bit.
+void check_same_fit(const std::filesystem::path& whole, const std::filesystem::path& cut) {
+  using knitsim::test::slurp;
+  const nlohmann::json a = nlohmann::json::parse(slurp(whole / "summary.json"));
+  const nlohmann::json b = nlohmann::json::parse(slurp(cut / "summary.json"));
+  for (const char* key : {"best_country", "objective", "params", "history", "evaluations",
+                          "failed_evaluations", "status", "fitted_drape_status"}) {
+    INFO(key);
+    CHECK(b.at(key) == a.at(key));
+  }
+  CHECK(slurp(cut / "history.csv") == slurp(whole / "history.csv"));
+  CHECK(slurp(cut / "drape" / "nodes.csv") == slurp(whole / "drape" / "nodes.csv"));
 }
 
 // The run in dir/second (continued with --continue from dir/first) ended where dir/whole (one
@@ -300,12 +320,8 @@ TEST_CASE("knitsim fit killed after a decade and resumed equals an uninterrupted
   REQUIRE(reference.status == 0);
 
   // The same fit, killed once its checkpoint holds decade 1 or later.
-  const pid_t pid = start_knitsim(args + " --seed 3 --out '" + cut.string() + "'", tmp);
-  REQUIRE(pid > 0);
-  int status = 0;
-  const int decade = wait_for_decade_one(pid, cut, status);
-  ::kill(pid, SIGKILL);
-  ::waitpid(pid, &status, 0);
+  int decade = -1;
+  const int status = fit_signalled_after_decade_one(args + " --seed 3", cut, SIGKILL, tmp, decade);
   INFO("checkpoint decade " << decade << "; " << slurp(tmp.path / "background-stderr.txt"));
   REQUIRE(WIFSIGNALED(status));  // killed before it finished
   REQUIRE(decade >= 1);
@@ -325,15 +341,9 @@ TEST_CASE("knitsim fit killed after a decade and resumed equals an uninterrupted
   const Run resumed =
       run_knitsim(args + " --seed 3 --jobs 2 --out '" + cut.string() + "' --resume", tmp);
   REQUIRE(resumed.status == 0);
-  const nlohmann::json a = nlohmann::json::parse(slurp(whole / "summary.json"));
-  const nlohmann::json b = nlohmann::json::parse(slurp(cut / "summary.json"));
-  CHECK(b.at("resumed_from_decade").get<int>() >= decade);
-  for (const char* key : {"best_country", "objective", "params", "history", "evaluations",
-                          "failed_evaluations", "status"}) {
-    INFO(key);
-    CHECK(b.at(key) == a.at(key));
-  }
-  CHECK(slurp(cut / "history.csv") == slurp(whole / "history.csv"));
+  check_same_fit(whole, cut);
+  CHECK(nlohmann::json::parse(slurp(cut / "summary.json")).at("resumed_from_decade").get<int>() >=
+        decade);
 }
 
 TEST_CASE(
@@ -347,12 +357,9 @@ TEST_CASE(
   const Run reference = run_knitsim(args + " --out '" + whole.string() + "'", tmp);
   REQUIRE(reference.status == 0);
 
-  const pid_t pid = start_knitsim(args + " --out '" + cut.string() + "'", tmp);
-  REQUIRE(pid > 0);
-  int status = 0;
-  REQUIRE(wait_for_decade_one(pid, cut, status) >= 1);
-  ::kill(pid, SIGTERM);
-  ::waitpid(pid, &status, 0);
+  int seen = -1;
+  const int status = fit_signalled_after_decade_one(args, cut, SIGTERM, tmp, seen);
+  REQUIRE(seen >= 1);
   const std::string err = slurp(tmp.path / "background-stderr.txt");
   INFO(err);
   REQUIRE(WIFEXITED(status));  // the handler ran: not killed by the signal
@@ -377,15 +384,8 @@ TEST_CASE(
   // --resume finishes it: the uninterrupted fit, bit for bit.
   const Run resumed = run_knitsim(args + " --out '" + cut.string() + "' --resume", tmp);
   REQUIRE(resumed.status == 0);
-  const nlohmann::json a = nlohmann::json::parse(slurp(whole / "summary.json"));
-  const nlohmann::json b = nlohmann::json::parse(slurp(cut / "summary.json"));
-  CHECK(b.at("resumed_from_decade") == decade);
-  for (const char* key : {"best_country", "objective", "params", "history", "evaluations",
-                          "failed_evaluations", "status", "fitted_drape_status"}) {
-    INFO(key);
-    CHECK(b.at(key) == a.at(key));
-  }
-  CHECK(fs::exists(cut / "drape" / "nodes.csv"));
+  check_same_fit(whole, cut);
+  CHECK(nlohmann::json::parse(slurp(cut / "summary.json")).at("resumed_from_decade") == decade);
 }
 
 TEST_CASE(
