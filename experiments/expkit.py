@@ -175,10 +175,11 @@ def loglog_slope(xs, ys):
     return sum((p[0] - mx) * (p[1] - my) for p in pts) / sxx if sxx > 0 else math.nan
 
 
-def write_manifest(args, name, sample_run=None, extra=None):
-    """OUT/manifest.json: study, command line, git commit, knitsim binary and its own manifest
-    (build commit and type, libraries: from `sample_run`, else from the study's first run),
-    machine load, and the study's parameters (`extra`)."""
+def write_manifest(args, name, sample_run=None, extra=None, command=None):
+    """OUT/manifest.json: study, command line (`command`, else the study's run.sh with this
+    process's arguments), git commit, knitsim binary and its own manifest (build commit and
+    type, libraries: from `sample_run`, else from the study's first run), machine load, and the
+    study's parameters (`extra`)."""
     try:
         commit = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"],
                                 capture_output=True, text=True).stdout.strip() or "unknown"
@@ -187,7 +188,7 @@ def write_manifest(args, name, sample_run=None, extra=None):
     except OSError:
         commit, dirty = "unknown", False
     m = {"experiment": name,
-         "command": " ".join(["experiments/%s/run.sh" % name] + sys.argv[1:]),
+         "command": command or " ".join(["experiments/%s/run.sh" % name] + sys.argv[1:]),
          "quick": args.quick,
          "git_commit": commit + ("+dirty" if dirty else ""),
          "knitsim": knitsim_path(),

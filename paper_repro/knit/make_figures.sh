@@ -8,11 +8,11 @@
 #   KNITSIM=path/to/knitsim   the binary (default build/knitsim)
 #   OUT=folder                output folder (default out/knit_figures)
 # Writes $OUT/<chart>-<paper|stabilised>/ (the outputs of knitsim knit), $OUT/runs.csv (one row
-# per run: chart, variant, integrator, status, steps, t_final, wall time, max displacement / r)
-# and $OUT/figures/ (below).
+# per run: chart, variant, integrator, status, steps, t_final, wall time, max displacement / r),
+# $OUT/manifest.json (git commit, binary and build stamp, load) and $OUT/figures/ (below).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-KNITSIM=${KNITSIM:-build/knitsim}
+export KNITSIM=${KNITSIM:-build/knitsim}
 OUT=${OUT:-out/knit_figures}
 CHARTS=models/charts
 [ -x "$KNITSIM" ] || { echo "make_figures.sh: no knitsim binary at $KNITSIM (set KNITSIM)" >&2; exit 1; }
@@ -68,4 +68,13 @@ PY
   cp "$OUT/several_tucks-$variant/after.png" "$OUT/figures/fig9_several_tucks_$variant.png"
   cp "$OUT/several_misses-$variant/after.png" "$OUT/figures/fig10_several_misses_$variant.png"
 done
-echo "make_figures.sh: outputs in $OUT (runs.csv, figures/)"
+# manifest.json: the script, git commit, the binary and its build stamp, machine load.
+python3 - "$OUT" "$OUT/single_tuck-paper" <<'PY'
+import sys, types
+sys.path.insert(0, "experiments")
+import expkit
+expkit.write_manifest(types.SimpleNamespace(quick=False, out=sys.argv[1]), "knit_figures",
+                      sample_run=types.SimpleNamespace(folder=sys.argv[2]),
+                      command="paper_repro/knit/make_figures.sh")
+PY
+echo "make_figures.sh: outputs in $OUT (runs.csv, manifest.json, figures/)"
