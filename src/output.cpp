@@ -546,6 +546,23 @@ void write_run_state(const fs::path& dir, const SavedRun& saved) {
                                          {"v", saved.state.v}});
 }
 
+namespace {
+
+// The fields of to_json(DrapeParams) whose --set key is not "model.<field>". Older state files
+// keyed them "model.<field>" too (and a refusal then named a key --set does not know);
+// parse_run_state renames those.
+const std::vector<std::pair<std::string, std::string>>& drape_fields_set_elsewhere() {
+  static const std::vector<std::pair<std::string, std::string>> fields = {
+      {"width", "fabric.width"},
+      {"areal_density", "fabric.areal_density"},
+      {"layout", "pins.layout"},
+      {"pin_span", "pins.span"},
+      {"pin_move_time", "pins.move_time"}};
+  return fields;
+}
+
+}  // namespace
+
 SavedRun parse_run_state(const std::string& text, const std::string& command) {
   SavedRun saved;
   try {
@@ -576,6 +593,13 @@ SavedRun parse_run_state(const std::string& text, const std::string& command) {
                                   ": must be >= 0 s and finite");
     saved.model = state.at("model");
     if (!saved.model.is_object()) throw std::invalid_argument("model is not an object");
+    if (command == "drape")  // an older file's keys: "model.width" for fabric.width, ...
+      for (const auto& [field, set_key] : drape_fields_set_elsewhere()) {
+        const auto old = saved.model.find("model." + field);
+        if (old == saved.model.end() || saved.model.contains(set_key)) continue;
+        saved.model[set_key] = *old;
+        saved.model.erase(old);
+      }
   } catch (const nlohmann::json::exception& e) {
     // Without the library's "[json.exception.parse_error.101] " tag: what went wrong, where.
     std::string what = e.what();
@@ -607,7 +631,12 @@ SavedRun read_run_state(const fs::path& dir, const std::string& command) {
 nlohmann::json drape_model_keys(const DrapeParams& params) {
   nlohmann::json keys = nlohmann::json::object();
   const nlohmann::json fields = to_json(params);  // items() must not outlive its object
-  for (const auto& [key, value] : fields.items()) keys["model." + key] = value;
+  for (const auto& [field, value] : fields.items()) {
+    std::string key = "model." + field;
+    for (const auto& [elsewhere, set_key] : drape_fields_set_elsewhere())
+      if (field == elsewhere) key = set_key;
+    keys[key] = value;
+  }
   return keys;
 }
 

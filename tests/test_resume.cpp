@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <fstream>
@@ -17,6 +18,8 @@
 #include <thread>
 
 #include "src/ica.hpp"
+#include "src/output.hpp"
+#include "src/scene.hpp"
 #include "src/test_functions.hpp"
 #include "tests/cli_runner.hpp"
 
@@ -482,10 +485,47 @@ TEST_CASE("knitsim drape --continue: a run continued where it stopped is the uni
             "state.json: not a valid state file: number overflow parsing '1e400'"},
         Bad{"--continue '" + (tmp.path / "first").string() + "' --set model.stiffness=900",
             "model.stiffness = 900"},
+        // named by the keys --set knows (they used to read model.layout, model.width)
+        Bad{"--continue '" + (tmp.path / "first").string() + "' --scene two_corner",
+            "pins.layout = \"two_corner\" here, \"four_corner\" in the run being continued"},
+        Bad{"--continue '" + (tmp.path / "first").string() + "' --set fabric.width=0.4",
+            "fabric.width = 0.4 here"},
         Bad{"--continue '" + (tmp.path / "first").string() + "' --set run.t_max=1e-3",
             "raise run.t_max"}}) {
     INFO(b.args);
     check_refused(drape(b.args, "refused"), b.says, tmp.path / "refused");
+  }
+
+  // A state file of an earlier version, whose keys read model.width, model.layout, ...:
+  // continued as before (the Euler pieces, bit for bit).
+  const nlohmann::json state = json("first", "state.json");
+  nlohmann::json old_state = state;
+  old_state["model"] = nlohmann::json::object();
+  for (const auto& [key, value] : state.at("model").items()) {
+    const std::string field = key.substr(key.find('.') + 1);
+    old_state["model"][key.rfind("model.", 0) == 0 ? key
+                       : field == "span"           ? "model.pin_span"
+                       : field == "move_time"      ? "model.pin_move_time"
+                                                   : "model." + field] = value;
+  }
+  REQUIRE(old_state.at("model").contains("model.layout"));
+  fs::create_directories(tmp.path / "old");
+  std::ofstream(tmp.path / "old" / "state.json") << old_state.dump();
+  REQUIRE(
+      drape("--integrator euler --max-steps 2000 --continue '" + (tmp.path / "old").string() + "'",
+            "second-from-old")
+          .status == 3);
+  CHECK(slurp(tmp.path / "second-from-old" / "nodes.csv") ==
+        slurp(tmp.path / "whole" / "nodes.csv"));
+}
+
+TEST_CASE("a drape state's model keys are the keys --set takes") {
+  const std::vector<std::string> known = knitsim::scene_keys();
+  const nlohmann::json keys = knitsim::drape_model_keys(knitsim::DrapeParams{});
+  REQUIRE(keys.size() == knitsim::to_json(knitsim::DrapeParams{}).size());  // one per field
+  for (const auto& [key, value] : keys.items()) {
+    INFO(key);
+    CHECK(std::find(known.begin(), known.end(), key) != known.end());
   }
 }
 
