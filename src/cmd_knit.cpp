@@ -522,8 +522,8 @@ void register_knit_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "knit",
       "Run a stitch chart's interlacing-point network (paper 2) to its steady state; writes "
-      "points.csv, typevalue.csv, centerlines.csv/.vtk, before/after.png, frames/, summary.json "
-      "and manifest.json into --out");
+      "points.csv, typevalue.csv, centerlines.csv/.vtk, before/after.png, frames/, summary.json, "
+      "state.json and manifest.json into --out");
   cmd->add_option("--chart", args->chart, "Stitch chart file (K knit, T tuck, M miss)")->required();
   cmd->add_option("--set", args->sets,
                   "Override a parameter, e.g. knit.stabiliser=0.1 (repeatable); keys "
