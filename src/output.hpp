@@ -153,7 +153,8 @@ struct SavedRun {
   nlohmann::json model;  // {"model.stiffness": 852, ...}: what was integrated, keyed as the user
                          // sets it (--set keys; "chart" for the knit chart)
 };
-// A drape's SavedRun::model: to_json(params) with its keys as --set names them ("model.KEY").
+// A drape's SavedRun::model: to_json(params) with its keys as --set names them ("model.KEY",
+// "fabric.width", "pins.layout", ...).
 nlohmann::json drape_model_keys(const DrapeParams& params);
 // Writes DIR/state.json (format "knitsim run state 2", shortest round-trip decimals); does
 // nothing if x or v is not finite (there is nothing to continue from).
