@@ -360,6 +360,7 @@ void run(const FitArgs& args) {
   // The fitted drape, re-run (deterministic: the same run the ICA scored); not for a fit cut
   // short, whose best country is provisional.
   std::string drape_status = "not_run";
+  bool drape_ok = false;
   if (!interrupted) {
     const Scene fitted = problem->scene_of(fit.best_x);
     const DrapeResult drape = run_drape(fitted, problem->integrator());
@@ -367,8 +368,8 @@ void run(const FitArgs& args) {
     std::filesystem::create_directories(drape_dir);
     write_drape_outputs(drape_dir, fitted, drape, &problem->measured());
     drape_status = to_string(drape.stats.status);
+    drape_ok = drape.stats.status == RunStatus::Equilibrium;
   }
-  const bool drape_ok = drape_status == to_string(RunStatus::Equilibrium);
 
   const nlohmann::json bounds = bounds_json(problem->options().bounds);
   const nlohmann::json settings = {{"scene", base.name},
