@@ -32,3 +32,9 @@ for ax in axes:
 fig.suptitle("knitsim fit, four_corner twin target, same ICA budget and seed", fontsize=9)
 fig.tight_layout()
 fig.savefig(os.path.join(out, "fit_tolerance.png"), dpi=120)
+
+# The tables of the README (summary.md) from the same CSV files.
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import summary  # noqa: E402
+
+summary.main([out])
