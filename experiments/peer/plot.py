@@ -33,3 +33,9 @@ for i, v in enumerate(vals):
 ax.set_title("knitsim cvode-bdf vs independent scipy BDF (same residual stop 1e-8)", fontsize=9)
 fig.tight_layout()
 fig.savefig(os.path.join(out, "peer.png"), dpi=120)
+
+# The tables of the README (summary.md) from the same CSV files.
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import summary  # noqa: E402
+
+summary.main([out])
