@@ -68,3 +68,9 @@ ax.set_title("Stability limits: measured vs predict_stable_dt (Gershgorin), esti
              fontsize=9)
 fig.tight_layout()
 fig.savefig(os.path.join(out, "limits.png"), dpi=110)
+
+# The tables of the README (summary.md) from the same CSV files.
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import summary  # noqa: E402
+
+summary.main([out])
