@@ -101,3 +101,9 @@ a.grid(True, alpha=0.3)
 fig.tight_layout()
 fig.savefig(os.path.join(out, "convergence.png"), dpi=110)
 print("convergence: wrote %s/convergence.png" % out)
+
+# The tables of the README (summary.md) from the same CSV files.
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import summary  # noqa: E402
+
+summary.main([out])
