@@ -89,3 +89,9 @@ figure([[(s, "rhs_evals", "pos_err_m", "RHS evaluations", "max position error (m
        os.path.join(out, "work_precision_counts.png"),
        "Equilibrium error vs RHS evaluations and linear-solver set-ups")
 print("work_precision: wrote %s/work_precision_{cpu,counts}.png" % out)
+
+# The tables of the README (summary.md) from the same CSV files.
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import summary  # noqa: E402
+
+summary.main([out])
