@@ -382,9 +382,10 @@ def provenance(manifest, source="manifest.json"):
     else:
         build, head = {}, manifest.get("git_commit")
     if build.get("git_commit"):
-        lines.append("- knitsim built from commit %s (%s, %s)"
-                     % (build["git_commit"], build.get("build_type") or "?",
-                        build.get("compiler") or "?"))
+        commit = build["git_commit"]
+        lines.append("- knitsim build: %s, %s, %s"
+                     % ("commit not recorded" if commit == "unknown" else "commit " + commit,
+                        build.get("build_type") or "?", build.get("compiler") or "?"))
     if head:
         lines.append("- repository HEAD when the manifest was written: %s" % head)
     if manifest.get("created_utc"):

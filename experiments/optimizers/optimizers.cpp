@@ -59,6 +59,7 @@
 #include <iostream>
 #include <limits>
 #include <mutex>
+#include <nlohmann/json.hpp>
 #include <pagmo/algorithm.hpp>
 #include <pagmo/algorithms/cmaes.hpp>
 #include <pagmo/algorithms/de.hpp>
@@ -73,9 +74,17 @@
 #include <utility>
 #include <vector>
 
+#include "src/base/command_line.hpp"
+#include "src/base/files.hpp"
+#include "src/base/table.hpp"
+#include "src/base/text.hpp"
+#include "src/io/json.hpp"
+#include "src/io/manifest.hpp"
 #include "src/lm_fit.hpp"
+#include "src/measure/measurement.hpp"
 #include "src/output.hpp"
 #include "src/paper_data.hpp"
+#include "src/scene/scene.hpp"
 
 using namespace knitsim;
 

@@ -9,14 +9,11 @@ Reads OUT/runs.csv, OUT/trace.csv, OUT/reference.csv (knitsim_optimizers); write
   final_errors.png  final error per optimizer: box (quartiles, whiskers at min/max) and one dot
                     per seed;
   both as the excess over the best error of all runs, log scale (1e-6 % = reached it);
-  summary.csv, summary.md  per optimizer: median, quartiles, min and max of the final error,
-                    evaluations and CPU seconds of a run, and the median evaluations and CPU
-                    seconds to reach each threshold: the median final ICA error, 1.01 x and 1.1 x
-                    the best error any run found, the Table 4 error; "not reached" when fewer than half
-                    the seeds reached it (a seed that never reached it counts as infinitely late).
+  summary.csv, summary.md  by summary.py (standard library only; see its docstring): per
+                    optimizer the final error, evaluations, CPU and the evaluations to each
+                    threshold, where the runs ended, the cost of an evaluation.
 """
 import csv
-import math
 import os
 import sys
 import warnings
@@ -43,20 +40,6 @@ def step(points, grid, key):
     idx = np.searchsorted(xs, grid, side="right") - 1
     res = np.where(idx >= 0, ys[np.maximum(idx, 0)], np.nan)
     return np.where(grid <= xs[-1], res, np.nan)  # nan after the run's last evaluation
-
-
-def reach(points, threshold):
-    """(evaluation, cpu seconds) of the first best-so-far <= threshold, or (inf, inf)."""
-    for p in points:
-        if p["best"] <= threshold:
-            return p["evaluation"], p["cpu"]
-    return math.inf, math.inf
-
-
-def median_or_none(values):
-    v = sorted(values)
-    m = float(np.median(v)) if v else math.inf
-    return m if math.isfinite(m) else None
 
 
 def main(out):
@@ -133,61 +116,10 @@ def main(out):
     fig.savefig(os.path.join(out, "final_errors.png"), dpi=90)
     plt.close(fig)
 
-    # summary.csv / summary.md
-    thresholds = []
-    if "ica" in final:
-        thresholds.append(("ica_median", float(np.median(final["ica"]))))
-    thresholds.append(("best_x1.01", 1.01 * best_any))
-    thresholds.append(("best_x1.1", 1.1 * best_any))
-    if truth is not None:
-        thresholds.append(("table4", truth))
-    fields = ["optimizer", "runs", "median", "q1", "q3", "min", "max", "evaluations", "cpu_seconds"]
-    for t, _ in thresholds:
-        fields += ["%s_evaluations" % t, "%s_cpu_seconds" % t, "%s_reached" % t]
-    rows = []
-    for n in names:
-        seeds = [int(r["seed"]) for r in runs if r["optimizer"] == n]
-        v = np.array(final[n])
-        row = {"optimizer": n, "runs": len(v), "median": np.median(v),
-               "q1": np.percentile(v, 25), "q3": np.percentile(v, 75), "min": v.min(),
-               "max": v.max(),
-               "evaluations": np.median([int(r["evaluations"]) for r in runs
-                                         if r["optimizer"] == n]),
-               "cpu_seconds": np.median([float(r["cpu_seconds"]) for r in runs
-                                         if r["optimizer"] == n])}
-        for t, value in thresholds:
-            hits = [reach(traces[(n, s)], value) for s in seeds]
-            e = median_or_none([h[0] for h in hits])
-            c = median_or_none([h[1] for h in hits])
-            row["%s_evaluations" % t] = "not reached" if e is None else "%g" % e
-            row["%s_cpu_seconds" % t] = "not reached" if c is None else "%.3g" % c
-            row["%s_reached" % t] = "%d/%d" % (sum(math.isfinite(h[0]) for h in hits), len(hits))
-        rows.append(row)
-
-    def fmt(x):  # errors differ in the 4th digit near the optimum
-        return "%.5g" % x if isinstance(x, (float, np.floating)) else str(x)
-
-    with open(os.path.join(out, "summary.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=fields)
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: fmt(v) for k, v in r.items()})
-    with open(os.path.join(out, "summary.md"), "w") as f:
-        f.write("Thresholds: " + ", ".join("%s = %.5g %%" % t for t in thresholds) + "\n\n")
-        head = ["optimizer", "runs", "median %", "IQR %", "min-max %", "evals", "CPU s"]
-        for t, _ in thresholds:
-            head += ["evals to %s" % t, "CPU s to %s" % t]
-        f.write("| " + " | ".join(head) + " |\n|" + "---|" * len(head) + "\n")
-        for r in rows:
-            cells = [r["optimizer"], str(r["runs"]), fmt(r["median"]),
-                     "%s-%s" % (fmt(r["q1"]), fmt(r["q3"])),
-                     "%s-%s" % (fmt(r["min"]), fmt(r["max"])), fmt(r["evaluations"]),
-                     fmt(r["cpu_seconds"])]
-            for t, _ in thresholds:
-                cells += ["%s (%s)" % (r["%s_evaluations" % t], r["%s_reached" % t]),
-                          r["%s_cpu_seconds" % t]]
-            f.write("| " + " | ".join(cells) + " |\n")
-    print(open(os.path.join(out, "summary.md")).read())
+    # summary.md / summary.csv: the tables, by summary.py from the same CSV files.
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import summary
+    summary.main([out])
 
 
 if __name__ == "__main__":
