@@ -45,3 +45,9 @@ ax.set_title("Reductions: equilibrium stop vs fixed end time, static polish, spr
              fontsize=9)
 fig.tight_layout()
 fig.savefig(os.path.join(out, "reductions.png"), dpi=120)
+
+# The tables of the README (summary.md) from the same CSV files.
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import summary  # noqa: E402
+
+summary.main([out])
