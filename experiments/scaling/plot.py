@@ -9,10 +9,10 @@ least-squares exponent p of cpu ~ C particles^p and of steps ~ C particles^q ove
 that reached equilibrium, with the number of points) and prints the fit table. Repeated runs
 of one solver and grid (run.sh --target) enter as one point: the median CPU time of the rounds
 (the status and steps of the median run); DIR/median.csv lists those points with the range.
+Then summary.py writes DIR/summary.md, the tables of the README, from the same CSV files.
 """
 import csv
-import math
-import statistics
+import os
 import sys
 
 import matplotlib
@@ -20,37 +20,9 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-
-def slope(xs, ys):
-    """Least-squares slope of log(y) on log(x); None with fewer than two points."""
-    if len(xs) < 2:
-        return None
-    lx = [math.log(x) for x in xs]
-    ly = [math.log(y) for y in ys]
-    mx, my = sum(lx) / len(lx), sum(ly) / len(ly)
-    sxx = sum((a - mx) ** 2 for a in lx)
-    return sum((a - mx) * (b - my) for a, b in zip(lx, ly)) / sxx
-
-
-def medians(rows):
-    """One row per (solver, particles): the run with the median CPU time of its rounds (the
-    lower median for an even count), plus the rounds' count, minimum and maximum CPU."""
-    groups = {}
-    for r in rows:
-        groups.setdefault((r["solver"], r["particles"]), []).append(r)
-    out = []
-    for rs in groups.values():
-        timed = sorted((r for r in rs if r["cpu_seconds"]), key=lambda r: float(r["cpu_seconds"]))
-        pick = dict(timed[(len(timed) - 1) // 2] if timed else rs[0])
-        cpus = [float(r["cpu_seconds"]) for r in timed]
-        flops = pick.get("factor_flops") or ""
-        work = float(flops) * int(pick["factorisations"]) / 1e9 if flops and pick["factorisations"] else ""
-        pick.update(factorisation_gflop=work)
-        pick.update(rounds=len(rs), cpu_min=min(cpus) if cpus else "",
-                    cpu_max=max(cpus) if cpus else "",
-                    cpu_median=statistics.median(cpus) if cpus else "")
-        out.append(pick)
-    return out
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import summary  # noqa: E402  (the tables of summary.md; slope and medians are shared)
+from summary import medians, slope  # noqa: E402
 
 
 def main(out):
@@ -102,6 +74,7 @@ def main(out):
         fmt = lambda v: "-" if v is None else "%.2f" % v  # noqa: E731
         print("%-16s %6d %12s %14s %10d" % (r["solver"], r["points"], fmt(r["cpu_exponent"]),
                                              fmt(r["steps_exponent"]), r["largest_particles"]))
+    summary.main([out])
 
 
 if __name__ == "__main__":
