@@ -20,7 +20,8 @@
 # final residual, and the largest point distance from the reference in loop radii, as written
 # (dx_max_over_r) and after the best rigid motion (shape_dx_over_r; the free network's steady
 # state is unique only up to one). Writes DIR/knit.csv, DIR/knit_timed.csv, DIR/drape.csv,
-# DIR/manifest.json (a part replaces its own rows). About 15 minutes of CPU for all parts.
+# DIR/manifest.json (a part replaces its own rows), then DIR/summary.md (summary.py). About 15
+# minutes of CPU for all parts.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
@@ -143,3 +144,4 @@ json.dump({"experiment": "benchmark/knit_atol", "command": "experiments/benchmar
           open(sys.argv[1], "w"), indent=2)
 PY
 echo "knit_atol: wrote $OUT/knit.csv, $OUT/knit_timed.csv, $OUT/drape.csv, $OUT/manifest.json"
+python3 "$here/summary.py" "$OUT"  # summary.md: the tables of README.md, from the CSV files

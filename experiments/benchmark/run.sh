@@ -11,7 +11,8 @@
 # mode it runs to equilibrium (about 5-10 minutes); with --quick it runs EULER_QUICK_STEPS steps
 # and its cost to equilibrium is extrapolated from the measured time per step and the
 # physical settling time t_settle measured by verlet (second order, same ODE).
-# Writes DIR/runs.csv (every run), DIR/summary.csv (medians), DIR/manifest.json; prints a table.
+# Writes DIR/runs.csv (every run), DIR/summary.csv (medians), DIR/manifest.json; prints a table;
+# then summary.py writes DIR/summary.md (the tables of README.md).
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
@@ -151,3 +152,4 @@ if os.path.exists(first):
 json.dump(m, open(sys.argv[1], "w"), indent=2)
 PY
 echo "benchmark: wrote $OUT/runs.csv, $OUT/summary.csv, $OUT/manifest.json"
+python3 "$here/summary.py" "$OUT"  # summary.md: the tables of README.md, from the CSV files

@@ -14,7 +14,7 @@
 #   cvode-bdf --newton-solver ldl, cvode-bdf --newton-solver cg-ldl (the default), static.
 # Writes DIR/stops.csv (one row per run: status, steps, final residual, t_final, CPU) and
 # DIR/summary.csv (per integrator: runs, equilibria, median CPU), DIR/manifest.json; prints the
-# summary. About 1 s of CPU per parameter set on two_corner.
+# summary; then summary.py writes DIR/summary.md. About 1 s of CPU per parameter set on two_corner.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
@@ -112,3 +112,4 @@ json.dump({"experiment": "benchmark/stops",
           open(sys.argv[1], "w"), indent=2)
 PY
 echo "stops: wrote $csv, $OUT/summary.csv, $OUT/manifest.json"
+python3 "$here/summary.py" "$OUT"  # summary.md: the tables of README.md, from the CSV files
