@@ -81,8 +81,8 @@ def drape_section(folder):
     if eu:
         text += ("\nEuler: dt %s s%s, %s steps timed, %s µs CPU per step; t_settle %s."
                  % (num(eu["dt"], 3),
-                    " (0.9 × the predicted limit %s s; the automatic step of the probe run is half "
-                    "the limit)" % num(2 * float(probe["dt"]), 3) if probe else "",
+                    " (0.9 × the predicted limit %s s; the automatic step of the probe run is "
+                    "half the limit)" % num(2 * float(probe["dt"]), 3) if probe else "",
                     eu["steps"], num(1e6 * float(eu["cpu_seconds"]) / int(eu["steps"]), 3),
                     "%s s from a verlet run (%s steps)" % (num(verlet["t_final"], 4),
                                                           verlet["steps"])
@@ -176,7 +176,8 @@ def knit_drape_section(folder):
                    and float(b["velocity_atol"]) == 0), None)
         table.append([r["scene"], num(r["velocity_atol"], exp=True)
                       if float(r["velocity_atol"]) else "0", r["status"], r["steps"],
-                      "%+.0f %%" % (100 * (int(r["steps"]) / int(v0["steps"]) - 1)) if v0 else "—",
+                      "%+.0f %%" % (100 * (int(r["steps"]) / int(v0["steps"]) - 1))
+                      if v0 else "—",
                       r["lin_setups"], num(r["cpu_seconds"]), num(r["residual"], 2),
                       num(r["max_edge_relative_change"], 2)])
     text = ("cvode-bdf, rtol 1e-8 (as `knitsim fit`), atol 1e-9, one run each; edge change = the "

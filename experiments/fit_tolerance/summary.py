@@ -25,10 +25,12 @@ def build(out):
     ref = [float(r["cpu_seconds"]) for r in fits if float(r["rtol"]) == DEFAULT_RTOL]
     rows = []
     for r in fits:
-        rows.append([num(r["rtol"], exp=True), "%.2f" % float(r["stiffness"]), "%.2f" % float(r["damping"]),
+        rows.append([num(r["rtol"], exp=True), "%.2f" % float(r["stiffness"]),
+                     "%.2f" % float(r["damping"]),
                      "%.2f" % float(r["elongation_limit"]),
                      "%.4f" % (100 * float(r["natural_length"])), r["topology"],
-                     "%.6f" % float(r["objective"]), "%s (%s)" % (r["evaluations"], r["failed_evaluations"]),
+                     "%.6f" % float(r["objective"]),
+                     "%s (%s)" % (r["evaluations"], r["failed_evaluations"]),
                      r["status"], "%.2f" % float(r["cpu_seconds"]),
                      "%.3f" % (float(r["cpu_seconds"]) / ref[0]) if ref else "—"])
     sections.append((
@@ -36,7 +38,8 @@ def build(out):
         "`knitsim fit` with the same ICA budget and seed at each rtol; objective = Eq. 5, %; CPU = "
         "the fit process's user + system time.\n\n" + md_table(
             ["rtol", "fitted k (N/m)", "c (N·s/m)", "ε (%)", "L0 (cm)", "topology", "objective",
-             "evaluations (failed)", "status", "fit CPU (s)", "CPU / CPU at rtol %s" % num(DEFAULT_RTOL, exp=True)],
+             "evaluations (failed)", "status", "fit CPU (s)",
+             "CPU / CPU at rtol %s" % num(DEFAULT_RTOL, exp=True)],
             rows)))
     params = list(dict.fromkeys(r["params"] for r in obj))
     rtols = sorted({float(r["rtol"]) for r in obj})
@@ -46,7 +49,8 @@ def build(out):
         row = [num(rt, exp=True)]
         for p in params:
             r = by.get((p, rt))
-            row += ["—"] * 4 if r is None else [objective(r["objective"]), num(r["objective_change"], 2),
+            row += ["—"] * 4 if r is None else [objective(r["objective"]),
+                                                 num(r["objective_change"], 2),
                                                  r["status"], r["steps"]]
         rows.append(row)
     head = ["rtol"]
@@ -58,7 +62,8 @@ def build(out):
             + md_table(head, rows))
     if worst:
         text += ("\nLargest change: %s (%s, rtol %s).\n"
-                 % (num(worst["objective_change"], 2), worst["params"], num(worst["rtol"], exp=True)))
+                 % (num(worst["objective_change"], 2), worst["params"],
+                    num(worst["rtol"], exp=True)))
     sections.append(("Objective of fixed parameters at each rtol (objective.csv)", text))
     sections.append(("Provenance", provenance(read_json(out, "manifest.json"))))
     return "fit_tolerance: tables", ["fits.csv", "objective.csv", "manifest.json"], sections

@@ -29,7 +29,8 @@ def build(out):
     rows = []
     for c in compare:
         rows.append([c["scene"], "%s (%s dof)" % (c["knitsim_model"], c["knitsim_dof"]),
-                     "%s / %s" % (num(c["knitsim_rtol"], exp=True), num(c["knitsim_atol"], exp=True)),
+                     "%s / %s" % (num(c["knitsim_rtol"], exp=True),
+                                  num(c["knitsim_atol"], exp=True)),
                      c["knitsim_status"], num(c["knitsim_cpu_median"]),
                      "%s (%s steps, t %s s)" % (num(c["scipy_cpu"]), c["scipy_steps"],
                                                 num(c["scipy_t_final"])),

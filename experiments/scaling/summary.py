@@ -60,7 +60,8 @@ def medians(rows):
         pick = dict(timed[(len(timed) - 1) // 2] if timed else rs[0])
         cpus = [float(r["cpu_seconds"]) for r in timed]
         flops = pick.get("factor_flops") or ""
-        work = float(flops) * int(pick["factorisations"]) / 1e9 if flops and pick["factorisations"] else ""
+        work = (float(flops) * int(pick["factorisations"]) / 1e9
+                if flops and pick["factorisations"] else "")
         pick.update(factorisation_gflop=work)
         pick.update(rounds=len(rs), cpu_min=min(cpus) if cpus else "",
                     cpu_max=max(cpus) if cpus else "",

@@ -58,8 +58,8 @@ def build(out):
         rows.append(row)
     base_text = ""
     if base:
-        base_text = ("Base fabric: k %s N/m, c %s N·s/m, %s g/m², L0 %s cm; each case changes what "
-                     "its label names. " % (num(base["stiffness"], 4), num(base["damping"], 4),
+        base_text = ("Base fabric: k %s N/m, c %s N·s/m, %s g/m², L0 %s cm; each case changes "
+                     "what its label names. " % (num(base["stiffness"], 4), num(base["damping"], 4),
                                             num(base["areal_density"], 4),
                                             num(100 * float(base["natural_length"]), 4)))
     sections.append((
