@@ -54,6 +54,8 @@ def summary_rows(out):
     truth = reference.get("table4_parameters")
     names = [n for n in ORDER if any(r["optimizer"] == n for r in runs)]
     final = {n: [float(r["final_error"]) for r in runs if r["optimizer"] == n] for n in names}
+    if not final:
+        return [], [], []
     best_any = min(min(v) for v in final.values())
     thresholds = []
     if "ica" in final:
@@ -76,7 +78,7 @@ def summary_rows(out):
                "evaluations": median([r["evaluations"] for r in mine]),
                "cpu_seconds": median([r["cpu_seconds"] for r in mine])}
         for t, value in thresholds:
-            hits = [reach(traces[(n, s)], value) for s in seeds]
+            hits = [reach(traces.get((n, s), []), value) for s in seeds]
             e = median_or_none([h[0] for h in hits])
             c = median_or_none([h[1] for h in hits])
             row["%s_evaluations" % t] = "not reached" if e is None else "%g" % e
@@ -88,6 +90,9 @@ def summary_rows(out):
 
 def build(out):
     thresholds, fields, rows = summary_rows(out)
+    if not rows:
+        return ("optimizers: tables", ["runs.csv", "trace.csv", "reference.csv", "manifest.json"],
+                [("Provenance", provenance(read_json(out, "manifest.json")))])
     text = "Thresholds: " + ", ".join("%s = %.5g %%" % t for t in thresholds) + "\n\n"
     head = ["optimizer", "runs", "median %", "IQR %", "min-max %", "evals", "CPU s"]
     for t, _ in thresholds:
@@ -137,6 +142,8 @@ def build(out):
 
 def write_csv(out):
     _, fields, rows = summary_rows(out)
+    if not rows:
+        return
     with open(os.path.join(out, "summary.csv"), "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=fields)
         w.writeheader()
