@@ -89,7 +89,7 @@
 // with (SPEC 2.9 leaves the two coincident; on the face the tuck hides behind it). A float
 // passes behind each missed wale at F_i = B_i - r e_y - r n. Each course's yarn is one C^2
 // cubic NURBS through its points in wale order (T8 of a loop = T0 of the next), chord-length
-// parameters (src/nurbs.hpp).
+// parameters (src/geometry/nurbs.hpp).
 //
 // Failure modes: a bad chart or parameters throw std::invalid_argument at set-up (chart
 // messages name row and column). Geometry functions expect positions of every point
@@ -101,8 +101,8 @@
 #include <vector>
 
 #include "models/spring_network.hpp"
-#include "src/nurbs.hpp"
-#include "src/vec3.hpp"
+#include "src/geometry/nurbs.hpp"
+#include "src/core/vec3.hpp"
 
 namespace knitsim {
 

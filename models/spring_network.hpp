@@ -37,8 +37,8 @@
 #include <string>
 #include <vector>
 
-#include "src/mechanical_system.hpp"
-#include "src/vec3.hpp"
+#include "src/core/mechanical_system.hpp"
+#include "src/core/vec3.hpp"
 
 namespace knitsim {
 
@@ -71,7 +71,7 @@ struct SpringNetworkSpec {
 };
 
 // A direction in the network's data (d(data)/dp for one parameter p), for the equilibrium
-// sensitivities dx*/dp = -K^-1 dF/dp (src/sensitivity.hpp). An empty vector means zero.
+// sensitivities dx*/dp = -K^-1 dF/dp (src/fit/sensitivity.hpp). An empty vector means zero.
 struct SpringNetworkTangent {
   std::vector<double> stiffness;   // per spring: dk_s/dp, N/m per unit of p
   std::vector<double> rest;        // per spring: dL0_s/dp, m per unit of p

@@ -1,5 +1,5 @@
 // ARKODE integrators (SUNDIALS 6.4 / ARKODE 5.4) on the 2n first-order system y = [x; v],
-// y' = f(t, y) = [v; a_c(t, x) - Gamma v] (src/first_order.hpp), J = [[0, I], [Ax, -Gamma]].
+// y' = f(t, y) = [v; a_c(t, x) - Gamma v] (src/core/first_order.hpp), J = [[0, I], [Ax, -Gamma]].
 //
 //   arkode-erk    ERKStep, the default adaptive embedded table of order 4
 //                 (Zonneveld 5-3-4; IntegratorOptions::max_order picks the default table of

@@ -1,5 +1,5 @@
 // CVODE integrators (SUNDIALS 6.4, linked as libsundials_cvode, never cvodes) on the 2n
-// first-order system y = [x; v], y' = [v; a_c(t, x) - Gamma v] (src/first_order.hpp), with
+// first-order system y = [x; v], y' = [v; a_c(t, x) - Gamma v] (src/core/first_order.hpp), with
 // Jacobian J = [[0, I], [Ax, -Gamma]], Ax = da_c/dx.
 //
 //   cvode-bdf        BDF orders 1..5, Newton iteration; A = I - gamma J assembled into J's

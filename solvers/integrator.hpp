@@ -5,7 +5,7 @@
 //   std::vector<double> x, v;                          // in: initial state (empty: the model's)
 //   RunStats s = run_to_equilibrium(model, *integ, opt, x, v);   // out: final state
 //
-// Integrators see only a MechanicalSystem (src/mechanical_system.hpp); they never know which
+// Integrators see only a MechanicalSystem (src/core/mechanical_system.hpp); they never know which
 // model they run. Every run stops by the same criterion (SPEC 2.3): static residual below
 // equilibrium_tol -- or below the model's round-off floor (MechanicalSystem::
 // residual_roundoff) when that is larger, reported in RunStats.message and residual_floor --
@@ -20,7 +20,7 @@
 #include <string>
 #include <vector>
 
-#include "src/mechanical_system.hpp"
+#include "src/core/mechanical_system.hpp"
 
 namespace knitsim {
 
@@ -52,7 +52,7 @@ struct IntegratorOptions {
   double t_max = 1e7;             // s, physical end time if no equilibrium is reached, [1e-9, 1e15]
   double equilibrium_tol = 1e-8;  // static residual at which the run stops (dimensionless)
   double max_wall_seconds = 0.0;  // wall-clock cap per run, s; 0 = none
-  // A request to stop from outside (e.g. the CLI's SIGINT/SIGTERM handler, src/interrupt.hpp):
+  // A request to stop from outside (e.g. the CLI's SIGINT/SIGTERM handler, src/cli/interrupt.hpp):
   // when it reads true the run ends with status Interrupted and its state so far. Read at each
   // residual check (every `check_every` steps), like the wall-clock cap. nullptr = none.
   const std::atomic<bool>* interrupt = nullptr;

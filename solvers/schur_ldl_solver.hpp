@@ -3,7 +3,7 @@
 // instead of the unsymmetric 6n x 6n one (SPEC 2.12, "levers").
 //
 // CVODE and ARKODE (identity mass) build A = I - gamma J in the FirstOrderSystem's CSC pattern
-// (src/first_order.hpp), so
+// (src/core/first_order.hpp), so
 //     A = [ I       -gamma I ]      A_vx = -gamma Ax,   A_vv = I + gamma Gamma (diagonal).
 //         [ A_vx     A_vv    ]
 // gamma is read back from A itself (A(0, n) = -gamma). Solving A [x1; x2] = [b1; b2]:
@@ -48,7 +48,7 @@
 
 #include "solvers/integrator.hpp"
 #include "solvers/symmetric_factor.hpp"
-#include "src/first_order.hpp"
+#include "src/core/first_order.hpp"
 
 namespace knitsim::detail {
 

@@ -6,7 +6,7 @@
 
 #include <Eigen/SparseCore>
 
-#include "src/mechanical_system.hpp"
+#include "src/core/mechanical_system.hpp"
 
 namespace knitsim::detail {
 

@@ -19,7 +19,7 @@
 // ErrorLog (not stderr) and are appended to failure messages.
 //
 // Sparse matrices. SUNDIALS' sparse SUNMatrix here is CSC (CSC_MAT), the same storage order
-// as CscPattern (src/sparse.hpp), with 64-bit indices. The pattern is copied into the
+// as CscPattern (src/core/sparse.hpp), with 64-bit indices. The pattern is copied into the
 // matrix's index arrays once (`make_csc_matrix`). CVODE and ARKODE call SUNMatZero before
 // a user Jacobian function, which wipes the index arrays too, so the matrix-based
 // integrators supply a linear-system function instead (CVodeSetLinSysFn /
@@ -48,8 +48,8 @@
 #include <vector>
 
 #include "solvers/integrator.hpp"
-#include "src/first_order.hpp"
-#include "src/sparse.hpp"
+#include "src/core/first_order.hpp"
+#include "src/core/sparse.hpp"
 
 namespace knitsim::sun {
 

@@ -9,8 +9,14 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "src/output.hpp"
 #include "tests/cli_runner.hpp"
+
+#include "src/base/files.hpp"
+#include "src/base/table.hpp"
+#include "src/base/text.hpp"
+#include "src/io/drape_outputs.hpp"
+#include "src/io/vtk.hpp"
+#include "src/measure/measurement.hpp"
 
 using namespace knitsim;
 using namespace knitsim::test;
@@ -349,7 +355,7 @@ TEST_CASE("fit --optimizer lm: a noise-free target of the model itself, end to e
       s["params"]["stiffness"].get<double>() / s["params"]["natural_length"].get<double>();
   CHECK(std::abs(ratio / (852.0 / 0.05) - 1.0) < 1e-3);
   // Budget: one screening drape per topology (3) x n bracket (<= 4: n = 5..8), then the 2
-  // refined starts with <= 15 evaluations each (src/lm_fit.hpp defaults).
+  // refined starts with <= 15 evaluations each (src/fit/lm_fit.hpp defaults).
   const long evaluations = s["evaluations"].get<long>();
   CHECK(evaluations >= 3 * 3);
   CHECK(evaluations <= 3 * 4 + 2 * 15);

@@ -1,4 +1,4 @@
-// Drape fitting (src/drape_fit.hpp) on twin targets, failed evaluations, determinism across
+// Drape fitting (src/fit/drape_fit.hpp) on twin targets, failed evaluations, determinism across
 // thread counts, and the paper's tables (paper_repro/data) against the code's defaults.
 //
 // Speed: the base scene is a 30 cm sheet (fabric.width = 0.3), so L0 ~ 5 cm gives a 7 x 7 grid
@@ -13,8 +13,11 @@
 #include <string>
 #include <vector>
 
-#include "src/commands.hpp"
-#include "src/drape_fit.hpp"
+#include "src/base/table.hpp"
+#include "src/cli/commands.hpp"
+#include "src/fit/drape_fit.hpp"
+#include "src/measure/measurement.hpp"
+#include "src/scene/scene.hpp"
 
 using namespace knitsim;
 
@@ -161,7 +164,7 @@ TEST_CASE("twin target: zero error at the true parameters, and the ICA moves tow
 
   const DrapeFitResult r = fit_drape(p);
   INFO("initial best " << r.history.front().best_cost << ", final " << r.objective);
-  long expected = 6;  // header of src/ica.hpp: countries, then countries - empires per decade
+  long expected = 6;  // header of src/fit/ica.hpp: countries, then countries - empires per decade
   for (size_t d = 1; d < r.history.size(); ++d) expected += 6 - r.history[d - 1].empires;
   CHECK(r.evaluations == expected);
   CHECK(r.failed_evaluations == 0);

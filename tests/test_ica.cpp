@@ -1,4 +1,4 @@
-// ICA (src/ica.hpp): Table 1 defaults, the colony allocation repair, the n-dimensional
+// ICA (src/fit/ica.hpp): Table 1 defaults, the colony allocation repair, the n-dimensional
 // assimilation step, accuracy on test functions, determinism across threads, failed
 // evaluations, categorical genes.
 #include <array>
@@ -8,8 +8,9 @@
 #include <numeric>
 #include <stdexcept>
 
-#include "src/ica.hpp"
-#include "src/test_functions.hpp"
+#include "src/base/table.hpp"
+#include "src/fit/ica.hpp"
+#include "src/fit/test_functions.hpp"
 
 using namespace knitsim;
 

@@ -16,7 +16,7 @@
 #include "models/drape_grid.hpp"
 #include "solvers/integrator.hpp"
 #include "solvers/sundials_common.hpp"
-#include "src/first_order.hpp"
+#include "src/core/first_order.hpp"
 #include "tests/test_systems.hpp"
 
 using namespace knitsim;

@@ -11,8 +11,8 @@
 
 #include "models/knit_loops.hpp"
 #include "solvers/integrator.hpp"
-#include "src/jacobian_check.hpp"
-#include "src/output.hpp"
+#include "src/base/text.hpp"
+#include "src/core/jacobian_check.hpp"
 
 using namespace knitsim;
 

@@ -1,4 +1,4 @@
-// Levenberg-Marquardt (src/lm_fit.hpp): the bounded solver on closed-form problems, the
+// Levenberg-Marquardt (src/fit/lm_fit.hpp): the bounded solver on closed-form problems, the
 // identifiability formulas on hand-made Jacobians, and the drape fit on a noise-free twin.
 //
 // Speed: the drape twin is a 30 cm sheet with L0 = 5 cm (7 x 7 grid), a few ms per evaluation.
@@ -7,7 +7,9 @@
 #include <filesystem>
 #include <vector>
 
-#include "src/lm_fit.hpp"
+#include "src/fit/lm_fit.hpp"
+#include "src/measure/measurement.hpp"
+#include "src/scene/scene.hpp"
 
 using namespace knitsim;
 

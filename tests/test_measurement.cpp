@@ -14,8 +14,8 @@
 #include <tuple>
 
 #include "models/drape_grid.hpp"
-#include "src/measurement.hpp"
-#include "src/targets.hpp"
+#include "src/measure/measurement.hpp"
+#include "src/fit/targets.hpp"
 
 using namespace knitsim;
 using Catch::Matchers::Contains;

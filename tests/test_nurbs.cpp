@@ -5,7 +5,7 @@
 #include <cmath>
 #include <random>
 
-#include "src/nurbs.hpp"
+#include "src/geometry/nurbs.hpp"
 
 using namespace knitsim;
 

@@ -12,7 +12,7 @@
 #include <filesystem>
 #include <stdexcept>
 
-#include "src/render.hpp"
+#include "src/render/render.hpp"
 
 using namespace knitsim;
 namespace fs = std::filesystem;

@@ -1,4 +1,4 @@
-// knitsim repro (src/repro.hpp) and its plot (src/plot.hpp): the tick rules, the seed and
+// knitsim repro (src/repro/repro.hpp) and its plot (src/render/plot.hpp): the tick rules, the seed and
 // budget helpers, and a tiny-budget Table 4 + 6 run whose CSVs are checked against
 // paper_data and against objective() recomputed from the fitted parameters, and for
 // independence of the thread count. Matching the paper's numbers is NOT tested.
@@ -15,13 +15,14 @@
 #include <sstream>
 #include <thread>
 
-#include "src/drape_fit.hpp"
-#include "src/output.hpp"
-#include "src/paper_data.hpp"
-#include "src/plot.hpp"
-#include "src/repro.hpp"
-#include "src/scene.hpp"
-#include "src/test_functions.hpp"
+#include "src/base/text.hpp"
+#include "src/fit/drape_fit.hpp"
+#include "src/fit/test_functions.hpp"
+#include "src/measure/measurement.hpp"
+#include "src/paper/paper_data.hpp"
+#include "src/render/plot.hpp"
+#include "src/repro/repro.hpp"
+#include "src/scene/scene.hpp"
 #include "tests/cli_runner.hpp"
 
 using namespace knitsim;

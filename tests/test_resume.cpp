@@ -1,4 +1,4 @@
-// Resumable ICA runs (src/ica.hpp checkpoints, knitsim fit --resume): the twister's state round
+// Resumable ICA runs (src/fit/ica.hpp checkpoints, knitsim fit --resume): the twister's state round
 // trip, a run continued from any decade's saved state (through JSON) is bit-identical to the
 // uninterrupted run, states that do not fit are refused, and `knitsim fit` killed with SIGKILL
 // after a decade, or stopped by SIGTERM at a decade's end, then resumed writes the same best
@@ -14,13 +14,16 @@
 #include <fstream>
 #include <limits>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <thread>
 
-#include "src/ica.hpp"
-#include "src/output.hpp"
-#include "src/scene.hpp"
-#include "src/test_functions.hpp"
+#include "src/fit/ica.hpp"
+#include "src/fit/test_functions.hpp"
+#include "src/io/json.hpp"
+#include "src/io/run_state.hpp"
+#include "src/measure/measurement.hpp"
+#include "src/scene/scene.hpp"
 #include "tests/cli_runner.hpp"
 
 using namespace knitsim;

@@ -9,7 +9,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "src/scene.hpp"
+#include "src/scene/scene.hpp"
 
 using namespace knitsim;
 namespace fs = std::filesystem;

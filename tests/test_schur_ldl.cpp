@@ -12,7 +12,7 @@
 #include "solvers/integrator.hpp"
 #include "solvers/schur_ldl_solver.hpp"
 #include "solvers/sundials_common.hpp"
-#include "src/first_order.hpp"
+#include "src/core/first_order.hpp"
 
 using namespace knitsim;
 

@@ -1,4 +1,4 @@
-// Equilibrium sensitivities (src/sensitivity.hpp): the model's dF/dp against finite differences
+// Equilibrium sensitivities (src/fit/sensitivity.hpp): the model's dF/dp against finite differences
 // of the force, the measurement chain's tangent against finite differences of measure_edges,
 // and d(coefficients)/dp against central differences of full re-runs to a polished equilibrium;
 // the exact k-L0 scaling law; damping and an inactive elongation limit exactly zero.
@@ -9,8 +9,9 @@
 #include <random>
 #include <vector>
 
-#include "src/scene.hpp"
-#include "src/sensitivity.hpp"
+#include "src/fit/sensitivity.hpp"
+#include "src/measure/measurement.hpp"
+#include "src/scene/scene.hpp"
 
 using namespace knitsim;
 
@@ -225,7 +226,7 @@ TEST_CASE("edge sensitivities agree with central differences of full re-runs", "
 }
 
 TEST_CASE("at fixed n the edges depend on k and L0 only through k / L0", "[sensitivity]") {
-  // dc/dL0 = -(k / L0) dc/dk exactly (src/sensitivity.hpp): the data cannot tell k from L0.
+  // dc/dL0 = -(k / L0) dc/dk exactly (src/fit/sensitivity.hpp): the data cannot tell k from L0.
   for (const char* name : {"four_corner", "two_corner"}) {
     const Scene scene = small_scene(name);
     const DrapeSensitivity s = solve(scene, PolishOptions{});

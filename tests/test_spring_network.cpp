@@ -9,8 +9,8 @@
 #include "models/drape_grid.hpp"
 #include "models/spring_network.hpp"
 #include "solvers/integrator.hpp"
-#include "src/jacobian_check.hpp"
-#include "src/sparse.hpp"
+#include "src/core/jacobian_check.hpp"
+#include "src/core/sparse.hpp"
 
 using namespace knitsim;
 

@@ -1,4 +1,4 @@
-// StepLog (src/step_log.hpp) and the driver's on_step calls: the logged steps add up to the
+// StepLog (src/io/step_log.hpp) and the driver's on_step calls: the logged steps add up to the
 // run, carry the orders the integrators report, the residuals the driver checked, and stay
 // bounded and evenly thinned on long runs.
 #include <catch2/catch.hpp>
@@ -8,7 +8,7 @@
 
 #include "models/drape_grid.hpp"
 #include "solvers/integrator.hpp"
-#include "src/step_log.hpp"
+#include "src/io/step_log.hpp"
 
 using namespace knitsim;
 

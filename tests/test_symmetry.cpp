@@ -9,9 +9,9 @@
 #include <random>
 
 #include "models/mirror_reduced.hpp"
-#include "src/jacobian_check.hpp"
-#include "src/measurement.hpp"
-#include "src/scene.hpp"
+#include "src/core/jacobian_check.hpp"
+#include "src/measure/measurement.hpp"
+#include "src/scene/scene.hpp"
 
 using namespace knitsim;
 

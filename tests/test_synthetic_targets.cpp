@@ -1,5 +1,5 @@
-// Paper 1's sample data in code (src/paper_data.hpp) against the committed tables, and the
-// synthetic targets of SPEC 2.8 (src/synthetic_targets.hpp): exact edges without noise, the
+// Paper 1's sample data in code (src/paper/paper_data.hpp) against the committed tables, and the
+// synthetic targets of SPEC 2.8 (src/fit/synthetic_targets.hpp): exact edges without noise, the
 // noise's statistics, determinism, and regeneration of the committed files bit for bit.
 #include <CLI/CLI.hpp>
 #include <catch2/catch.hpp>
@@ -11,8 +11,10 @@
 #include <string>
 #include <vector>
 
-#include "src/commands.hpp"
-#include "src/synthetic_targets.hpp"
+#include "src/cli/commands.hpp"
+#include "src/fit/synthetic_targets.hpp"
+#include "src/measure/measurement.hpp"
+#include "src/scene/scene.hpp"
 
 using namespace knitsim;
 namespace fs = std::filesystem;

@@ -27,7 +27,7 @@
 
 #include "models/spring_network.hpp"
 #include "solvers/integrator.hpp"
-#include "src/vec3.hpp"
+#include "src/core/vec3.hpp"
 
 namespace knitsim::test {
 

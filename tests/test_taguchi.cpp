@@ -1,11 +1,11 @@
-// Taguchi L27 (src/taguchi.hpp): the array against the published table and its orthogonality,
+// Taguchi L27 (src/fit/taguchi.hpp): the array against the published table and its orthogonality,
 // the additive self-check of SPEC 2.7, the ANOVA decomposition and pooling, the CSV reader.
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
 
-#include "src/taguchi.hpp"
+#include "src/fit/taguchi.hpp"
 
 using namespace knitsim;
 

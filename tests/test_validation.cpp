@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "src/scene.hpp"
-#include "src/targets.hpp"
+#include "src/scene/scene.hpp"
+#include "src/fit/targets.hpp"
 #include "tests/cli_runner.hpp"
 
 using namespace knitsim;

@@ -1,4 +1,4 @@
-// run_work_units (src/work_units.hpp): results in unit order, the checkpoint's lines, resume
+// run_work_units (src/parallel/work_units.hpp): results in unit order, the checkpoint's lines, resume
 // (completed units are not run again, a half-written last line is dropped, other settings or
 // unknown units are refused), exact doubles through the checkpoint, and -- when mpirun was
 // found at configure time -- 2 MPI ranks giving the same results as one process ([mpi], hidden:
@@ -13,12 +13,13 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
-#include "src/work_units.hpp"
+#include "src/parallel/work_units.hpp"
 
 namespace {
 

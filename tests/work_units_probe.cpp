@@ -6,10 +6,11 @@
 #include <exception>
 #include <fstream>
 #include <iostream>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
-#include "src/work_units.hpp"
+#include "src/parallel/work_units.hpp"
 
 int main(int argc, char** argv) {
   knitsim::ProcessGroup processes(argc, argv);

@@ -7,11 +7,11 @@
 //   * at the generating parameters p* (the twin's true ones; for cross those of the 3x finer
 //     sheet, which the coarse model can only approximate), the residuals r = P_target -
 //     P_model(p*) (twin: noise only; cross: noise + model error) and the analytic Jacobian
-//     J = dr/dp (src/sensitivity.hpp), per scene; "both" stacks the two scenes' rows (40
+//     J = dr/dp (src/fit/sensitivity.hpp), per scene; "both" stacks the two scenes' rows (40
 //     residuals). J depends on the model and p* only, so rank, structural zeros and the
 //     k-L0 correlation are the same for both sets; sigma and the standard errors scale with
 //     the residuals;
-//   * the Gauss-Newton analysis of src/lm_fit.hpp (identifiability()): rank, condition number,
+//   * the Gauss-Newton analysis of src/fit/lm_fit.hpp (identifiability()): rank, condition number,
 //     standard errors, conditional standard errors, correlation of k and L0, the error of k/L0;
 //   * objective slices E(p) = 100 rms(r) along each parameter with the others at p*, and along
 //     the valley k = k* L0 / L0* (k / L0 held), where the grid size n = round(W / L0) jumps.
@@ -28,10 +28,16 @@
 #include <string>
 #include <vector>
 
-#include "src/lm_fit.hpp"
-#include "src/output.hpp"
-#include "src/paper_data.hpp"
-#include "src/synthetic_targets.hpp"
+#include "src/base/command_line.hpp"
+#include "src/base/files.hpp"
+#include "src/base/table.hpp"
+#include "src/base/text.hpp"
+#include "src/io/manifest.hpp"
+#include "src/fit/lm_fit.hpp"
+#include "src/measure/measurement.hpp"
+#include "src/paper/paper_data.hpp"
+#include "src/scene/scene.hpp"
+#include "src/fit/synthetic_targets.hpp"
 
 using namespace knitsim;
 

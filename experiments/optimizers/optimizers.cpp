@@ -1,15 +1,15 @@
-// Optimizers side by side on the drape fit (issue 7, item 4): the ICA of paper 1 (src/ica.hpp)
+// Optimizers side by side on the drape fit (issue 7, item 4): the ICA of paper 1 (src/fit/ica.hpp)
 // against pagmo2's DE, SADE, CMA-ES and PSO (Debian's libpagmo-dev) and against the screened
-// multi-start Levenberg-Marquardt fit (src/lm_fit.hpp), on the same target and the same budget
+// multi-start Levenberg-Marquardt fit (src/fit/lm_fit.hpp), on the same target and the same budget
 // of drape evaluations.
 //
-// Problem: DrapeFitProblem (src/drape_fit.hpp) of the base scene `--scene` (default four_corner)
+// Problem: DrapeFitProblem (src/fit/drape_fit.hpp) of the base scene `--scene` (default four_corner)
 // with the Table 2 areal density of `--sample` (as `knitsim fit --scene four_corner --set
 // fabric.areal_density=<Table 2>` builds it), rtol 1e-8, the Table 3 box, fitted to `--target`
 // (default: the twin target of sample 1, SPEC 2.8). Cost = Eq. 5 error, percent.
 // Encoding, the same for every optimizer: the 5 genes k, c, eps, L0 and the topology gene u in
-// [0, 3), topology = 'a' + floor(u) (src/ica.hpp category_of; pagmo may propose u = 3 exactly,
-// which maps to c). LM searches the topologies x grid sizes itself (src/lm_fit.hpp).
+// [0, 3), topology = 'a' + floor(u) (src/fit/ica.hpp category_of; pagmo may propose u = 3 exactly,
+// which maps to c). LM searches the topologies x grid sizes itself (src/fit/lm_fit.hpp).
 //
 // Budget B drape evaluations per (optimizer, seed), enforced by one counting wrapper
 // (EvaluationLog) through which every evaluation of every optimizer goes: it runs the drape,
@@ -80,10 +80,9 @@
 #include "src/base/text.hpp"
 #include "src/io/json.hpp"
 #include "src/io/manifest.hpp"
-#include "src/lm_fit.hpp"
+#include "src/fit/lm_fit.hpp"
 #include "src/measure/measurement.hpp"
-#include "src/output.hpp"
-#include "src/paper_data.hpp"
+#include "src/paper/paper_data.hpp"
 #include "src/scene/scene.hpp"
 
 using namespace knitsim;
@@ -363,7 +362,7 @@ int main(int argc, char** argv) {
   StudyOptions o;
   std::string optimizers;
   CLI::App app{"Optimizers side by side on the drape fit (experiments/optimizers/README.md)"};
-  app.add_option("--target", o.target, "Target CSV (src/targets.hpp)");
+  app.add_option("--target", o.target, "Target CSV (src/fit/targets.hpp)");
   app.add_option("--sample", o.sample, "Paper sample: Table 2 areal density, Table 4 reference");
   app.add_option("--scene", o.scene, "Base scene (built-in name or TOML file)");
   app.add_option("--rtol", o.rtol, "Relative tolerance of every drape");

@@ -5,9 +5,10 @@
 
 #include "models/drape_grid.hpp"
 #include "models/knit_loops.hpp"
-#include "src/output.hpp"
-#include "src/scene.hpp"
-#include "src/targets.hpp"
+#include "src/fit/targets.hpp"
+#include "src/io/run_state.hpp"
+#include "src/measure/measurement.hpp"
+#include "src/scene/scene.hpp"
 
 namespace knitsim::fuzz {
 

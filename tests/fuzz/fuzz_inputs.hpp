@@ -6,8 +6,8 @@
 //   scene   load_scene_text (TOML scene, SPEC 2.10), then, if accepted and small, the grid;
 //   chart   parse_knit_chart (SPEC 2.9), then, if accepted and small, the model and its
 //           type-value points and centrelines at rest;
-//   target  parse_target_csv (src/targets.hpp), then every scene's edge fits;
-//   state   parse_run_state (src/output.hpp: the state.json of drape|knit --continue), then
+//   target  parse_target_csv (src/fit/targets.hpp), then every scene's edge fits;
+//   state   parse_run_state (src/io/output.hpp: the state.json of drape|knit --continue), then
 //           what it holds (finite, x and v of one size).
 // Oracle: the parser either accepts the input or throws std::invalid_argument with one
 // non-empty line (SPEC 2.10: "one clear line naming the bad input"). Once it has accepted, the

@@ -1,0 +1,174 @@
+#include "src/base/files.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <ctime>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+
+#include "src/base/command_line.hpp"
+
+namespace knitsim {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string tmp_name(const fs::path& path) { return path.string() + ".tmp"; }
+
+void commit_tmp(const fs::path& path) {
+  std::error_code ec;
+  fs::rename(tmp_name(path), path, ec);
+  if (ec) {
+    fs::remove(tmp_name(path), ec);
+    throw std::runtime_error("cannot write " + path.string() + ": " + ec.message());
+  }
+}
+
+std::string local_stamp() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  localtime_r(&now, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y%m%d-%H%M%S", &tm);
+  return buf;
+}
+
+
+}  // namespace
+
+void write_file_atomic(const fs::path& path, const std::string& content) {
+  write_file_atomic_with(path, [&content](const std::string& tmp) {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    out << content;
+    out.close();
+    if (!out) throw std::runtime_error(std::strerror(errno));
+  });
+}
+
+void write_file_atomic_with(const fs::path& path,
+                            const std::function<void(const std::string& tmp)>& write) {
+  try {
+    write(tmp_name(path));
+  } catch (const std::exception& e) {
+    std::error_code ec;
+    fs::remove(tmp_name(path), ec);
+    throw std::runtime_error("cannot write " + path.string() + ": " + e.what());
+  }
+  commit_tmp(path);
+}
+
+void write_json_atomic(const fs::path& path, const nlohmann::json& value) {
+  write_file_atomic(path, value.dump(2) + "\n");
+}
+
+namespace {
+
+// An existing --out folder is reused only by the command that wrote it: its manifest.json
+// naming another command (e.g. a fit's folder given to drape) means results this run would
+// overwrite or leave mixed with its own. Folders without a manifest, or whose manifest
+// predates the "command" field, are reused as before.
+void refuse_other_commands_folder(const fs::path& dir, const std::string& requested) {
+  std::error_code ec;
+  const fs::path path = dir / "manifest.json";
+  if (!fs::is_regular_file(path, ec)) return;
+  std::ifstream in(path);
+  const nlohmann::json m = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+  if (!m.is_object() || !m.contains("command") || !m["command"].is_string()) return;
+  const std::string owner = m["command"].get<std::string>();
+  if (owner.empty() || owner == command_name()) return;
+  throw std::invalid_argument("--out " + requested + ": holds the results of `knitsim " + owner +
+                              "` (its manifest.json); give another folder or remove that one");
+}
+
+}  // namespace
+
+fs::path make_output_dir(const std::string& requested, const std::string& stem, bool* created_out) {
+  std::error_code ec;
+  fs::path dir;
+  bool created = false;
+  if (requested.empty()) {
+    const fs::path parent = "out";
+    fs::create_directories(parent, ec);
+    if (ec) throw std::invalid_argument("--out (default out/): cannot create out: " + ec.message());
+    const std::string base = stem + "-" + local_stamp();
+    for (int k = 1; !created; ++k) {
+      dir = parent / (k == 1 ? base : base + "-" + std::to_string(k));
+      created = fs::create_directory(dir, ec);
+      if (ec)
+        throw std::invalid_argument("--out " + dir.string() + ": cannot create: " + ec.message());
+    }
+  } else {
+    dir = requested;
+    if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
+      throw std::invalid_argument("--out " + requested + ": exists and is not a folder");
+    refuse_other_commands_folder(dir, requested);
+    created = !fs::exists(dir, ec);
+    fs::create_directories(dir, ec);
+    if (ec) throw std::invalid_argument("--out " + requested + ": cannot create: " + ec.message());
+  }
+  const fs::path probe = dir / (".knitsim-probe-" + std::to_string(::getpid()));
+  std::ofstream out(probe);
+  const int err = errno;
+  const bool writable = static_cast<bool>(out);
+  out.close();
+  fs::remove(probe, ec);
+  if (!writable) {
+    if (created) fs::remove(dir, ec);
+    throw std::invalid_argument("--out " + dir.string() + ": cannot write: " + std::strerror(err));
+  }
+  if (created_out) *created_out = created;
+  return dir;
+}
+
+void refuse_fresh_start_over_checkpoint(const std::string& out,
+                                        const std::vector<std::string>& checkpoints, bool resume) {
+  if (resume || out.empty()) return;
+  std::error_code ec;
+  for (const std::string& name : checkpoints)
+    if (fs::exists(fs::path(out) / name, ec))
+      throw std::invalid_argument("--out " + out + ": holds the checkpoint " + name +
+                                  " of an earlier run; add --resume to continue it, or remove "
+                                  "the file (or give another folder) to start afresh");
+}
+
+void remove_stale_output(const fs::path& file) {
+  std::error_code ec;
+  fs::remove_all(file, ec);
+  if (ec) throw std::runtime_error("cannot remove " + file.string() + ": " + ec.message());
+}
+
+void remove_if_unused(const fs::path& dir, bool created) {
+  std::error_code ec;
+  if (created && fs::is_empty(dir, ec) && !ec) fs::remove(dir, ec);
+}
+
+bool read_input_file(const std::string& path, std::size_t max_bytes, std::string& text,
+                     std::string& why) {
+  std::error_code ec;
+  const std::filesystem::file_status st = std::filesystem::status(path, ec);
+  if (ec) return why = ec.message(), false;
+  if (std::filesystem::is_directory(st)) return why = "is a directory", false;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return why = std::strerror(errno), false;
+  text.clear();
+  char buffer[1 << 16];
+  while (in && text.size() <= max_bytes) {
+    in.read(buffer, static_cast<std::streamsize>(
+                        std::min<std::size_t>(sizeof buffer, max_bytes + 1 - text.size())));
+    text.append(buffer, static_cast<std::size_t>(in.gcount()));
+  }
+  if (in.bad()) return why = "read error", false;
+  if (text.size() > max_bytes) {
+    text.clear();
+    return why = "larger than " + std::to_string(max_bytes) + " bytes, the limit for this input",
+           false;
+  }
+  return true;
+}
+
+}  // namespace knitsim

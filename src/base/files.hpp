@@ -1,0 +1,57 @@
+// Files and folders: atomic writes, the output folder of a command, inputs read with a size cap.
+//
+// Every file is written atomically: to `<name>.tmp` in the same folder, then renamed over
+// `<name>` (POSIX rename: a reader sees the old file or the new one, never half of one).
+// Failure modes: bad --out folders are bad input (std::invalid_argument naming --out); a write
+// that fails later (disk full, ...) throws std::runtime_error("cannot write PATH: reason").
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <functional>
+#include <nlohmann/json_fwd.hpp>
+#include <string>
+#include <vector>
+
+namespace knitsim {
+
+void write_file_atomic(const std::filesystem::path& path, const std::string& content);
+// For writers that take a file name (the PNG renderer): write(tmp) must create the file tmp.
+void write_file_atomic_with(const std::filesystem::path& path,
+                            const std::function<void(const std::string& tmp)>& write);
+// JSON pretty-printed with 2 spaces and a final newline.
+void write_json_atomic(const std::filesystem::path& path, const nlohmann::json& value);
+
+// The output folder of a command, created and checked writable (a probe file is created and
+// removed) before any work starts.
+//   requested empty: a fresh folder out/<stem>-YYYYmmdd-HHMMSS (local time) under the working
+//     directory, with -2, -3, ... appended if that name is taken;
+//   otherwise `requested`, created with its parents if missing; an existing folder is reused
+//     and files of the same names in it are replaced -- unless its manifest.json names another
+//     command than this process's (command_name()): that folder holds another command's
+//     results, and the call throws rather than overwrite them.
+// Throws std::invalid_argument("--out DIR: cannot create|write ...: reason"). `created`, if
+// given, says whether the folder is new (for remove_if_unused).
+std::filesystem::path make_output_dir(const std::string& requested, const std::string& stem,
+                                      bool* created = nullptr);
+// For the commands that checkpoint (fit, repro): throws std::invalid_argument if `out` names a
+// folder holding one of `checkpoints` and the run is not `resume`d -- starting afresh would
+// overwrite the earlier run's work, which a forgotten --resume should not cost.
+void refuse_fresh_start_over_checkpoint(const std::string& out,
+                                        const std::vector<std::string>& checkpoints, bool resume);
+// Removes `file` if it exists: an optional output this run does not write (a picture under
+// --no-pictures, steps.csv without --step-history, ...). Left in a reused --out folder, an
+// earlier run's file would read as this run's.
+void remove_stale_output(const std::filesystem::path& file);
+// Removes `dir` if `created` and it is still empty: for bad input found only once the run
+// starts (an integrator option the model refuses), so that nothing is left behind.
+void remove_if_unused(const std::filesystem::path& dir, bool created);
+
+// Reads an input file named on the command line (scene, chart, target) into `text`. Returns
+// false with `why` set ("No such file or directory", "is a directory", "larger than N bytes, the
+// limit for this input", ...) if it cannot be read or holds more than max_bytes: reading stops
+// at max_bytes + 1, so /dev/zero or a runaway file is refused without filling memory.
+bool read_input_file(const std::string& path, std::size_t max_bytes, std::string& text,
+                     std::string& why);
+
+}  // namespace knitsim

@@ -1,0 +1,105 @@
+// Command-line pieces shared by several subcommands.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "solvers/integrator.hpp"
+#include "src/fit/ica.hpp"
+#include "src/cli/interrupt.hpp"
+
+namespace CLI {
+class App;
+class Option;
+}  // namespace CLI
+
+namespace knitsim {
+
+// Makes every integer option of `app`'s subcommands (CLI11 type INT or UINT) take decimal text
+// only: CLI11 alone reads "010" as octal 8, "0x10" as 16, "-1" into an unsigned option as its
+// maximum and a value past 64 bits as the largest one (--max-steps 1e20 digits), all silently.
+// Leading zeros are dropped (010 is ten); anything else that is not a decimal integer, or does
+// not fit 64 bits, is refused with one line naming the option. Text options (TEXT) refuse an
+// empty value: `--integrator ""` silently meant the default. Call once, after registering.
+void require_well_formed_values(CLI::App& app);
+
+// The --help group of the ICA's own flags (all of add_ica_options but --seed and --jobs, which
+// other optimizers read too): how `fit --optimizer lm` finds the ICA flags it ignores.
+inline constexpr const char* kIcaOptionGroup = "ICA options";
+
+// The ICA flags (SPEC 2.10): --seed --jobs --decades --countries --imperialists --beta --gamma
+// --revolution --xi --stop-one-empire, bound to `o`.
+void add_ica_options(CLI::App* cmd, IcaOptions& o);
+
+// --seed bound to `seed` (std::uint64_t or unsigned): a decimal integer from 0 to the type's
+// maximum. CLI11 alone reads "-1" as the maximum (wrapped) and a value past it as the maximum
+// (saturated), both silently; these are refused with one line naming the range.
+template <typename T>
+CLI::Option* add_seed_option(CLI::App* cmd, T& seed, const std::string& help);
+
+// The absolute-tolerance flags of drape, knit and fit (IntegratorOptions::atol, velocity_atol):
+// --atol (m, and m/s for the velocities unless --velocity-atol is given) and --velocity-atol
+// (m/s; 0 = --atol), bound to `atol` and `velocity_atol`; help shows their current values.
+// Returns the --velocity-atol option (knit appends its own default rule to the description).
+CLI::Option* add_atol_options(CLI::App* cmd, double& atol, double& velocity_atol);
+
+// --newton-solver {klu, ldl, cg-ldl} of drape and knit, bound to `which`
+// (IntegratorOptions::newton_solver).
+void add_newton_solver_option(CLI::App* cmd, IntegratorOptions::NewtonSolver& which);
+// --factorization {auto, simplicial, block, supernodal} of drape and knit, bound to `which`
+// (IntegratorOptions::factorization).
+void add_factorization_option(CLI::App* cmd, IntegratorOptions::Factorization& which);
+// --gmres-preconditioner, --krylov-dim and --eps-lin (cvode-bdf-gmres) into `o`.
+void add_gmres_options(CLI::App* cmd, IntegratorOptions& o);
+
+// The run flags of drape and knit, bound to the IntegratorOptions fields they set: --rtol,
+// --atol, --velocity-atol, --dt, --max-order, --max-steps, --max-wall, --max-restarts,
+// --newton-solver, --factorization and the cvode-bdf-gmres flags. Returns the --velocity-atol
+// option (knit appends its own default rule to the description).
+CLI::Option* add_run_options(CLI::App* cmd, IntegratorOptions& o);
+// --step-history (bound to `step_history`) and --continue DIR (to `continue_from`) of drape and
+// knit; `inputs` names what a continuation must repeat ("--scene and --set").
+void add_history_and_continue_options(CLI::App* cmd, bool& step_history, std::string& continue_from,
+                                      const std::string& inputs);
+// Copies into `into` exactly the fields add_run_options binds (not t_max, equilibrium_tol:
+// scene keys), so a scene's run settings and the command line combine in one place.
+void copy_run_flags(const IntegratorOptions& flags, IntegratorOptions& into);
+
+// Validation messages name struct fields ("revolution_rate = 2: ..."); the user typed flags.
+// Rethrows `e` with the field replaced by its flag ("--revolution = 2: ..."), for the ICA
+// fields and the extra (field, flag) pairs given; unchanged if no name matches.
+[[noreturn]] void rethrow_with_flag_names(
+    const std::invalid_argument& e,
+    const std::vector<std::pair<std::string, std::string>>& extra = {});
+
+// One line on stderr, "knitsim <command>: warning: <message>": input that is valid but will not
+// do what it seems to. The run goes on.
+void warn(const std::string& message);
+// drape's and knit's warnings before a run: no damping (`damping_key` is 0: only
+// implicit-euler's numerical damping settles such a run, any other integrator goes on to
+// `t_max`, for hours with the defaults), and --dt given (`flags.dt` > 0) to an adaptive
+// integrator, which ignores it.
+void warn_about_run(const std::string& damping_key, double damping, const IntegratorInfo& integ,
+                    const IntegratorOptions& flags, double t_max);
+
+// Bad input found only once a run has started (an option the integrator refuses for this
+// model, e.g. --max-order 9 with cvode-bdf): removes the run's --out folder `dir` if the run
+// `created` it and it is still empty, then rethrows `e` with the run options' flag names.
+[[noreturn]] void refuse_at_run_start(const std::invalid_argument& e,
+                                      const std::filesystem::path& dir, bool created);
+
+// The end of drape and knit once their outputs are written (src/cli/main.cpp's exit contract):
+// returns at equilibrium; a run stopped by `interrupt`'s signal prints one line on stderr
+// ("knitsim <command>: interrupted by SIGINT at t = ... s; outputs written to DIR/; the same
+// command with --continue DIR goes on from there") and exits 128 + the signal; one stopped by
+// --max-steps or --max-wall prints the same line ("stopped by --max-wall ...") and exits 3, as
+// does any other status (silently: the reason is in summary.json and the stdout summary).
+void exit_with_run_status(const char* command, const RunStats& stats,
+                          const InterruptScope& interrupt, const std::string& dir);
+
+}  // namespace knitsim

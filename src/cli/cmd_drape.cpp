@@ -1,0 +1,169 @@
+// knitsim drape (SPEC 2.10): one scene run to equilibrium, with its outputs.
+//
+// Order of work: parse, load the scene and apply --set, check the run options and the
+// integrator name, create and probe --out; only then run and write. Bad input therefore writes
+// nothing (exit 2); a run that ends in any status but equilibrium still writes its outputs and
+// exits 3 -- or 128 + the signal (130, 143) when Ctrl-C or SIGTERM stopped it (status
+// interrupted, src/cli/interrupt.hpp). --continue DIR starts from the state.json of an earlier run
+// (read and checked with the other input, before --out is made).
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+
+#include "src/base/files.hpp"
+#include "src/base/table.hpp"
+#include "src/base/text.hpp"
+#include "src/cli/cli_options.hpp"
+#include "src/cli/commands.hpp"
+#include "src/cli/interrupt.hpp"
+#include "src/fit/targets.hpp"
+#include "src/io/drape_outputs.hpp"
+#include "src/io/progress.hpp"
+#include "src/io/run_state.hpp"
+#include "src/io/step_log.hpp"
+#include "src/measure/measurement.hpp"
+#include "src/scene/scene.hpp"
+
+namespace knitsim {
+
+namespace {
+
+struct DrapeArgs {
+  std::string scene = "four_corner";
+  std::vector<std::string> sets;
+  std::string integrator;     // empty: default_integrator()
+  IntegratorOptions options;  // only the fields add_run_options binds are taken from here
+  std::string out;
+  std::string target;
+  bool step_history = false;
+  bool quiet = false;
+  bool no_pictures = false;
+  std::string continue_from;  // --continue DIR
+};
+
+std::string human_summary(const Scene& scene, const DrapeResult& r, const std::string& dir) {
+  const RunStats& s = r.stats;
+  const int side = r.grid.n + 1;
+  Table t;
+  t.columns = {"drape", scene.name + " (" + scene.source + ")"};
+  t.rows = {{"grid", std::to_string(side) + " x " + std::to_string(side) + " particles, " +
+                         std::to_string(r.grid.network.spec().springs.size()) + " springs, " +
+                         std::to_string(r.grid.network.dof()) + " dof" +
+                         (r.integrated_dof != r.grid.network.dof()
+                              ? " (" + std::to_string(r.integrated_dof) +
+                                    " integrated: " + to_string(scene.params.symmetry) + ")"
+                              : std::string())},
+            {"integrator", s.integrator},
+            {"status", std::string(to_string(s.status)) + " (" + s.message + ")"},
+            {"t_final", format_number(s.t_final, 6) + " s"},
+            {"steps", std::to_string(s.steps) + " (RHS " + std::to_string(s.rhs_evals) + ", Jac " +
+                          std::to_string(s.jac_evals) + ", LS setups " +
+                          std::to_string(s.lin_setups) + ")"}};
+  if (const std::string la = linear_algebra_summary(s); !la.empty())
+    t.rows.push_back({"linear algebra", la});
+  t.rows.insert(t.rows.end(),
+                {{"residual", format_number(s.residual, 3) + " (tol " +
+                                  format_number(scene.options.equilibrium_tol, 3) + ")"},
+                 {"centre sag", format_number(100 * r.centre_sag, 4) + " cm"},
+                 {"max strain", format_number(100 * r.max_strain, 3) + " %"},
+                 {"wall", format_number(1e3 * s.wall_seconds, 4) + " ms"},
+                 {"outputs", dir + "/"}});
+  return t.text();
+}
+
+void run(const DrapeArgs& args) {
+  Scene scene = load_scene(args.scene, args.sets);
+  copy_run_flags(args.options, scene.options);
+  scene.validate();
+
+  const std::string integrator = args.integrator.empty() ? default_integrator() : args.integrator;
+  std::unique_ptr<Integrator> integ;
+  try {
+    integ = make_integrator(integrator);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("--") + e.what());  // "--integrator = X: ..."
+  }
+
+  std::optional<RunState> from;
+  if (!args.continue_from.empty())
+    from = continue_state(args.continue_from, "drape", drape_model_keys(scene.params),
+                          "--scene and --set", integrator, scene.options);
+
+  // --target: read, checked and fitted before the output folder is made.
+  std::vector<EdgeFit> target_edges;
+  if (!args.target.empty()) {
+    const Target target = read_target_csv(args.target);
+    try {
+      target_edges = fit_target_scene(target.scene(target_scene_name(scene)));
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("--target " + args.target + ": " + e.what());
+    }
+  }
+
+  bool created = false;
+  const std::filesystem::path dir = make_output_dir(args.out, "drape-" + scene.name, &created);
+  warn_about_run("model.damping", scene.params.damping, integ->info(), args.options,
+                 scene.options.t_max);
+  const InterruptScope interrupt;
+  scene.options.interrupt = interrupt.flag();
+  std::string steps_csv;
+  DrapeResult result = [&] {
+    ProgressLine progress(scene.name + " " + integrator, scene.options.equilibrium_tol,
+                          !args.quiet);
+    StepLog steps(&progress);
+    RunObserver* observer = args.step_history ? static_cast<RunObserver*>(&steps) : &progress;
+    try {
+      DrapeResult r = run_drape(scene, integrator, observer, from ? &*from : nullptr);
+      steps_csv = steps.csv();
+      return r;
+    } catch (const std::invalid_argument& e) {  // an option the model refuses at the start
+      refuse_at_run_start(e, dir, created);
+    }
+  }();
+  write_drape_outputs(dir, scene, result, args.target.empty() ? nullptr : &target_edges,
+                      !args.no_pictures);
+  if (args.step_history)
+    write_file_atomic(dir / "steps.csv", steps_csv);
+  else
+    remove_stale_output(dir / "steps.csv");
+  if (!args.quiet) std::cout << human_summary(scene, result, dir.string()) << std::flush;
+  exit_with_run_status("drape", result.stats, interrupt, dir.string());
+}
+
+}  // namespace
+
+void register_drape_command(CLI::App& app) {
+  auto args = std::make_shared<DrapeArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "drape",
+      "Hang a fabric (paper 1) and run it to equilibrium; writes summary.json, "
+      "nodes.csv, edges.csv, drape.vtk, drape.png, state.json and manifest.json into "
+      "--out");
+  cmd->add_option("--scene", args->scene,
+                  "Built-in scene (four_corner, two_corner, two_corner_slack) or a TOML file")
+      ->capture_default_str();
+  cmd->add_option("--set", args->sets,
+                  "Override a scene key, e.g. model.stiffness=900 (repeatable: one key=value "
+                  "per --set)")
+      ->allow_extra_args(false)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  cmd->add_option("--integrator", args->integrator,
+                  "Integrator (knitsim list integrators); default cvode-bdf if built, else "
+                  "implicit-euler");
+  add_run_options(cmd, args->options);
+  cmd->add_option("--out", args->out,
+                  "Output folder (default: a fresh out/drape-<scene>-<YYYYmmdd-HHMMSS>)");
+  cmd->add_option("--target", args->target,
+                  "Target edges (CSV, src/fit/targets.hpp): adds the Eq. 5 objective and both sets of "
+                  "edge coefficients to summary.json and writes target_edges.csv");
+  cmd->add_flag("--no-pictures", args->no_pictures,
+                "Skip drape.png (its rendering costs about as much as a four_corner solve)");
+  add_history_and_continue_options(cmd, args->step_history, args->continue_from, "scene and --set");
+  cmd->add_flag("--quiet", args->quiet, "No progress line and no summary on stdout");
+  cmd->callback([args] { run(*args); });
+}
+
+}  // namespace knitsim

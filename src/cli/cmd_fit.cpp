@@ -1,0 +1,487 @@
+// knitsim fit (SPEC 2.10): the drape model's parameters fitted to a target with the ICA
+// (src/fit/drape_fit.hpp), or with `--optimizer lm` by multi-start Levenberg-Marquardt on analytic
+// equilibrium sensitivities (src/fit/lm_fit.hpp; outputs: see run_lm_fit), and the fitted drape.
+//
+// Order of work: parse; load the scene (--set applied), read and check the target (its matching
+// scene must be present and valid), check the ICA options and the integrator; create and probe
+// --out; only then fit. Bad input therefore writes nothing (exit 2).
+// Outputs in --out:
+//   summary.json   params {stiffness, damping, elongation_limit, natural_length, topology},
+//                  objective (Eq. 5, percent), evaluations, failed_evaluations, status,
+//                  message, wall_seconds, best_country, history [{decade, best, mean,
+//                  empires, evaluations}], scene, target, integrator, ica options, bounds
+//   history.csv    decade,best,mean,empires,evaluations (imperialist costs, paper 1 Fig. 13)
+//   drape/         the fitted drape re-run (write_drape_outputs: summary.json, nodes.csv,
+//                  drape.vtk, drape.png, manifest.json) plus edges.csv (its measured edges)
+//                  and target_edges.csv (the target's, as fitted)
+//   manifest.json
+//   ica_checkpoint.json  {config, state}: the ICA's whole state (IcaState) after the latest
+//                  decade, rewritten atomically after every decade; `--resume` continues from
+//                  it (kept after the fit: resuming a finished fit only rewrites the outputs)
+// Resume: `knitsim fit ... --out DIR --resume` continues the fit whose checkpoint is in DIR,
+// bit-identical to an uninterrupted run (best country, objective, history, counts). The
+// checkpoint's config (base scene parameters and run options, the target file's content,
+// optimizer, --integrator as given, bounds, ICA options except --jobs) must equal this run's,
+// else exit 2 naming the first difference; without a checkpoint in DIR the fit starts afresh
+// (so a job script may always pass --resume).
+// Ctrl-C or SIGTERM during an ICA fit ends it at the end of the current decade (the drapes in
+// flight finish, so the checkpoint stays whole): summary.json (status "interrupted", the best
+// country so far, fitted_drape_status "not_run"), history.csv and manifest.json are written, no
+// drape/, and the exit code is 128 + signal; `--resume` then finishes the fit, bit-identical to
+// an uninterrupted one. A second signal kills at once (src/cli/interrupt.hpp).
+// Exit 3 (after writing) when every evaluation failed or the fitted drape's re-run does not
+// reach equilibrium.
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "src/base/files.hpp"
+#include "src/base/table.hpp"
+#include "src/base/text.hpp"
+#include "src/cli/cli_options.hpp"
+#include "src/cli/commands.hpp"
+#include "src/fit/drape_fit.hpp"
+#include "src/fit/lm_fit.hpp"
+#include "src/io/drape_outputs.hpp"
+#include "src/io/json.hpp"
+#include "src/io/manifest.hpp"
+#include "src/measure/measurement.hpp"
+#include "src/parallel/work_units.hpp"
+#include "src/scene/scene.hpp"
+
+namespace knitsim {
+
+namespace {
+
+struct FitArgs {
+  std::string scene;
+  std::vector<std::string> sets;
+  std::string target;
+  std::string optimizer = "ica";  // ica | lm (src/fit/lm_fit.hpp)
+  DrapeLmOptions lm;
+  std::string integrator;  // empty: default_integrator()
+  // Tighter than the drape default: at 1e-6 some countries stall at residual ~4e-8 and would
+  // be scored as failures (src/fit/drape_fit.hpp).
+  double rtol = 1e-8;
+  double atol = IntegratorOptions{}.atol;
+  double velocity_atol = IntegratorOptions{}.velocity_atol;
+  IcaOptions ica;
+  std::string out;
+  bool resume = false;
+  bool quiet = false;
+  std::vector<std::string> ignored;  // flags given that the chosen optimizer does not read
+};
+
+constexpr const char* kLmOptionGroup = "LM options (--optimizer lm)";
+
+// The flags of --help group `group` given on the command line, in their help order.
+std::vector<std::string> given_flags(CLI::App* cmd, const std::string& group) {
+  std::vector<std::string> given;
+  for (const CLI::Option* opt :
+       cmd->get_options([&](CLI::Option* o) { return o->get_group() == group && o->count() > 0; }))
+    given.push_back(opt->get_name());
+  return given;
+}
+
+// One warning for flags the run will not read, and for a stability-limited integrator, whose
+// every drape of the fit takes minutes (warned, not refused: the paper's own method).
+void warn_about_fit(const FitArgs& args, const std::string& integrator) {
+  if (!args.ignored.empty()) {
+    std::string list;
+    for (const std::string& flag : args.ignored) list += (list.empty() ? "" : ", ") + flag;
+    warn(list + (args.ignored.size() == 1 ? " is" : " are") + " not read by --optimizer " +
+         args.optimizer);
+  }
+  if (make_integrator(integrator)->info().explicit_method)
+    warn("--integrator " + integrator +
+         ": stability-limited, so each drape of the fit takes minutes (four_corner with euler: "
+         "~10 min), against milliseconds with cvode-bdf or static");
+}
+
+constexpr const char* kCheckpointFile = "ica_checkpoint.json";
+
+nlohmann::json params_json(const DrapeParams& p) {
+  return {{"stiffness", p.stiffness},
+          {"damping", p.damping},
+          {"elongation_limit", p.elongation_limit},
+          {"natural_length", p.natural_length},
+          {"topology", std::string(1, p.topology)}};
+}
+
+nlohmann::json ica_json(const IcaOptions& o) {
+  nlohmann::json j = to_json(o);
+  j["seed"] = o.seed;
+  j["jobs"] = o.jobs;
+  return j;
+}
+
+nlohmann::json bounds_json(const DrapeFitBounds& b) {
+  nlohmann::json bounds = nlohmann::json::object();
+  for (int g = 0; g < kDrapeGenes; ++g) bounds[drape_gene_names()[g]] = {b.lower[g], b.upper[g]};
+  return bounds;
+}
+
+// What a checkpoint must have been made with to be resumed by this run (see the header).
+nlohmann::json checkpoint_config(const FitArgs& args, const Scene& base,
+                                 const DrapeFitOptions& options) {
+  nlohmann::json ica = ica_json(args.ica);
+  ica.erase("jobs");  // the result does not depend on it
+  std::ifstream in(args.target, std::ios::binary);
+  std::ostringstream target;
+  target << in.rdbuf();
+  return {{"scene", base.name},
+          {"base_params", to_json(base.params)},
+          {"run_options", to_json(base.options)},
+          {"target_file_content", target.str()},
+          {"optimizer", args.optimizer},
+          {"integrator", args.integrator},
+          {"bounds", bounds_json(options.bounds)},
+          {"ica", ica}};
+}
+
+// The state saved in `path` by a fit with `config`; null when there is no such file.
+std::shared_ptr<const IcaState> read_checkpoint(const std::filesystem::path& path,
+                                                const nlohmann::json& config) {
+  std::ifstream in(path);
+  if (!in) return nullptr;
+  const std::string where = "--resume: " + path.string();
+  const nlohmann::json saved = nlohmann::json::parse(in, nullptr, false);
+  if (saved.is_discarded() || !saved.contains("config") || !saved.contains("state"))
+    throw std::invalid_argument(where + ": not a knitsim fit checkpoint");
+  // Compared as written and read back, as the saved one was.
+  const nlohmann::json now = nlohmann::json::parse(config.dump());
+  if (saved.at("config") != now)
+    throw std::invalid_argument(where + " is of a fit with other settings (first difference: " +
+                                first_config_difference(saved.at("config"), now) +
+                                "); give the same options, or drop --resume to start afresh");
+  try {
+    return std::make_shared<const IcaState>(ica_state_from_json(saved.at("state")));
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(where + ": " + e.what());
+  }
+}
+
+// --optimizer lm: the multi-start Levenberg-Marquardt fit and its outputs in dir: summary.json
+// (the ICA's fields params, objective, evaluations, failed_evaluations, status, message,
+// wall_seconds, best_country, plus cpu_seconds, standard_errors, identifiability and starts),
+// starts.csv (one row per start), drape/ and manifest.json. Exit 3 as for the ICA.
+void run_lm_fit(const FitArgs& args, const Scene& base, const DrapeFitProblem& problem,
+                const std::filesystem::path& dir) {
+  if (!args.quiet)
+    std::cout << "fitting " << base.name << " to " << args.target << " (scene "
+              << problem.target_scene()
+              << ") with Levenberg-Marquardt: " << args.lm.starts_per_bracket
+              << " start(s) per topology and n bracket, " << args.lm.refine
+              << " refined with <= " << args.lm.lm.max_evaluations << " evaluations each, "
+              << problem.integrator() << "\n"
+              << std::flush;
+  DrapeLmOptions lm = args.lm;
+  lm.seed = args.ica.seed;  // --seed draws the random starts too
+  const DrapeLmResult fit = fit_drape_lm(problem, lm);
+  auto finite_or_null = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nullptr; };
+  Table starts;
+  starts.columns = {"topology", "cells",  "screened",    "predicted",
+                    "refined",  "status", "evaluations", "objective"};
+  for (int g = 0; g < kDrapeContinuous; ++g) starts.columns.push_back(drape_gene_names()[g]);
+  nlohmann::json starts_json = nlohmann::json::array();
+  for (const DrapeLmStart& s : fit.starts) {
+    const std::string status = s.refined ? to_string(s.lm.status) : "screened";
+    const int evaluations = s.refined ? s.lm.evaluations : 1;
+    starts.rows.push_back({std::string(1, s.topology), std::to_string(s.cells),
+                           format_number(s.screened, 6), format_number(s.predicted, 6),
+                           s.refined ? "1" : "0", status, std::to_string(evaluations),
+                           format_number(s.objective, 17)});
+    for (int g = 0; g < kDrapeContinuous; ++g)
+      starts.rows.back().push_back(format_number(s.x[g], 17));
+    starts_json.push_back({{"topology", std::string(1, s.topology)},
+                           {"cells", s.cells},
+                           {"x0", s.x0},
+                           {"x", s.x},
+                           {"screened", finite_or_null(s.screened)},
+                           {"predicted", finite_or_null(s.predicted)},
+                           {"refined", s.refined},
+                           {"objective", finite_or_null(s.objective)},
+                           {"status", status},
+                           {"evaluations", evaluations}});
+  }
+  write_file_atomic(dir / "starts.csv", starts.csv());
+  const DrapeIdentifiability& id = fit.identifiability;
+  nlohmann::json se = nlohmann::json::object(), cse = nlohmann::json::object();
+  for (int g = 0; g < kDrapeContinuous; ++g) {
+    se[drape_gene_names()[g]] = finite_or_null(id.parameters[g].standard_error);
+    cse[drape_gene_names()[g]] = finite_or_null(id.parameters[g].conditional_standard_error);
+  }
+  nlohmann::json bounds = nlohmann::json::object();
+  for (int g = 0; g < kDrapeGenes; ++g)
+    bounds[drape_gene_names()[g]] = {problem.options().bounds.lower[g],
+                                     problem.options().bounds.upper[g]};
+  const nlohmann::json settings = {{"scene", base.name},
+                                   {"scene_source", base.source},
+                                   {"sets", args.sets},
+                                   {"target", args.target},
+                                   {"target_scene", problem.target_scene()},
+                                   {"optimizer", args.optimizer},
+                                   {"integrator", problem.integrator()},
+                                   {"lm", to_json(lm)},
+                                   {"bounds", bounds},
+                                   {"base_params", to_json(base.params)},
+                                   {"run_options", to_json(base.options)}};
+  nlohmann::json summary = settings;
+  bool drape_ok = false;
+  if (fit.ok) {
+    const Scene fitted = problem.scene_of(fit.best_x);
+    const DrapeResult drape = run_drape(fitted, problem.integrator());
+    drape_ok = drape.stats.status == RunStatus::Equilibrium;
+    std::filesystem::create_directories(dir / "drape");
+    write_drape_outputs(dir / "drape", fitted, drape, &problem.measured());
+    summary["params"] = params_json(fit.params);
+    summary["objective"] = fit.objective;
+    summary["best_country"] = fit.best_x;
+    summary["fitted_drape_status"] = to_string(drape.stats.status);
+  }
+  summary["evaluations"] = fit.evaluations;
+  summary["failed_evaluations"] = fit.failed_evaluations;
+  summary["status"] = fit.ok ? "converged" : "all_failed";
+  summary["message"] = fit.message;
+  summary["wall_seconds"] = fit.wall_seconds;
+  summary["cpu_seconds"] = fit.cpu_seconds;
+  summary["standard_errors"] = se;
+  summary["conditional_standard_errors"] = cse;
+  summary["identifiability"] = {
+      {"condition_number", finite_or_null(id.condition_number)},
+      {"rank", id.rank},
+      {"residuals", id.residuals},
+      {"sigma", id.sigma},
+      {"correlation_stiffness_natural_length", finite_or_null(id.correlation_stiffness_length)},
+      {"stiffness_over_length_relative_error", finite_or_null(id.ratio_relative_error)}};
+  summary["starts"] = starts_json;
+  write_json_atomic(dir / "summary.json", summary);
+  write_json_atomic(dir / "manifest.json", manifest(settings));
+  if (!args.quiet) {
+    std::cout << starts.text() << "\nstatus: " << fit.message << "\n";
+    Table t;
+    t.columns = {"parameter", "fitted", "standard error", "if the others were known"};
+    const char* units[kDrapeContinuous] = {" N/m", " N s/m", " %", " m"};
+    for (int g = 0; g < kDrapeContinuous && fit.ok; ++g)
+      t.rows.push_back({drape_gene_names()[g], format_number(fit.best_x[g], 6) + units[g],
+                        format_number(id.parameters[g].standard_error, 3),
+                        format_number(id.parameters[g].conditional_standard_error, 3)});
+    t.rows.push_back({"topology", fit.ok ? std::string(1, fit.params.topology) : "-", "", ""});
+    t.rows.push_back({"objective", format_number(fit.objective, 6) + " %", "", ""});
+    t.rows.push_back({"k / L0", "", format_number(100.0 * id.ratio_relative_error, 3) + " %", ""});
+    t.rows.push_back({"evaluations", std::to_string(fit.evaluations), "", ""});
+    t.rows.push_back({"cpu", format_number(fit.cpu_seconds, 4) + " s", "", ""});
+    t.rows.push_back({"outputs", dir.string() + "/", "", ""});
+    std::cout << t.text() << std::flush;
+  }
+  if (!fit.ok || !drape_ok) throw CLI::RuntimeError(3);
+}
+
+void run(const FitArgs& args) {
+  if (args.optimizer != "ica" && args.optimizer != "lm")
+    throw std::invalid_argument("--optimizer = " + args.optimizer + ": accepted: ica, lm");
+  try {
+    args.lm.validate();
+  } catch (const std::invalid_argument& e) {
+    rethrow_with_flag_names(e, {{"lm.starts_per_bracket", "--lm-starts"},
+                                {"lm.refine", "--lm-refine"},
+                                {"lm.max_evaluations", "--lm-evaluations"}});
+  }
+  Scene base = load_scene(args.scene, args.sets);
+  base.options.rtol = args.rtol;
+  base.options.atol = args.atol;
+  base.options.velocity_atol = args.velocity_atol;
+  base.validate();
+  const Target target = read_target_csv(args.target);
+  DrapeFitOptions options;
+  options.ica = args.ica;
+  options.integrator = args.integrator;
+  if (args.resume && args.out.empty())
+    throw std::invalid_argument("--resume: needs --out, the folder of the fit to continue");
+  if (args.resume && args.optimizer != "ica")
+    throw std::invalid_argument("--resume: only with --optimizer ica");
+  refuse_fresh_start_over_checkpoint(args.out, {kCheckpointFile}, args.resume);
+  const nlohmann::json config = checkpoint_config(args, base, options);
+  if (args.resume)
+    options.ica.resume_from = read_checkpoint(args.out + "/" + kCheckpointFile, config);
+  std::filesystem::path dir;  // the output folder, made below once all input is checked
+  options.ica.on_decade = [&dir, &config](const IcaState& state) {
+    write_file_atomic(dir / kCheckpointFile,
+                      nlohmann::json{{"config", config}, {"state", to_json(state)}}.dump() + "\n");
+  };
+  // Ctrl-C or SIGTERM ends the ICA at the end of its current decade, whose checkpoint is then
+  // written; the handlers are installed once the fit starts (the LM fit has none).
+  std::unique_ptr<InterruptScope> interrupt;
+  options.ica.stop_requested = [&interrupt] { return interrupt && interrupt->signal() != 0; };
+  std::unique_ptr<DrapeFitProblem> problem;
+  try {
+    problem = std::make_unique<DrapeFitProblem>(base, target, options);
+  } catch (const std::invalid_argument& e) {
+    rethrow_with_flag_names(e, {{"integrator", "--integrator"}});
+  }
+  dir = make_output_dir(args.out, "fit-" + base.name);
+  warn_about_fit(args, problem->integrator());
+  if (args.optimizer == "lm") return run_lm_fit(args, base, *problem, dir);
+
+  if (!args.quiet) {
+    std::cout << "fitting " << base.name << " to " << args.target << " (scene "
+              << problem->target_scene() << ", " << problem->measured().size()
+              << " edges) with the ICA: " << args.ica.countries << " countries, "
+              << args.ica.imperialists << " imperialists, " << args.ica.decades << " decades, seed "
+              << args.ica.seed << ", jobs " << args.ica.jobs << ", " << problem->integrator()
+              << "\n";
+    if (args.resume) {
+      const std::shared_ptr<const IcaState>& from = options.ica.resume_from;
+      std::cout << (from ? "resuming from decade " + std::to_string(from->decade) + " of " +
+                               std::to_string(args.ica.decades)
+                         : std::string("no checkpoint: starting afresh"))
+                << " (" << (dir / kCheckpointFile).string() << ")\n";
+    }
+    std::cout << std::flush;
+  }
+  interrupt = std::make_unique<InterruptScope>();
+  const DrapeFitResult fit = fit_drape(*problem);
+  const bool interrupted = fit.status == IcaStatus::Interrupted;
+
+  Table history;
+  history.columns = {"decade", "best", "mean", "empires", "evaluations"};
+  nlohmann::json history_json = nlohmann::json::array();
+  for (const IcaDecade& d : fit.history) {
+    history.rows.push_back({std::to_string(d.decade), format_number(d.best_cost, 17),
+                            format_number(d.mean_cost, 17), std::to_string(d.empires),
+                            std::to_string(d.evaluations)});
+    history_json.push_back({{"decade", d.decade},
+                            {"best", d.best_cost},
+                            {"mean", d.mean_cost},
+                            {"empires", d.empires},
+                            {"evaluations", d.evaluations}});
+  }
+  write_file_atomic(dir / "history.csv", history.csv());
+
+  // The fitted drape, re-run (deterministic: the same run the ICA scored); not for a fit cut
+  // short, whose best country is provisional.
+  std::string drape_status = "not_run";
+  bool drape_ok = false;
+  if (!interrupted) {
+    const Scene fitted = problem->scene_of(fit.best_x);
+    const DrapeResult drape = run_drape(fitted, problem->integrator());
+    const std::filesystem::path drape_dir = dir / "drape";
+    std::filesystem::create_directories(drape_dir);
+    write_drape_outputs(drape_dir, fitted, drape, &problem->measured());
+    drape_status = to_string(drape.stats.status);
+    drape_ok = drape.stats.status == RunStatus::Equilibrium;
+  }
+
+  const nlohmann::json bounds = bounds_json(problem->options().bounds);
+  const nlohmann::json settings = {{"scene", base.name},
+                                   {"scene_source", base.source},
+                                   {"sets", args.sets},
+                                   {"target", args.target},
+                                   {"target_scene", problem->target_scene()},
+                                   {"optimizer", args.optimizer},
+                                   {"integrator", problem->integrator()},
+                                   {"ica", ica_json(args.ica)},
+                                   {"bounds", bounds},
+                                   {"base_params", to_json(base.params)},
+                                   {"run_options", to_json(base.options)}};
+  nlohmann::json summary = settings;
+  summary["params"] = params_json(fit.params);
+  summary["objective"] = fit.objective;
+  summary["evaluations"] = fit.evaluations;
+  summary["failed_evaluations"] = fit.failed_evaluations;
+  summary["status"] = to_string(fit.status);
+  summary["message"] = fit.message;
+  summary["wall_seconds"] = fit.wall_seconds;
+  summary["best_country"] = fit.best_x;
+  summary["history"] = history_json;
+  summary["fitted_drape_status"] = drape_status;
+  if (options.ica.resume_from) summary["resumed_from_decade"] = options.ica.resume_from->decade;
+  write_json_atomic(dir / "summary.json", summary);
+  write_json_atomic(dir / "manifest.json", manifest(settings));
+
+  if (!args.quiet) {
+    std::cout << history.text() << "\nstatus: " << fit.message << "\n";
+    Table t;
+    t.columns = {"parameter", "fitted"};
+    t.rows = {{"stiffness", format_number(fit.params.stiffness, 6) + " N/m"},
+              {"damping", format_number(fit.params.damping, 6) + " N s/m"},
+              {"elongation_limit", format_number(fit.params.elongation_limit, 6) + " %"},
+              {"natural_length", format_number(fit.params.natural_length, 6) + " m"},
+              {"topology", std::string(1, fit.params.topology)},
+              {"objective", format_number(fit.objective, 6) + " %"},
+              {"evaluations", std::to_string(fit.evaluations) + " (" +
+                                  std::to_string(fit.failed_evaluations) + " failed)"},
+              {"wall", format_number(fit.wall_seconds, 4) + " s"},
+              {"outputs", dir.string() + "/"}};
+    std::cout << t.text() << std::flush;
+  }
+  if (interrupted) {
+    std::cerr << "knitsim fit: interrupted by " << interrupt->signal_name() << " after decade "
+              << fit.history.back().decade << " of " << args.ica.decades
+              << "; the best so far is written to " << dir.string()
+              << "/; the same command with --resume goes on from there" << std::endl;
+    throw CLI::RuntimeError(interrupt->exit_code());
+  }
+  if (fit.status == IcaStatus::AllFailed || !drape_ok) throw CLI::RuntimeError(3);
+}
+
+}  // namespace
+
+void register_fit_command(CLI::App& app) {
+  auto args = std::make_shared<FitArgs>();
+  IcaOptions& o = args->ica;
+  CLI::App* cmd = app.add_subcommand(
+      "fit",
+      "Fit the drape model's parameters (Table 3 box) to a target with the ICA; writes "
+      "summary.json, history.csv, the fitted drape and manifest.json into --out");
+  cmd->add_option("--scene", args->scene,
+                  "Base scene (four_corner, two_corner, two_corner_slack or a TOML file): "
+                  "fabric, pins and run options")
+      ->required();
+  cmd->add_option("--set", args->sets, "Override a scene key of the base scene (repeatable)")
+      ->allow_extra_args(false)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  cmd->add_option("--target", args->target, "Target edges CSV (src/fit/targets.hpp format)")
+      ->required();
+  cmd->add_option("--optimizer", args->optimizer,
+                  "Optimiser: ica, or lm (multi-start Levenberg-Marquardt with analytic "
+                  "equilibrium sensitivities; src/fit/lm_fit.hpp)")
+      ->capture_default_str();
+  cmd->add_option("--lm-starts", args->lm.starts_per_bracket,
+                  "lm: screened starts per topology and grid-size bracket (k at the box "
+                  "centre, then seeded random k)")
+      ->capture_default_str()
+      ->group(kLmOptionGroup);
+  cmd->add_option("--lm-refine", args->lm.refine, "lm: best screened starts refined by LM")
+      ->capture_default_str()
+      ->group(kLmOptionGroup);
+  cmd->add_option("--lm-evaluations", args->lm.lm.max_evaluations,
+                  "lm: drape evaluations per refined start at most")
+      ->capture_default_str()
+      ->group(kLmOptionGroup);
+  cmd->add_option("--integrator", args->integrator,
+                  "Integrator of every evaluation (knitsim list integrators); default cvode-bdf");
+  cmd->add_option("--rtol", args->rtol, "Relative tolerance of every drape run (adaptive methods)")
+      ->capture_default_str();
+  add_atol_options(cmd, args->atol, args->velocity_atol);
+  add_ica_options(cmd, o);
+  cmd->add_option("--out", args->out,
+                  "Output folder (default: a fresh out/fit-<scene>-<YYYYmmdd-HHMMSS>)");
+  cmd->add_flag("--resume", args->resume,
+                "Continue the interrupted fit in --out from its ica_checkpoint.json (same "
+                "options needed; any --jobs); starts afresh if there is none");
+  cmd->add_flag("--quiet", args->quiet, "Nothing on stdout");
+  cmd->callback([args, cmd] {
+    args->ignored = given_flags(cmd, args->optimizer == "lm" ? kIcaOptionGroup : kLmOptionGroup);
+    run(*args);
+  });
+}
+
+}  // namespace knitsim

@@ -1,0 +1,90 @@
+// knitsim command line (SPEC 2.10). Each subcommand registers itself (src/cli/commands.hpp); this
+// file only parses and maps what a command throws to the exit status of the contract:
+//   0  success (and --help)
+//   2  bad input: a CLI11 parse error or std::invalid_argument, printed as ONE line
+//      "knitsim: error: <message>" on stderr (commands validate all input before writing)
+//   3  a run that ended in another status than equilibrium: the command throws
+//      CLI::RuntimeError(3) after writing its outputs (CLI11 prints nothing for it)
+//   130, 143  drape or knit stopped by SIGINT or SIGTERM (128 + the signal): the run ended with
+//      status interrupted and its outputs were written (src/cli/interrupt.hpp)
+//   1  anything else (e.g. a file that cannot be written), one line on stderr
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <exception>
+#include <iostream>
+#include <stdexcept>
+#include <string>
+
+#include "src/base/command_line.hpp"
+#include "src/base/text.hpp"
+#include "src/cli/cli_options.hpp"
+#include "src/cli/commands.hpp"
+#include "src/io/manifest.hpp"
+#include "src/parallel/work_units.hpp"
+
+namespace {
+
+int fail(int status, std::string message) {
+  std::replace(message.begin(), message.end(), '\n', ' ');
+  std::cerr << "knitsim: error: " << message << std::endl;
+  return status;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // MPI_Init/MPI_Finalize when started by mpirun (src/parallel/work_units.hpp); nothing otherwise.
+  knitsim::ProcessGroup processes(argc, argv);
+  knitsim::set_command_line(argc, argv);
+  CLI::App app{"knitsim: stiff mass-spring models of knitted fabric"};
+  app.require_subcommand(1);
+  knitsim::register_drape_command(app);
+  knitsim::register_knit_command(app);
+  knitsim::register_list_command(app);
+  knitsim::register_demo_command(app);
+  knitsim::register_optimize_command(app);
+  knitsim::register_taguchi_command(app);
+  knitsim::register_fit_command(app);
+  knitsim::register_targets_command(app);
+  knitsim::register_repro_command(app);
+  knitsim::require_well_formed_values(app);
+  app.set_version_flag("--version", knitsim::version_string());
+  // CLI11 reports an unknown command as "A subcommand is required": name it instead.
+  if (argc > 1 && argv[1][0] != '-') {
+    std::string names;
+    bool known = false;
+    for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+      known = known || sub->check_name(argv[1]);
+    }
+    if (!known)
+      return fail(2, "unknown command '" + knitsim::printable(argv[1]) + "': one of " + names +
+                         " (see knitsim --help)");
+  }
+  // Under mpirun only repro distributes its work; any other command would run once per process
+  // and every process would write the same files.
+  if (knitsim::process_count() > 1 && (argc < 2 || std::string(argv[1]) != "repro")) {
+    const std::string why = "only `knitsim repro` runs under mpirun (" +
+                            std::to_string(knitsim::process_count()) +
+                            " processes); run this command as one process";
+    return knitsim::process_rank() == 0 ? fail(2, why) : 2;
+  }
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::RuntimeError& e) {
+    return e.get_exit_code();
+  } catch (const CLI::ParseError& e) {
+    return fail(2, std::string(e.what()) + " (see knitsim --help)");
+  } catch (const std::invalid_argument& e) {
+    return fail(2, e.what());
+  } catch (const std::exception& e) {
+    return fail(1, e.what());
+  }
+  return 0;
+}

@@ -1,0 +1,82 @@
+// The one contract between physics (models/) and integrators (solvers/).
+//
+// A MechanicalSystem is a second-order ODE over n degrees of freedom (n = 3 x free particles):
+//
+//     x'' = a(t, x, v) = a_c(t, x) - Gamma v
+//
+//   a_c   conservative + external acceleration, M^-1 (F_spring(x, t) + F_ext)    [m/s^2]
+//   Gamma per-dof linear damping rate gamma_i = c_i / m_i (absolute damping)     [1/s]
+//   M     diagonal mass, one value per dof                                        [kg]
+//
+// Its Jacobian blocks are da/dx = da_c/dx (sparse, the "stiffness" pattern, built once, every
+// diagonal present) and da/dv = -Gamma (diagonal). Pinned particles are not degrees of freedom;
+// their (possibly time-dependent) positions enter a_c through t.
+//
+// Implementations hold parameters, never integration state. Methods are const but may use
+// private scratch buffers, so one instance must not be evaluated from two threads at once
+// (build one instance per thread: models are cheap to build). No method allocates.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "src/core/sparse.hpp"
+
+namespace knitsim {
+
+class MechanicalSystem {
+ public:
+  virtual ~MechanicalSystem() = default;
+
+  // Number of degrees of freedom n (3 x free particles).
+  virtual int dof() const = 0;
+
+  // Initial state at t = 0 (arrays of length n).
+  virtual void initial_state(double* x, double* v) const = 0;
+
+  // a_c(t, x) into a (length n).
+  virtual void conservative_acceleration(double t, const double* x, double* a) const = 0;
+
+  // The state-independent part of a_c (e.g. gravity) into a (length n): what an IMEX split
+  // treats explicitly. Default: zero.
+  virtual void constant_acceleration(double t, double* a) const;
+
+  // gamma_i (1/s), length n; a = a_c - gamma .* v.
+  virtual const std::vector<double>& damping_rate() const = 0;
+
+  // m_i (kg), length n (each particle's mass repeated for its 3 components).
+  virtual const std::vector<double>& mass() const = 0;
+
+  // CSC pattern of da_c/dx (n x n), every diagonal entry present; fixed for the lifetime.
+  virtual const CscPattern& stiffness_pattern() const = 0;
+
+  // Values of da_c/dx = M^-1 dF/dx in stiffness_pattern() order (nnz doubles).
+  virtual void stiffness_values(double t, const double* x, double* values) const = 0;
+
+  // Static residual used by the equilibrium criterion (SPEC 2.3): a dimensionless measure of
+  // the net force at rest, e.g. max_i |F_i(x)| / (mean mass x g).
+  virtual double static_residual(double t, const double* x) const = 0;
+
+  // Round-off floor of static_residual at (t, x): an upper estimate of the residual that
+  // rounding alone leaves at an exact equilibrium, in the same units. run_to_equilibrium
+  // accepts r <= max(equilibrium_tol, this) as equilibrium (and says which applied), so a
+  // stiff model is not integrated to t_max chasing a residual its arithmetic cannot reach.
+  // Default 0: no floor known.
+  virtual double residual_roundoff(double /*t*/, const double* /*x*/) const { return 0.0; }
+
+  // Equilibrium may only be declared from this time on (e.g. after prescribed pin motion).
+  virtual double equilibrium_start_time() const { return 0.0; }
+
+  // Position constraint projection for the explicit reference paths (Provot 1995): called
+  // after each step; returns true if anything moved. Implicit paths never call it.
+  virtual bool project(double /*t*/, double* /*x*/, double* /*v*/) const { return false; }
+
+  // Energies: potential (springs + gravity) at (t, x) and kinetic 1/2 sum m v^2 (J).
+  virtual double potential_energy(double t, const double* x) const = 0;
+  double kinetic_energy(const double* v) const;
+
+  // Human-readable description for summaries.
+  virtual std::string describe() const = 0;
+};
+
+}  // namespace knitsim

@@ -1,0 +1,193 @@
+#include "src/io/drape_outputs.hpp"
+
+#include <algorithm>
+#include <array>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "src/base/files.hpp"
+#include "src/base/text.hpp"
+#include "src/io/json.hpp"
+#include "src/io/manifest.hpp"
+#include "src/io/run_state.hpp"
+#include "src/io/vtk.hpp"
+#include "src/measure/measurement.hpp"
+#include "src/render/render.hpp"
+#include "src/scene/scene.hpp"
+
+namespace knitsim {
+
+namespace fs = std::filesystem;
+
+std::string linear_algebra_summary(const RunStats& s) {
+  if (s.factorisations == 0 || !(s.factor_flops > 0.0)) return "";
+  return std::to_string(s.factorisations) + " factorisations of S (" + s.factorization +
+         (s.factorization == "supernodal" ? " LL^T, " : " LDL^T, ") +
+         format_number(s.factor_flops, 3) + " flops each, " +
+         format_number(s.factor_flops * static_cast<double>(s.factorisations) / 1e9, 3) +
+         " GFlop in all)";
+}
+
+nlohmann::json summary_units(const nlohmann::json& model) {
+  nlohmann::json units = {
+      {"t_start, t_final", "s"},
+      {"dt", "s: the fixed step of euler, verlet, implicit-euler; 0 for adaptive integrators"},
+      {"dt_estimated, dt_predicted", "s: stability limits of the explicit methods (SPEC 2.4)"},
+      {"wall_seconds, cpu_seconds", "s (cpu: this process, all threads)"},
+      {"factor_flops", "floating-point operations of one factorisation of S (CHOLMOD's count)"},
+      {"factor_nonzeros", "entries of one factor L"},
+      {"steps, rhs_evals, jac_evals, lin_setups, lin_iters, nonlin_iters, factorisations",
+       "counts"}};
+  units.update(model);
+  return units;
+}
+
+nlohmann::json drape_summary(const Scene& scene, const DrapeResult& r) {
+  const SpringNetwork& net = r.grid.network;
+  nlohmann::json j = to_json(r.stats);
+  j["scene"] = scene.name;
+  j["source"] = scene.source;
+  j["grid"] = {{"n", r.grid.n},
+               {"particles", net.particle_count()},
+               {"pinned", net.spec().pinned.size()},
+               {"springs", net.spec().springs.size()},
+               {"dof", net.dof()},
+               {"integrated_dof", r.integrated_dof}};
+  j["t_start"] = r.t_start;
+  j["max_strain"] = r.max_strain;
+  j["centre_sag_m"] = r.centre_sag;
+  j["params"] = to_json(scene.params);
+  j["options"] = to_json(scene.options);
+  j["units"] = summary_units(
+      {{"residual, residual_floor",
+        "1: the static residual (SPEC 2.3), max over free particles of |spring force + weight| "
+        "/ mean particle weight; residual_floor: its round-off bound"},
+       {"centre_sag_m", "m"},
+       {"max_strain", "1: (L - L0) / L0 of the most stretched spring, a fraction (stdout: %)"},
+       {"objective", "%: the Eq. 5 error against --target"},
+       {"edge_coefficients",
+        "1: p0..p4 of d(s) = sum p_i s^i, s and d lengths divided by the "
+        "edge's reference length (edges.csv; src/measure/measurement.hpp)"},
+       {"params",
+        "width, natural_length, perturbation m; areal_density g/m^2; stiffness N/m; "
+        "damping N s/m; elongation_limit %; pin_span a fraction of the width; "
+        "pin_move_time s"}});
+  return j;
+}
+
+namespace {
+
+// drape.png: the oblique view of the final state, pins marked, parameters in the caption.
+void write_drape_picture(const fs::path& path, const Scene& scene, const DrapeResult& r,
+                         const std::vector<std::array<int, 4>>& quads) {
+  const DrapeGrid& g = r.grid;
+  const int side = g.n + 1;
+  MeshScene mesh;
+  mesh.points = r.positions;
+  mesh.quads = quads;
+  mesh.markers = g.network.spec().pinned;
+  RenderView view;
+  view.title = scene.name + ": " + r.stats.integrator + ", " + to_string(r.stats.status) +
+               " at t = " + format_number(r.stats.t_final, 4) + " s";
+  const DrapeParams& p = scene.params;
+  view.caption = {"k = " + format_number(p.stiffness) + " N/m, c = " + format_number(p.damping) +
+                      " N s/m, L0 = " + format_number(100 * p.natural_length) + " cm, topology " +
+                      std::string(1, p.topology) + ", " + format_number(p.areal_density) + " g/m^2",
+                  std::to_string(side) + " x " + std::to_string(side) + " particles, centre sag " +
+                      format_number(100 * r.centre_sag, 3) + " cm, max strain " +
+                      format_number(100 * r.max_strain, 3) + " %, residual " +
+                      format_number(r.stats.residual, 2)};
+  write_file_atomic_with(path, [&](const std::string& tmp) { render_mesh_png(tmp, mesh, view); });
+}
+
+}  // namespace
+
+void write_drape_outputs(const fs::path& dir, const Scene& scene, const DrapeResult& r,
+                         const std::vector<EdgeFit>* target, bool picture) {
+  const DrapeGrid& g = r.grid;
+  const int side = g.n + 1;
+  std::vector<int> pinned(r.positions.size(), 0);
+  for (int p : g.network.spec().pinned) pinned[p] = 1;
+
+  nlohmann::json summary = drape_summary(scene, r);
+  const bool finite = std::all_of(r.positions.begin(), r.positions.end(), is_finite);
+  // The edges of a run that stopped early (a flat sheet, a diverged one) may not be measurable
+  // (fit_polynomial needs 5 distinct abscissae): the outputs are still written, with the reason.
+  std::vector<EdgeFit> edges;
+  if (finite) {
+    try {
+      edges = measure_edges(g, r.positions);
+    } catch (const std::invalid_argument& e) {
+      summary["edges_error"] = e.what();
+    }
+  }
+  if (edges.empty()) remove_stale_output(dir / "edges.csv");
+  if (!edges.empty()) {
+    write_file_atomic_with(dir / "edges.csv",
+                           [&](const std::string& tmp) { write_edges_csv(edges, tmp); });
+    nlohmann::json coefficients = nlohmann::json::object();
+    for (const EdgeFit& e : edges)
+      coefficients[e.name] = std::vector<double>(e.coefficients.begin(), e.coefficients.end());
+    summary["edge_coefficients"] = coefficients;
+    if (target) {
+      summary["objective"] = objective(*target, edges);
+      nlohmann::json target_coefficients = nlohmann::json::object();
+      for (const EdgeFit& e : *target)
+        target_coefficients[e.name] =
+            std::vector<double>(e.coefficients.begin(), e.coefficients.end());
+      summary["target_edge_coefficients"] = target_coefficients;
+    }
+  }
+  if (target)
+    write_file_atomic_with(dir / "target_edges.csv",
+                           [&](const std::string& tmp) { write_edges_csv(*target, tmp); });
+  else
+    remove_stale_output(dir / "target_edges.csv");
+  write_json_atomic(dir / "summary.json", summary);
+
+  std::ostringstream nodes;
+  nodes.precision(17);
+  nodes << "id,i,j,x,y,z,pinned\n";
+  for (int i = 0; i < side; ++i)
+    for (int j = 0; j < side; ++j) {
+      const int id = g.index(i, j);
+      const Vec3& p = r.positions[id];
+      nodes << id << "," << i << "," << j << "," << p.x << "," << p.y << "," << p.z << ","
+            << pinned[id] << "\n";
+    }
+  write_file_atomic(dir / "nodes.csv", nodes.str());
+
+  write_run_state(dir, {"drape",
+                        {r.stats.t_final, r.state_x, r.state_v},
+                        r.stats.integrator,
+                        r.stats.dt,
+                        drape_model_keys(scene.params)});
+
+  std::vector<std::array<int, 4>> quads;
+  for (int i = 0; i < g.n; ++i)
+    for (int j = 0; j < g.n; ++j)
+      quads.push_back({g.index(i, j), g.index(i, j + 1), g.index(i + 1, j + 1), g.index(i + 1, j)});
+
+  VtkPolyData vtk;
+  vtk.title = "knitsim drape " + scene.name + " (" + r.stats.integrator + ", " +
+              to_string(r.stats.status) + ", t = " + format_number(r.stats.t_final, 6) + " s)";
+  vtk.points = r.positions;
+  for (const auto& q : quads) vtk.polygons.emplace_back(q.begin(), q.end());
+  vtk.point_ints.push_back({"pinned", pinned});
+  std::vector<Vec3> displacement(r.positions.size());
+  for (size_t k = 0; k < displacement.size(); ++k) displacement[k] = r.positions[k] - r.rest[k];
+  vtk.point_vectors.push_back({"displacement", displacement});
+  write_file_atomic(dir / "drape.vtk", to_vtk(vtk));
+
+  if (picture)
+    write_drape_picture(dir / "drape.png", scene, r, quads);
+  else
+    remove_stale_output(dir / "drape.png");
+  write_json_atomic(dir / "manifest.json", manifest({{"scene", scene.name},
+                                                     {"source", scene.source},
+                                                     {"integrator", r.stats.integrator},
+                                                     {"params", to_json(scene.params)},
+                                                     {"options", to_json(scene.options)}}));
+}
+
+}  // namespace knitsim

@@ -1,0 +1,45 @@
+// What a drape run writes (SPEC 2.10): summary.json, nodes.csv, drape.vtk, drape.png, edges.csv,
+// state.json, manifest.json; and the parts of a run's summary that the knit run shares.
+#pragma once
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "solvers/integrator.hpp"
+#include "src/measure/measurement.hpp"
+#include "src/scene/scene.hpp"
+
+namespace knitsim {
+
+// The "linear algebra" line of drape's and knit's summaries: "125 factorisations of S (block
+// LDL^T, 2.12e+09 flops each, 265 GFlop in all)"; "" where the run factorised no S by
+// SymmetricFactor (the explicit methods, KLU, block-Jacobi GMRES). `static`'s count includes
+// the few KLU factorisations of K (the same pattern) of its Newton polish.
+std::string linear_algebra_summary(const RunStats& s);
+
+// summary.json's "units": what each number of a run summary is measured in, for a reader
+// without the source. `model` maps the model's own numbers (drape or knit: the residual's
+// scale, centre_sag_m, params, ...) to their units; times, steps and cost figures are shared.
+nlohmann::json summary_units(const nlohmann::json& model);
+
+// summary.json: scene, source, status, message, integrator, t_final, residual, wall time, all
+// RunStats counters, grid size and counts, max strain, centre sag, params, options.
+nlohmann::json drape_summary(const Scene& scene, const DrapeResult& result);
+
+// Writes into `dir` (which must exist): summary.json, nodes.csv (id,i,j,x,y,z,pinned; all
+// particles at t_final, m), drape.vtk (the grid's quads, point data `pinned` and
+// `displacement` = position - rest position, m), drape.png (render_mesh_png, oblique view) and
+// manifest.json (options: scene, integrator, params, run options), and state.json
+// (write_run_state: the integrated unknowns at t_final; omitted if not finite).
+// Writes summary.json, nodes.csv, drape.vtk, drape.png, and edges.csv (the measured edges,
+// SPEC 2.5) when the final state is finite. With `target` (the measured edges of the matching
+// target scene, e.g. fit_target_scene(...)), summary.json also gets `objective` (Eq. 5, %) and
+// the per-edge coefficients of both, and target_edges.csv is written. picture = false skips
+// drape.png (`--no-pictures`: the rendering costs about as much as a four_corner solve).
+void write_drape_outputs(const std::filesystem::path& dir, const Scene& scene,
+                         const DrapeResult& result, const std::vector<EdgeFit>* target = nullptr,
+                         bool picture = true);
+
+}  // namespace knitsim

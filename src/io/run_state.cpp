@@ -1,0 +1,164 @@
+#include "src/io/run_state.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "src/base/files.hpp"
+#include "src/base/text.hpp"
+#include "src/io/json.hpp"
+#include "src/scene/scene.hpp"
+
+namespace knitsim {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// state.json's "format": bump the number if the layout changes (1: drape only, with the
+// integrator, step and parameters in summary.json).
+constexpr const char* kRunStateFormat = "knitsim run state 2";
+
+bool all_finite(const std::vector<double>& a) {
+  return std::all_of(a.begin(), a.end(), [](double d) { return std::isfinite(d); });
+}
+
+}  // namespace
+
+void write_run_state(const fs::path& dir, const SavedRun& saved) {
+  if (!all_finite(saved.state.x) || !all_finite(saved.state.v) || !std::isfinite(saved.state.t))
+    return;
+  write_json_atomic(dir / "state.json", {{"format", kRunStateFormat},
+                                         {"command", saved.command},
+                                         {"integrator", saved.integrator},
+                                         {"dt", saved.dt},
+                                         {"model", saved.model},
+                                         {"t", saved.state.t},
+                                         {"integrated_dof", saved.state.x.size()},
+                                         {"x", saved.state.x},
+                                         {"v", saved.state.v}});
+}
+
+namespace {
+
+// The fields of to_json(DrapeParams) whose --set key is not "model.<field>". Older state files
+// keyed them "model.<field>" too (and a refusal then named a key --set does not know);
+// parse_run_state renames those.
+const std::vector<std::pair<std::string, std::string>>& drape_fields_set_elsewhere() {
+  static const std::vector<std::pair<std::string, std::string>> fields = {
+      {"width", "fabric.width"},
+      {"areal_density", "fabric.areal_density"},
+      {"layout", "pins.layout"},
+      {"pin_span", "pins.span"},
+      {"pin_move_time", "pins.move_time"}};
+  return fields;
+}
+
+}  // namespace
+
+SavedRun parse_run_state(const std::string& text, const std::string& command) {
+  SavedRun saved;
+  try {
+    const nlohmann::json state = nlohmann::json::parse(text);
+    if (!state.is_object() || !state.contains("format") || state.at("format") != kRunStateFormat)
+      throw std::invalid_argument("format is not \"" + std::string(kRunStateFormat) +
+                                  "\" (not a state file of this knitsim version)");
+    saved.command = state.at("command").get<std::string>();
+    if (saved.command != command)
+      throw std::invalid_argument("the state of a knitsim " + printable(saved.command) +
+                                  " run; this is knitsim " + command);
+    saved.state.t = state.at("t").get<double>();
+    if (!(saved.state.t >= 0.0) || !std::isfinite(saved.state.t))
+      throw std::invalid_argument("t = " + format_number(saved.state.t) +
+                                  ": must be >= 0 s and finite");
+    saved.state.x = state.at("x").get<std::vector<double>>();
+    saved.state.v = state.at("v").get<std::vector<double>>();
+    const size_t n = state.at("integrated_dof").get<size_t>();
+    if (saved.state.x.size() != n || saved.state.v.size() != n)
+      throw std::invalid_argument("x and v must hold integrated_dof = " + std::to_string(n) +
+                                  " numbers each");
+    if (!all_finite(saved.state.x) || !all_finite(saved.state.v))
+      throw std::invalid_argument("x and v must be finite");
+    saved.integrator = state.at("integrator").get<std::string>();
+    saved.dt = state.at("dt").get<double>();
+    if (!(saved.dt >= 0.0) || !std::isfinite(saved.dt))
+      throw std::invalid_argument("dt = " + format_number(saved.dt) +
+                                  ": must be >= 0 s and finite");
+    saved.model = state.at("model");
+    if (!saved.model.is_object()) throw std::invalid_argument("model is not an object");
+    if (command == "drape")  // an older file's keys: "model.width" for fabric.width, ...
+      for (const auto& [field, set_key] : drape_fields_set_elsewhere()) {
+        const auto old = saved.model.find("model." + field);
+        if (old == saved.model.end() || saved.model.contains(set_key)) continue;
+        saved.model[set_key] = *old;
+        saved.model.erase(old);
+      }
+  } catch (const nlohmann::json::exception& e) {
+    // Without the library's "[json.exception.parse_error.101] " tag: what went wrong, where.
+    std::string what = e.what();
+    if (what.rfind("[json.exception.", 0) == 0 && what.find("] ") != std::string::npos)
+      what.erase(0, what.find("] ") + 2);
+    throw std::invalid_argument("not a valid state file: " + printable(what));
+  }
+  return saved;
+}
+
+SavedRun read_run_state(const fs::path& dir, const std::string& command) {
+  // Capped like the other inputs: 256 MiB holds the state of a 1000 x 1000 grid.
+  constexpr std::size_t kMaxStateFileBytes = std::size_t{256} << 20;
+  const fs::path path = dir / "state.json";
+  std::string text, why;
+  if (!read_input_file(path.string(), kMaxStateFileBytes, text, why))
+    throw std::invalid_argument(
+        path.string() + ": " + why +
+        (fs::exists(dir / "summary.json")
+             ? " (that run's final state was not finite, or it predates state.json)"
+             : " (not the output folder of a knitsim " + command + " run)"));
+  try {
+    return parse_run_state(text, command);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(path.string() + ": " + e.what());
+  }
+}
+
+nlohmann::json drape_model_keys(const DrapeParams& params) {
+  nlohmann::json keys = nlohmann::json::object();
+  const nlohmann::json fields = to_json(params);  // items() must not outlive its object
+  for (const auto& [field, value] : fields.items()) {
+    std::string key = "model." + field;
+    for (const auto& [elsewhere, set_key] : drape_fields_set_elsewhere())
+      if (field == elsewhere) key = set_key;
+    keys[key] = value;
+  }
+  return keys;
+}
+
+RunState continue_state(const std::string& dir, const std::string& command,
+                        const nlohmann::json& model, const std::string& same_what,
+                        const std::string& integrator, IntegratorOptions& options) {
+  const std::string where = "--continue " + dir + ": ";
+  SavedRun saved;
+  try {
+    saved = read_run_state(dir, command);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument("--continue: " + std::string(e.what()));
+  }
+  for (const auto& [key, value] : model.items())
+    if (!saved.model.contains(key) || saved.model.at(key) != value) {
+      const std::string here = value.dump(),
+                        there = saved.model.contains(key) ? saved.model.at(key).dump() : "absent";
+      const std::string differ = here.size() + there.size() <= 80
+                                     ? key + " = " + here + " here, " + there + " in"
+                                     : key + " differs from";  // e.g. a chart: not one line
+      throw std::invalid_argument(where + differ + " the run being continued; give the same " +
+                                  same_what);
+    }
+  if (!(saved.state.t < options.t_max))
+    throw std::invalid_argument(where + "that run stopped at t = " + format_number(saved.state.t) +
+                                " s, not below run.t_max = " + format_number(options.t_max) +
+                                " s; raise run.t_max");
+  if (options.dt == 0.0 && saved.dt > 0.0 && integrator == saved.integrator) options.dt = saved.dt;
+  return saved.state;
+}
+
+}  // namespace knitsim

@@ -1,0 +1,359 @@
+#include "src/scene/scene.hpp"
+
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <climits>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <functional>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <utility>
+
+#include "models/mirror_reduced.hpp"
+#include "src/base/files.hpp"
+#include "src/base/text.hpp"
+
+namespace knitsim {
+
+namespace {
+
+enum class Kind { Number, Integer, Text };
+
+// One scene key: where its value goes. Number keys expose the field (its accepted range is
+// stated once, by the validators); Integer and Text keys parse and check their own value and
+// throw `accepted` (e.g. "one of a, b, c") when it does not fit.
+struct Key {
+  std::string name;
+  Kind kind;
+  std::function<double&(Scene&)> number;                // Kind::Number
+  std::function<bool(Scene&, const std::string&)> set;  // Integer, Text: false = bad
+  std::string accepted;                                 // Integer, Text
+};
+
+bool is_name(const std::string& s) {
+  return !s.empty() && std::all_of(s.begin(), s.end(), [](unsigned char c) {
+    return std::isalnum(c) || c == '_' || c == '-';
+  });
+}
+
+const std::vector<Key>& keys() {
+  static const std::vector<Key> table = [] {
+    std::vector<Key> k;
+    auto number = [&k](const char* name, std::function<double&(Scene&)> field) {
+      k.push_back({name, Kind::Number, std::move(field), nullptr, ""});
+    };
+    auto other = [&k](const char* name, Kind kind,
+                      std::function<bool(Scene&, const std::string&)> set, const char* accepted) {
+      k.push_back({name, kind, nullptr, std::move(set), accepted});
+    };
+    // A text key naming one of a few values of the DrapeParams member `field`: (name, value).
+    auto choice = [&other](const char* name, auto field, auto values) {
+      std::string accepted = "one of ";
+      for (std::size_t i = 0; i < values.size(); ++i)
+        accepted += (i > 0 ? ", " : "") + values[i].first;
+      other(
+          name, Kind::Text,
+          [field, values](Scene& s, const std::string& v) {
+            for (const auto& [text, value] : values)
+              if (v == text) return (s.params.*field = value, true);
+            return false;
+          },
+          accepted.c_str());
+    };
+    other(
+        "scene.name", Kind::Text,
+        [](Scene& s, const std::string& v) { return is_name(v) ? (s.name = v, true) : false; },
+        "a non-empty name of letters, digits, _ and -");
+    number("fabric.width", [](Scene& s) -> double& { return s.params.width; });
+    number("fabric.areal_density", [](Scene& s) -> double& { return s.params.areal_density; });
+    number("model.stiffness", [](Scene& s) -> double& { return s.params.stiffness; });
+    number("model.damping", [](Scene& s) -> double& { return s.params.damping; });
+    number("model.elongation_limit", [](Scene& s) -> double& { return s.params.elongation_limit; });
+    number("model.natural_length", [](Scene& s) -> double& { return s.params.natural_length; });
+    choice("model.topology", &DrapeParams::topology,
+           std::vector<std::pair<std::string, char>>{{"a", 'a'}, {"b", 'b'}, {"c", 'c'}});
+    number("model.perturbation", [](Scene& s) -> double& { return s.params.perturbation; });
+    other(
+        "model.seed", Kind::Integer,
+        [](Scene& s, const std::string& v) {
+          auto digit = [](unsigned char c) { return std::isdigit(c) != 0; };
+          if (v.empty() || !std::all_of(v.begin(), v.end(), digit)) return false;
+          errno = 0;
+          const unsigned long long u = std::strtoull(v.c_str(), nullptr, 10);
+          if (errno == ERANGE || u > UINT_MAX) return false;
+          s.params.seed = static_cast<unsigned>(u);
+          return true;
+        },
+        "an integer in 0..4294967295");
+    choice("model.symmetry", &DrapeParams::symmetry,
+           std::vector<std::pair<std::string, DrapeSymmetry>>{{"none", DrapeSymmetry::None},
+                                                              {"half", DrapeSymmetry::Half},
+                                                              {"quarter", DrapeSymmetry::Quarter},
+                                                              {"eighth", DrapeSymmetry::Eighth}});
+    choice("pins.layout", &DrapeParams::layout,
+           std::vector<std::pair<std::string, PinLayout>>{{"four_corner", PinLayout::FourCorner},
+                                                          {"two_corner", PinLayout::TwoCorner}});
+    number("pins.span", [](Scene& s) -> double& { return s.params.pin_span; });
+    number("pins.move_time", [](Scene& s) -> double& { return s.params.pin_move_time; });
+    number("run.t_max", [](Scene& s) -> double& { return s.options.t_max; });
+    number("run.equilibrium_tol", [](Scene& s) -> double& { return s.options.equilibrium_tol; });
+    return k;
+  }();
+  return table;
+}
+
+[[noreturn]] void unknown_key(const std::string& key, const std::string& where) {
+  throw std::invalid_argument(unknown_key_message(key, scene_keys()) + where);
+}
+
+const Key& find_key(const std::string& name, const std::string& where) {
+  for (const Key& k : keys())
+    if (k.name == name) return k;
+  unknown_key(name, where);
+}
+
+// The accepted values of a key, for type errors. For numbers the range is asked from the
+// validators (with the field set to NaN), so it is stated in one place.
+std::string accepted(const Key& key) {
+  if (key.kind != Kind::Number) return key.accepted;
+  Scene probe;
+  key.number(probe) = std::numeric_limits<double>::quiet_NaN();
+  try {
+    probe.validate();
+  } catch (const std::invalid_argument& e) {
+    const std::string msg = e.what();
+    const std::string marker = ": must be ";
+    const size_t at = msg.find(marker);
+    if (at != std::string::npos) return "a number " + msg.substr(at + marker.size());
+  }
+  return "a finite number";
+}
+
+[[noreturn]] void bad_value(const Key& key, const std::string& shown, const std::string& where) {
+  throw std::invalid_argument(key.name + " = " + printable(shown) + ": must be " + accepted(key) +
+                              where);
+}
+
+// Sets a Number key; NaN and inf are type errors.
+void set_number(Scene& scene, const Key& key, double value, const std::string& shown,
+                const std::string& where) {
+  if (!std::isfinite(value)) bad_value(key, shown, where);
+  key.number(scene) = value;
+}
+
+// Sets `key` from text (a --set value, or a TOML string or integer).
+void set_from_text(Scene& scene, const Key& key, const std::string& text, const std::string& shown,
+                   const std::string& where) {
+  if (key.kind == Kind::Number) {
+    char* end = nullptr;
+    const double value = std::strtod(text.c_str(), &end);
+    if (text.empty() || end != text.c_str() + text.size()) bad_value(key, shown, where);
+    set_number(scene, key, value, shown, where);
+  } else if (!key.set(scene, text)) {
+    bad_value(key, shown, where);
+  }
+}
+
+std::string trim(const std::string& s) {
+  const size_t b = s.find_first_not_of(" \t");
+  if (b == std::string::npos) return "";
+  return s.substr(b, s.find_last_not_of(" \t") - b + 1);
+}
+
+void apply_override(Scene& scene, const std::string& assignment) {
+  const size_t eq = assignment.find('=');
+  if (eq == std::string::npos)
+    throw std::invalid_argument("--set " + printable(assignment) + ": expected key=value, e.g. " +
+                                "model.stiffness=900");
+  const std::string name = trim(assignment.substr(0, eq));
+  std::string value = trim(assignment.substr(eq + 1));
+  const Key& key = find_key(name, "");
+  if (key.kind == Kind::Text && value.size() >= 2 && value.front() == '"' && value.back() == '"')
+    value = value.substr(1, value.size() - 2);
+  set_from_text(scene, key, value, value, "");
+}
+
+// A TOML value as it appears in the file, for messages.
+std::string shown(const toml::node& node) {
+  std::ostringstream os;
+  node.visit([&os](const auto& v) { os << v; });
+  return os.str();
+}
+
+void apply_toml(Scene& scene, const std::string& text, const std::string& source) {
+  toml::table root;
+  try {
+    root = toml::parse(text, source);
+  } catch (const toml::parse_error& e) {
+    std::ostringstream os;
+    os << "scene " << source << ": TOML syntax error at line " << e.source().begin.line
+       << ", column " << e.source().begin.column << ": " << printable(std::string(e.description()));
+    throw std::invalid_argument(os.str());
+  }
+  auto where = [&source](const toml::node& node) {
+    return " (" + source + " line " + std::to_string(node.source().begin.line) + ")";
+  };
+  for (const auto& [section, section_node] : root) {
+    const std::string section_name(section.str());
+    const toml::table* table = section_node.as_table();
+    if (!table) unknown_key(section_name, where(section_node));
+    for (const auto& [name, node] : *table) {
+      const std::string full = section_name + "." + std::string(name.str());
+      const Key& key = find_key(full, where(node));
+      if (key.kind == Kind::Number && node.is_number()) {
+        // An integer beyond 2^53 has no exact double, so toml++'s value<double>() is empty:
+        // take the nearest double, and let the key's range check judge it.
+        const double v = node.is_integer() ? static_cast<double>(node.as_integer()->get())
+                                           : node.as_floating_point()->get();
+        set_number(scene, key, v, shown(node), where(node));
+      } else if (key.kind == Kind::Integer && node.is_integer()) {
+        set_from_text(scene, key, shown(node), shown(node), where(node));
+      } else if (key.kind == Kind::Text && node.is_string()) {
+        set_from_text(scene, key, node.value<std::string>().value(), shown(node), where(node));
+      } else {
+        bad_value(key, shown(node), where(node));
+      }
+    }
+  }
+}
+
+[[noreturn]] void unreadable(const std::string& path, const std::string& reason) {
+  std::string msg = "scene: cannot read " + path + ": " + reason;
+  if (path.find('/') == std::string::npos && path.find('.') == std::string::npos) {
+    msg += " (built-in scenes:";
+    for (const auto& s : builtin_scenes()) msg += " " + s.first;
+    msg += ")";
+  }
+  throw std::invalid_argument(msg);
+}
+
+}  // namespace
+
+void Scene::validate() const {
+  params.validate();
+  try {
+    options.validate();
+  } catch (const std::invalid_argument& e) {
+    // IntegratorOptions names its fields; the user wrote a scene key or a command-line flag.
+    rethrow_renamed(e, run_option_names());
+  }
+}
+
+Scene load_scene_text(const std::string& text, const std::string& name, const std::string& source,
+                      const std::vector<std::string>& overrides) {
+  Scene scene;
+  scene.name = name;
+  scene.source = source;
+  apply_toml(scene, text, source == "built-in" ? "built-in " + name : source);
+  for (const std::string& o : overrides) apply_override(scene, o);
+  scene.validate();
+  return scene;
+}
+
+Scene load_scene(const std::string& name_or_path, const std::vector<std::string>& overrides) {
+  const auto& builtins = builtin_scenes();
+  const auto builtin = std::find_if(builtins.begin(), builtins.end(),
+                                    [&](const auto& s) { return s.first == name_or_path; });
+  if (builtin != builtins.end())
+    return load_scene_text(builtin->second, builtin->first, "built-in", overrides);
+  std::string text, why;
+  if (!read_input_file(name_or_path, kMaxSceneFileBytes, text, why)) unreadable(name_or_path, why);
+  const std::string stem = std::filesystem::path(name_or_path).stem().string();
+  return load_scene_text(text, is_name(stem) ? stem : "scene", name_or_path, overrides);
+}
+
+std::vector<std::string> scene_keys() {
+  std::vector<std::string> names;
+  for (const Key& k : keys()) names.push_back(k.name);
+  return names;
+}
+
+std::string scene_description(const std::string& toml_text) {
+  std::istringstream in(toml_text);
+  std::string line;
+  std::getline(in, line);
+  if (!std::getline(in, line)) return "";
+  const size_t hash = line.find('#');
+  return hash == std::string::npos ? "" : trim(line.substr(hash + 1));
+}
+
+std::string default_integrator() {
+  for (const IntegratorInfo& info : integrator_catalog())
+    if (info.name == "cvode-bdf") return info.name;
+  return "implicit-euler";
+}
+
+DrapeResult run_drape(const Scene& scene, const std::string& integrator, RunObserver* observer,
+                      const RunState* from) {
+  scene.validate();
+  auto integ = make_integrator(integrator);
+  DrapeResult r{build_drape_grid(scene.params), 0, RunStats{}, {}, {}, 0.0, 0.0, {}, {}, 0.0};
+  const SpringNetwork& net = r.grid.network;
+  std::vector<double>& q = r.state_x;
+  std::vector<double>& qv = r.state_v;
+  const double t0 = from ? from->t : 0.0;
+  r.t_start = t0;
+  if (from) q = from->x, qv = from->v;
+  auto run = [&](const MechanicalSystem& sys) {
+    if (from &&
+        (static_cast<int>(q.size()) != sys.dof() || static_cast<int>(qv.size()) != sys.dof()))
+      throw std::invalid_argument("the state to continue from has " + std::to_string(q.size()) +
+                                  " unknowns; this scene integrates " + std::to_string(sys.dof()));
+    r.stats = run_to_equilibrium(sys, *integ, scene.options, q, qv, observer, t0);
+    r.integrated_dof = sys.dof();
+  };
+  std::vector<double> x;
+  if (scene.params.symmetry != DrapeSymmetry::None) {
+    const MirrorReduced reduced = make_drape_reduced(r.grid, scene.params.symmetry);
+    run(reduced);
+    x.resize(net.dof());
+    reduced.unfold(q.data(), x.data());
+  } else {
+    run(net);
+    x = q;
+  }
+  const double t = r.stats.t_final;
+  net.all_positions(t, x.data(), r.positions);
+  r.rest = net.spec().positions;
+  r.max_strain = net.max_strain(t, x.data());
+
+  const int n = r.grid.n;
+  double centre_z = 0.0;
+  int count = 0;
+  for (int i : {n / 2, (n + 1) / 2})
+    for (int j : {n / 2, (n + 1) / 2}) centre_z += r.positions[r.grid.index(i, j)].z, ++count;
+  double pin_z = 0.0;
+  for (int p : net.spec().pinned) pin_z += r.positions[p].z;
+  r.centre_sag = pin_z / net.spec().pinned.size() - centre_z / count;
+  return r;
+}
+
+std::string target_scene_name(const Scene& scene) {
+  if (scene.params.layout == PinLayout::FourCorner) return "four_corner";
+  return scene.params.pin_span < 1.0 ? "two_corner_slack" : "two_corner";
+}
+
+const std::vector<std::pair<std::string, std::string>>& run_option_names() {
+  static const std::vector<std::pair<std::string, std::string>> names = {
+      {"t_max", "run.t_max"},
+      {"equilibrium_tol", "run.equilibrium_tol"},
+      {"rtol", "--rtol"},
+      {"atol", "--atol"},
+      {"velocity_atol", "--velocity-atol"},
+      {"dt", "--dt"},
+      {"max_order", "--max-order"},
+      {"max_steps", "--max-steps"},
+      {"max_wall_seconds", "--max-wall"},
+      {"max_restarts", "--max-restarts"},
+      {"krylov_dim", "--krylov-dim"},
+      {"krylov_eps_lin", "--eps-lin"}};
+  return names;
+}
+
+}  // namespace knitsim

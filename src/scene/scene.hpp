@@ -1,0 +1,116 @@
+// Drape scenes (SPEC 2.2, 2.10): a DrapeParams set plus the run options of SPEC 2.3, loaded
+// from a built-in name or a TOML file, with `--set key=value` overrides, and run to equilibrium.
+//
+// Scene file (TOML), keys and units exactly as in models/scenes/four_corner.toml; every key is
+// optional (defaults: DrapeParams / IntegratorOptions, i.e. sample 1 hung from four corners):
+//   [scene]  name (text; default: the built-in name or the file's stem)
+//   [fabric] width (m), areal_density (g/m^2)
+//   [model]  stiffness (N/m), damping (N s/m), elongation_limit (percent),
+//            natural_length (m), topology (a|b|c), perturbation (m), seed (integer >= 0),
+//            symmetry (none|half|quarter|eighth: integrate one half of the grid, or one
+//            quarter or eighth of four_corner, unfolded after)
+//   [pins]   layout (four_corner|two_corner), span (fraction of the width), move_time (s)
+//   [run]    t_max (s), equilibrium_tol (static residual, dimensionless)
+// Line 2 of a scene file is a comment that describes it in one line (`knitsim list scenes`).
+//
+// Failure modes: every bad input throws std::invalid_argument with one line naming the key as
+// the user wrote it (scene key, or the command-line flag for the run options):
+//   "model.stifness: unknown key; did you mean model.stiffness?"
+//   "model.stiffness = abc: must be a number > 0 N/m"      (wrong type, NaN, inf)
+//   "model.stiffness = -5: must be > 0 N/m"                 (range, from DrapeParams::validate)
+//   "scene: cannot read FILE: <reason>",  "scene FILE: TOML syntax error at line L, column C: ..."
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "models/drape_grid.hpp"
+#include "solvers/integrator.hpp"
+#include "src/core/vec3.hpp"
+
+namespace knitsim {
+
+// The built-in scene files as (name, TOML text), compiled into the binary from
+// models/scenes/*.toml by src/scene/embed_scenes.cmake (defined in the generated builtin_scenes.cpp).
+const std::vector<std::pair<std::string, std::string>>& builtin_scenes();
+
+struct Scene {
+  std::string name = "four_corner";  // scene.name
+  std::string source = "built-in";   // "built-in" or the file path it was read from
+  DrapeParams params;
+  // Run options: the scene sets t_max and equilibrium_tol ([run]); the command line may set
+  // the integrator's tolerances, step and caps. Everything else keeps its default.
+  IntegratorOptions options;
+
+  // DrapeParams::validate and IntegratorOptions::validate, with the offending field renamed to
+  // what the user writes (run.t_max, --rtol, --max-wall, ...).
+  void validate() const;
+};
+
+// Loads a built-in scene (by name) or a scene file (any other argument is a path), applies the
+// "key=value" overrides in order, and validates the result. A file longer than
+// kMaxSceneFileBytes is refused unread ("scene: cannot read FILE: larger than ...").
+Scene load_scene(const std::string& name_or_path, const std::vector<std::string>& overrides = {});
+constexpr std::size_t kMaxSceneFileBytes = std::size_t{1} << 20;  // scene files are ~1 kB
+
+// The same from the TOML text itself: `name` is the default scene.name, `source` the file path
+// ("built-in" for a built-in scene) as messages show it. load_scene reads, then calls this.
+Scene load_scene_text(const std::string& text, const std::string& name, const std::string& source,
+                      const std::vector<std::string>& overrides = {});
+
+// The IntegratorOptions fields as the user writes them, for rethrow_renamed: the keys run.t_max
+// and run.equilibrium_tol (scene files, drape/knit --set) and the flags --rtol, --atol,
+// --velocity-atol, --dt, --max-order, --max-steps, --max-wall, --max-restarts, --krylov-dim,
+// --eps-lin.
+const std::vector<std::pair<std::string, std::string>>& run_option_names();
+
+// All scene keys, dotted ("model.stiffness"), in file order.
+std::vector<std::string> scene_keys();
+
+// The one-line description of a scene file: its line 2 without the leading "#".
+std::string scene_description(const std::string& toml_text);
+
+// cvode-bdf if the registry has it, otherwise implicit-euler (SPEC 2.4: cvode-bdf is the
+// default).
+std::string default_integrator();
+
+// One drape run and the quantities every report of it shows.
+struct DrapeResult {
+  DrapeGrid grid;               // the full model; particle (i, j) = grid.index(i, j)
+  int integrated_dof = 0;       // dof integrated: the grid's, or its reduction's (symmetry)
+  RunStats stats;               // status, counters, residual, wall time
+  std::vector<Vec3> positions;  // all particles (pins included) at stats.t_final, m
+  std::vector<Vec3> rest;       // all particles at t = 0, m
+  double max_strain = 0.0;      // largest spring strain (L - L0)/L0 at t_final
+  double centre_sag = 0.0;      // m: mean pin height minus the height of the grid centre (the
+                                // mean of the 1 or 4 particles nearest to it), at t_final
+  // The integrated state at t_final (integrated_dof unknowns each; the reduction's where
+  // model.symmetry is set): what `knitsim drape --continue` starts from (state.json).
+  std::vector<double> state_x, state_v;
+  double t_start = 0.0;  // s: where the run began (0, or the t of the state it continued from)
+};
+
+// Where a run continues from (knitsim drape|knit --continue): the integrated state (x, v) at
+// time t of an earlier run.
+struct RunState {
+  double t = 0.0;
+  std::vector<double> x, v;
+};
+
+// Builds the grid of `scene`, runs it from the flat state with run_to_equilibrium and the named
+// integrator (throws std::invalid_argument for an unknown name), and measures the result.
+// With model.symmetry = half | quarter | eighth the run integrates make_drape_reduced(grid) and
+// unfolds its final state onto the full grid, so positions, edges and outputs always see the full
+// sheet. A run that does not reach equilibrium is a status in result.stats, not an exception.
+// With `from` the run starts at from->t from that state instead of the flat sheet at rest; its
+// size must be the integrated dof (std::invalid_argument otherwise).
+DrapeResult run_drape(const Scene& scene, const std::string& integrator,
+                      RunObserver* observer = nullptr, const RunState* from = nullptr);
+
+// The target scene (src/fit/targets.hpp) a scene's edges are compared with: the one its pins imply
+// (four_corner; two_corner; two_corner_slack when pins.span < 1), whatever the scene's name.
+std::string target_scene_name(const Scene& scene);
+
+}  // namespace knitsim
