@@ -138,7 +138,7 @@ def max_position_error(a, b):
 
 
 def write_target_from(run, path):
-    """A coefficient target (src/targets.hpp CSV) holding the edge coefficients of `run`."""
+    """A coefficient target (src/fit/targets.hpp CSV) holding the edge coefficients of `run`."""
     s = run.summary
     with open(path, "w") as f:
         f.write("# edge coefficients of %s (%s)\n" % (run.folder, s["integrator"]))

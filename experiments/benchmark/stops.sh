@@ -6,7 +6,7 @@
 #   experiments/benchmark/stops.sh [--n N] [--seed S] [--scene four_corner|two_corner]
 #                                  [--symmetry none|half|quarter|eighth] [--rtol R] [--out DIR]
 #
-# Draws N parameter sets uniformly from the ICA box (src/drape_fit.hpp DrapeBounds: stiffness
+# Draws N parameter sets uniformly from the ICA box (src/fit/drape_fit.hpp DrapeBounds: stiffness
 # 500-1200 N/m, damping 10-20 N s/m, elongation limit 5-20 %, L0 4-6 cm, topology a/b/c) and
 # an areal density from paper 1's three (27.6, 41.65, 58.26 g/m^2), Python's random.Random(S),
 # and runs each (on the model.symmetry reduction given, default none) with rtol R (default 1e-8,

@@ -1,4 +1,4 @@
-// The knitsim subcommands (SPEC 2.10). Each lives in its own src/cmd_<name>.cpp and registers
+// The knitsim subcommands (SPEC 2.10). Each lives in its own src/cli/cmd_<name>.cpp and registers
 // itself on the CLI11 application; main.cpp only calls these.
 //
 // Contract for every command: exit status 0 on success; on bad input one line on stderr
