@@ -6,6 +6,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -17,10 +18,9 @@
 
 using namespace knitsim;
 using knitsim::test::max_abs_difference;
+using knitsim::test::settled_distance_bound;
 
 namespace {
-
-constexpr double kAgreement = 1e-6;  // m, final positions vs the reference
 
 struct Drape {
   RunStats stats;
@@ -59,12 +59,24 @@ DrapeGrid coarse_grid(double damping) {
   return build_drape_grid(p);
 }
 
-void require_agreement(const Drape& d, const Drape& ref, double tol) {
+// How far apart two runs that both stopped at equilibrium can be (m): each is within
+// equilibrium_distance_bound(its stop threshold: equilibrium_tol, or the round-off floor where
+// that is larger) of the exact equilibrium (tests/test_systems.hpp). Measured 2026-11-27
+// (Release): four_corner 1.8e-11 to 3.9e-11 m against a bound of 6.4e-10 m; two_corner up to
+// 1.9e-8 m (GMRES) against 3.4e-7 m (a soft hanging sheet: small lambda_min); the 6 x 6 grid
+// 5e-12 to 9e-12 m against 4.8e-10 m.
+double agreement_bound(const SpringNetwork& net, const Drape& a, const Drape& b) {
+  return settled_distance_bound(net, a.stats.t_final, a.x, b.stats.t_final, b.x);
+}
+
+void require_agreement(const SpringNetwork& net, const Drape& d, const Drape& ref) {
   INFO(d.stats.integrator << ": " << to_string(d.stats.status) << " (" << d.stats.message
                           << "), residual " << d.stats.residual << ", steps " << d.stats.steps);
   REQUIRE(d.stats.status == RunStatus::Equilibrium);
   CHECK(d.stats.residual <= IntegratorOptions{}.equilibrium_tol);
-  CHECK(max_abs_difference(d.x, ref.x) <= tol);
+  const double diff = max_abs_difference(d.x, ref.x), bound = agreement_bound(net, d, ref);
+  INFO("max |x - x_ref| " << diff << " m, bound " << bound << " m");
+  CHECK(diff <= bound);
 }
 
 const std::vector<std::string> kSundials = {"cvode-bdf",   "cvode-bdf-dense", "cvode-bdf-gmres",
@@ -93,7 +105,7 @@ TEST_CASE("matrix-based SUNDIALS integrators reach the four_corner equilibrium o
   for (const char* name : {"cvode-bdf", "arkode-dirk", "arkode-imex", "static"}) {
     SECTION(name) {
       const Drape d = drape(four_corner().network, name, IntegratorOptions{});
-      require_agreement(d, ref, kAgreement);
+      require_agreement(four_corner().network, d, ref);
       CHECK(d.stats.jac_evals > 0);
       CHECK(d.stats.lin_setups >= d.stats.jac_evals);
       CHECK(d.stats.nonlin_iters >= d.stats.steps);
@@ -130,7 +142,8 @@ TEST_CASE("static and cvode-bdf stop at the round-off floor when it is above equ
           d->stats.residual_floor);
   }
   CHECK(max_abs_difference(st.v, std::vector<double>(st.v.size(), 0.0)) == 0.0);
-  CHECK(max_abs_difference(st.x, bdf.x) <= kAgreement);
+  // (measured 6.6e-11 m against a bound of 4.7e-9 m)
+  CHECK(max_abs_difference(st.x, bdf.x) <= agreement_bound(grid.network, st, bdf));
   // The floor never loosens a tolerance by more than 1e3: 1e-14 stays below it.
   CHECK(equilibrium_threshold(grid.network, bdf.stats.t_final, bdf.x.data(), 1e-14) == 1e-11);
 }
@@ -145,7 +158,7 @@ TEST_CASE("static lands on the two_corner equilibrium of the dynamics") {
   for (std::size_t i = 2; i < ref.x.size(); i += 3) z_min = std::min(z_min, ref.x[i]);
   CHECK(z_min < -0.45);  // the sheet has swung down and hangs from its two corners
   const Drape d = drape(grid.network, "static", IntegratorOptions{});
-  require_agreement(d, ref, kAgreement);
+  require_agreement(grid.network, d, ref);
 }
 
 TEST_CASE("cvode-bdf-dense agrees with cvode-bdf on a small mesh") {
@@ -153,7 +166,7 @@ TEST_CASE("cvode-bdf-dense agrees with cvode-bdf on a small mesh") {
   const Drape ref = drape(grid.network, "cvode-bdf", reference_options());
   REQUIRE(ref.stats.status == RunStatus::Equilibrium);
   const Drape d = drape(grid.network, "cvode-bdf-dense", reference_options());
-  require_agreement(d, ref, kAgreement);
+  require_agreement(grid.network, d, ref);
   CHECK(d.stats.jac_evals > 0);
 }
 
@@ -179,7 +192,7 @@ TEST_CASE("cvode-bdf-gmres reaches the four_corner equilibrium; its floor is set
   REQUIRE(d.stats.status == RunStatus::Equilibrium);
   CHECK(d.stats.residual < 1e-8);
   CHECK(d.stats.lin_iters > 0);
-  CHECK(max_abs_difference(d.x, four_corner_reference().x) <= 1e-9);
+  require_agreement(four_corner().network, d, four_corner_reference());
 
   IntegratorOptions loose;  // block-Jacobi: its preconditioned residual is a poor error measure
   loose.gmres_preconditioner = IntegratorOptions::GmresPreconditioner::BlockJacobi;
@@ -201,8 +214,7 @@ TEST_CASE(
     opt.gmres_preconditioner = all[i];
     const Drape d = drape(four_corner().network, "cvode-bdf-gmres", opt);
     INFO(to_string(all[i]) << ": " << d.stats.message);
-    REQUIRE(d.stats.status == RunStatus::Equilibrium);
-    CHECK(max_abs_difference(d.x, four_corner_reference().x) <= 1e-9);
+    require_agreement(four_corner().network, d, four_corner_reference());
     iters[i] = d.stats.lin_iters;
   }
   // Measured 4091 / 3249 / 1371.
@@ -252,29 +264,94 @@ TEST_CASE("restart: the same state and time, counters kept, a fresh small first 
   }
 }
 
-TEST_CASE("restarts carry cvode-bdf-gmres through two_corner's repeated error-test failures") {
-  // Measured (README "Integrators"): without restarts, schur-ldl GMRES fails CVODE's error
-  // test seven times in a row (order 4, h 130 s -> 2e-3 s) at eps_lin 5e-3, 5e-5 and 5e-6; a
-  // restart from the last accepted state settles each. If a change moves this knife edge so
-  // that none of the three needs a restart, pick failing values again with `knitsim drape
-  // --scene two_corner --integrator cvode-bdf-gmres --eps-lin E --max-restarts 0`.
+namespace {
+
+// A SUNDIALS integrator whose `fail_at`-th step call fails once, recoverably, without stepping
+// (the state stays the last accepted one, as after CVODE's CV_ERR_FAILURE); restart() is the
+// real method's. Records the order of the step before the failure and of the step after it.
+class FailOnce final : public Integrator {
+ public:
+  FailOnce(const std::string& name, long fail_at)
+      : inner_(make_integrator(name)), fail_at_(fail_at) {}
+  const IntegratorInfo& info() const override { return inner_->info(); }
+  void start(const MechanicalSystem& sys, double t0, const double* x0, const double* v0,
+             const IntegratorOptions& opt) override {
+    inner_->start(sys, t0, x0, v0, opt);
+  }
+  Step step(double t_stop) override {
+    ++calls_;
+    if (calls_ == fail_at_) {
+      order_before_ = inner_->last_order();
+      return {false, "injected error-test failure", true};
+    }
+    const Step st = inner_->step(t_stop);
+    if (calls_ == fail_at_ + 1) order_after_ = inner_->last_order();
+    return st;
+  }
+  bool restart() override { return inner_->restart(); }
+  int last_order() const override { return inner_->last_order(); }
+  double time() const override { return inner_->time(); }
+  const double* positions() const override { return inner_->positions(); }
+  const double* velocities() const override { return inner_->velocities(); }
+  void fill_stats(RunStats& st) const override { inner_->fill_stats(st); }
+  int order_before() const { return order_before_; }
+  int order_after() const { return order_after_; }
+
+ private:
+  std::unique_ptr<Integrator> inner_;
+  long fail_at_, calls_ = 0;
+  int order_before_ = 0, order_after_ = 0;
+};
+
+}  // namespace
+
+TEST_CASE("a recoverable failure mid-run: the driver restarts CVODE, which settles as before") {
+  // Whether a real run needs a restart is a knife edge (two_corner, cvode-bdf-gmres: CVODE's
+  // seventh error-test failure in a row, or not, depending on round-off; README "Integrators"),
+  // so the mechanism is tested with a failure injected half-way through a four_corner run, at
+  // high order and large steps: the driver must restart the real CVODE (fresh order 1), and the
+  // run must still settle on the same equilibrium within the stop criterion's bound.
+  const SpringNetwork& net = four_corner().network;
+  const Drape clean = drape(net, "cvode-bdf-gmres", IntegratorOptions{});
+  REQUIRE(clean.stats.status == RunStatus::Equilibrium);
+  FailOnce failing("cvode-bdf-gmres", clean.stats.steps / 2);
+  Drape d;
+  d.stats = run_to_equilibrium(net, failing, IntegratorOptions{}, d.x, d.v);
+  INFO(d.stats.message << "; order before the failure " << failing.order_before() << ", after "
+                       << failing.order_after());
+  CHECK(d.stats.restarts >= 1);
+  CHECK(failing.order_before() >= 2);  // the history that a restart throws away
+  CHECK(failing.order_after() == 1);
+  require_agreement(net, d, four_corner_reference());
+  // Without restarts the same failure ends the run, saying what failed.
+  IntegratorOptions none;
+  none.max_restarts = 0;
+  FailOnce again("cvode-bdf-gmres", clean.stats.steps / 2);
+  std::vector<double> x, v;
+  const RunStats s = run_to_equilibrium(net, again, none, x, v);
+  CHECK(s.status == RunStatus::SolverFailure);
+  CHECK(s.message == "injected error-test failure");
+}
+
+TEST_CASE("with restarts allowed, cvode-bdf-gmres settles two_corner at eps_lin 5e-3 to 5e-6") {
+  // Measured (README "Integrators"): without restarts, schur-ldl GMRES failed CVODE's error
+  // test seven times in a row (order 4, h 130 s -> 2e-3 s) at these eps_lin; a restart from the
+  // last accepted state settled each (1 restart each, 2026-11-27). Whether a run needs the
+  // restart at all is a round-off knife edge, so only the outcome is asserted: every run
+  // settles on the reference equilibrium (the mechanism itself: the test above).
   DrapeParams p;
   p.layout = PinLayout::TwoCorner;
   const DrapeGrid grid = build_drape_grid(p);
   const Drape ref = drape(grid.network, "cvode-bdf", IntegratorOptions{});
   REQUIRE(ref.stats.status == RunStatus::Equilibrium);
-  long restarts = 0;
   for (const double eps_lin : {5e-3, 5e-5, 5e-6}) {
     IntegratorOptions opt;
     opt.krylov_eps_lin = eps_lin;
     const Drape d = drape(grid.network, "cvode-bdf-gmres", opt);
     INFO("eps_lin " << eps_lin << ": " << d.stats.message << ", " << d.stats.restarts
                     << " restarts");
-    CHECK(d.stats.status == RunStatus::Equilibrium);
-    CHECK(max_abs_difference(d.x, ref.x) <= kAgreement);
-    restarts += d.stats.restarts;
+    require_agreement(grid.network, d, ref);
   }
-  CHECK(restarts >= 1);
 }
 
 TEST_CASE("the block-Jacobi preconditioner cuts GMRES iterations") {
@@ -302,7 +379,7 @@ TEST_CASE("non-stiff methods agree with cvode-bdf on a lightly damped coarse dra
   for (const char* name : {"cvode-adams", "arkode-erk"}) {
     SECTION(name) {
       const Drape d = drape(grid.network, name, reference_options());
-      require_agreement(d, ref, kAgreement);
+      require_agreement(grid.network, d, ref);
       CHECK(d.stats.jac_evals == 0);
       CHECK(d.stats.lin_setups == 0);
     }

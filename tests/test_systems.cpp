@@ -1,9 +1,12 @@
 #include "tests/test_systems.hpp"
 
+#include <Eigen/Dense>
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <string>
 
 namespace knitsim::test {
 
@@ -88,6 +91,39 @@ double max_abs_difference(const std::vector<double>& a, const std::vector<double
 
 double total_energy(const MechanicalSystem& sys, double t, const double* x, const double* v) {
   return sys.kinetic_energy(v) + sys.potential_energy(t, x);
+}
+
+double equilibrium_distance_bound(const SpringNetwork& net, double t, const std::vector<double>& x,
+                                  double residual) {
+  const int n = net.dof();
+  if (static_cast<int>(x.size()) != n)
+    throw std::invalid_argument("equilibrium_distance_bound: state size does not match");
+  // K = -M da_c/dx, symmetrised (the spring forces are conservative: it is symmetric up to
+  // rounding).
+  const CscPattern& p = net.stiffness_pattern();
+  std::vector<double> values(p.nnz());
+  net.stiffness_values(t, x.data(), values.data());
+  Eigen::MatrixXd K = Eigen::MatrixXd::Zero(n, n);
+  for (int c = 0; c < n; ++c)
+    for (int k = p.colptr[c]; k < p.colptr[c + 1]; ++k)
+      K(p.rowind[k], c) = -net.mass()[p.rowind[k]] * values[k];
+  K = 0.5 * (K + K.transpose()).eval();
+  const double lambda_min =
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(K, Eigen::EigenvaluesOnly)
+          .eigenvalues()
+          .minCoeff();
+  if (!(lambda_min > 0.0))
+    throw std::runtime_error("equilibrium_distance_bound: K is not positive definite (lambda_min " +
+                             std::to_string(lambda_min) + " N/m)");
+  const double particles = n / 3;
+  return std::sqrt(particles) * residual * net.residual_force_scale() / lambda_min;
+}
+
+double settled_distance_bound(const SpringNetwork& net, double ta, const std::vector<double>& xa,
+                              double tb, const std::vector<double>& xb, double equilibrium_tol) {
+  const double ra = equilibrium_threshold(net, ta, xa.data(), equilibrium_tol);
+  const double rb = equilibrium_threshold(net, tb, xb.data(), equilibrium_tol);
+  return equilibrium_distance_bound(net, tb, xb, ra + rb);  // linear in the residual
 }
 
 }  // namespace knitsim::test

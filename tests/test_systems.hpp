@@ -87,4 +87,24 @@ double max_abs_difference(const std::vector<double>& a, const std::vector<double
 // Kinetic + potential energy (J) of sys at (t, x, v).
 double total_energy(const MechanicalSystem& sys, double t, const double* x, const double* v);
 
+// How far (m, max norm, to first order) a state of `net` whose static residual is at most
+// `residual` can lie from the exact equilibrium at x: the net force on each of the p free
+// particles is at most residual x F_ref (SPEC 2.3), so |F|_2 <= sqrt(p) residual F_ref, and
+// the state is dx = K^-1 F away, K = -dF/dx the springs' tangent stiffness at x (symmetric
+// positive definite at a stable equilibrium):
+//   |dx|_inf <= |dx|_2 <= sqrt(p) residual F_ref / lambda_min(K).
+// This is what the stop criterion guarantees, whatever the integrator: two runs that stopped
+// at residuals r1 and r2 are within bound(r1) + bound(r2) of each other. Dense (Eigen), for
+// test-sized networks; throws std::runtime_error if K is not positive definite at x.
+double equilibrium_distance_bound(const SpringNetwork& net, double t, const std::vector<double>& x,
+                                  double residual);
+
+// The stop criterion's bound on how far apart (m, max norm) two settled runs of `net` can end,
+// at (ta, xa) and (tb, xb): each stopped at a static residual <= equilibrium_threshold (the
+// tolerance, or the round-off floor where that is larger), so each is within
+// equilibrium_distance_bound of it from the exact equilibrium (K evaluated at xb).
+double settled_distance_bound(const SpringNetwork& net, double ta, const std::vector<double>& xa,
+                              double tb, const std::vector<double>& xb,
+                              double equilibrium_tol = IntegratorOptions{}.equilibrium_tol);
+
 }  // namespace knitsim::test
