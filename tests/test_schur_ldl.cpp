@@ -4,7 +4,9 @@
 #include <sunmatrix/sunmatrix_sparse.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <random>
 #include <stdexcept>
 
@@ -13,6 +15,7 @@
 #include "solvers/schur_ldl_solver.hpp"
 #include "solvers/sundials_common.hpp"
 #include "src/core/first_order.hpp"
+#include "tests/test_systems.hpp"
 
 using namespace knitsim;
 
@@ -165,7 +168,7 @@ TEST_CASE("Schur solve: the particle-wise A_vx b1 gives the column-wise sums bit
   SUNLinSolFree(column_ls);
 }
 
-TEST_CASE("cvode-bdf takes the same steps to the same equilibrium with KLU, LDL^T and CG-LDL^T") {
+TEST_CASE("cvode-bdf reaches the same equilibrium in as many steps with KLU, LDL^T and CG-LDL^T") {
   const DrapeGrid g = build_drape_grid(DrapeParams{});
   using NS = IntegratorOptions::NewtonSolver;
   const NS which[3] = {NS::Klu, NS::SchurLdl, NS::SchurCgLdl};
@@ -182,11 +185,16 @@ TEST_CASE("cvode-bdf takes the same steps to the same equilibrium with KLU, LDL^
     INFO("solver " << k << ": " << s[k].steps << " steps, " << s[k].lin_setups << " setups, "
                    << s[k].factorisations << " factorisations, " << s[k].lin_iters
                    << " CG iterations");
-    CHECK(s[0].steps == s[k].steps);
-    CHECK(s[0].lin_setups == s[k].lin_setups);
-    double diff = 0.0;
-    for (size_t i = 0; i < x[0].size(); ++i) diff = std::max(diff, std::abs(x[0][i] - x[k][i]));
-    CHECK(diff < 1e-12);
+    // The three solve the same Newton systems, but their solutions differ at round-off (and
+    // CG's by up to 1e-6 relative), which may flip an accept/reject decision of CVODE's tests
+    // where one sits near its threshold: counts within 5 %. Measured 2026-11-27: equal (246
+    // steps, 48 setups), and unchanged even by rtol x (1 +- 1e-3) on four_corner.
+    CHECK(std::abs(s[0].steps - s[k].steps) <= s[0].steps / 20);
+    CHECK(std::abs(s[0].lin_setups - s[k].lin_setups) <= s[0].lin_setups / 20);
+    // The same equilibrium: both within the stop criterion's bound of it (test_systems.hpp;
+    // measured 2026-11-27: 3e-16 and 2.6e-15 m against 6.4e-10 m).
+    const double diff = test::max_abs_difference(x[0], x[k]);
+    CHECK(diff <= test::settled_distance_bound(g.network, s[k].t_final, x[k], s[0].t_final, x[0]));
   }
   // KLU and LDL^T factorise at every setup; CG-LDL^T skips the early, small-step setups.
   CHECK(s[0].factorisations == s[0].lin_setups);

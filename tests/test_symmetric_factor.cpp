@@ -2,7 +2,9 @@
 // LDL^T (solvers/block_ldlt.hpp) and CHOLMOD's supernodal LL^T with its LDL^T fallback, against
 // dense solves, and the integrators that use them.
 #include <Eigen/Dense>
+#include <algorithm>
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <random>
 #include <thread>
 #include <vector>
@@ -13,6 +15,7 @@
 #include "solvers/integrator.hpp"
 #include "solvers/schur_matrix.hpp"
 #include "solvers/symmetric_factor.hpp"
+#include "tests/test_systems.hpp"
 
 using namespace knitsim;
 using Backend = IntegratorOptions::Factorization;
@@ -167,7 +170,7 @@ TEST_CASE("SymmetricFactor: automatic takes the supernodal back end from superno
   }
 }
 
-TEST_CASE("Integrators reach the same equilibrium in the same steps with every back end") {
+TEST_CASE("Integrators reach the same equilibrium in as many steps with every back end") {
   const DrapeGrid g = build_drape_grid(DrapeParams{});  // four_corner, 351 dof
   const char* integrator = GENERATE("cvode-bdf", "implicit-euler", "cvode-bdf-gmres");
   RunStats s[3];
@@ -188,11 +191,19 @@ TEST_CASE("Integrators reach the same equilibrium in the same steps with every b
   for (int k = 1; k < 3; ++k) {
     INFO(integrator << ", " << to_string(which[k]) << ": " << s[0].steps << " vs " << s[k].steps
                     << " steps");
-    CHECK(s[0].steps == s[k].steps);
-    CHECK(s[0].factorisations == s[k].factorisations);
-    double diff = 0.0;
-    for (size_t i = 0; i < x[0].size(); ++i) diff = std::max(diff, std::abs(x[0][i] - x[k][i]));
-    CHECK(diff < 1e-10);
+    // The back ends factorise the same S, but their solves differ at round-off (other pivot
+    // orders; LL^T vs LDL^T), which may flip an accept/reject decision where one sits near its
+    // threshold: counts within 5 % (at least 1). Measured 2026-11-27: equal, and unchanged even
+    // by rtol x (1 +- 1e-3) on four_corner.
+    const long margin = std::max(1L, s[0].steps / 20);
+    CHECK(std::abs(s[0].steps - s[k].steps) <= margin);
+    CHECK(std::abs(s[0].factorisations - s[k].factorisations) <=
+          std::max(1L, s[0].factorisations / 20));
+    // The same equilibrium: both within the stop criterion's bound of it (test_systems.hpp;
+    // measured 2026-11-27: 2e-16 to 3.3e-15 m against 6.4e-10 m).
+    const double diff = test::max_abs_difference(x[0], x[k]);
+    INFO("max |x - x_simplicial| " << diff << " m");
+    CHECK(diff <= test::settled_distance_bound(g.network, s[k].t_final, x[k], s[0].t_final, x[0]));
   }
 }
 
