@@ -2,14 +2,20 @@
 // exit status, stdout and stderr. KNITSIM_EXE (the binary's path) is defined by the build.
 #pragma once
 
+#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <string>
+#include <system_error>
+#include <thread>
 #include <vector>
 
 #ifndef KNITSIM_EXE
@@ -76,6 +82,72 @@ inline pid_t start_knitsim(const std::string& args, const TempDir& tmp) {
     ::_exit(127);
   }
   return pid;
+}
+
+// Sends `signal` to the background run `pid` (start_knitsim) once `ready()` holds -- an event
+// the run itself produces (a file written, a checkpoint line, a handler installed) -- and waits
+// for the run to end. ready() is evaluated while the run is stopped by SIGSTOP and the signal
+// is sent before SIGCONT, so the run can neither finish nor move on between the check and the
+// signal: the outcome does not depend on the machine's speed, its load or a sanitizer's
+// slowdown. `signalled` is false if the run ended before ready() held, or if ready() had not held
+// after `timeout`; `status` is the run's wait status, -1 if it had not ended after `timeout`
+// (it is then killed).
+struct SignalledRun {
+  bool signalled = false;
+  int status = -1;
+};
+inline SignalledRun signal_when(pid_t pid, int signal, const std::function<bool()>& ready,
+                                std::chrono::seconds timeout = std::chrono::seconds(600)) {
+  SignalledRun r;
+  const auto give_up = std::chrono::steady_clock::now() + timeout;
+  int st = 0;
+  while (!r.signalled) {
+    if (std::chrono::steady_clock::now() > give_up) {
+      ::kill(pid, SIGKILL);
+      ::waitpid(pid, &st, 0);
+      return r;
+    }
+    ::kill(pid, SIGSTOP);
+    if (::waitpid(pid, &st, WUNTRACED) != pid) return r;
+    if (!WIFSTOPPED(st)) {  // it ended before ready() held
+      r.status = st;
+      return r;
+    }
+    r.signalled = ready();
+    if (r.signalled) ::kill(pid, signal);  // delivered when the run continues
+    ::kill(pid, SIGCONT);
+    if (!r.signalled) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  pid_t done = 0;
+  while ((done = ::waitpid(pid, &st, WNOHANG)) == 0 && std::chrono::steady_clock::now() < give_up)
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  if (done == 0) {
+    ::kill(pid, SIGKILL);
+    ::waitpid(pid, &st, 0);
+    return r;
+  }
+  r.status = st;
+  return r;
+}
+
+// Whether process `pid` runs the knitsim binary (not yet the forked test process or the shell
+// of start_knitsim, which have handlers of their own) and has installed a handler for `signal`
+// (the SigCgt mask of /proc/<pid>/status; Linux).
+inline bool knitsim_handles(pid_t pid, int signal) {
+  const std::string proc = "/proc/" + std::to_string(pid);
+  std::error_code ec;
+  if (fs::read_symlink(proc + "/exe", ec) != fs::canonical(KNITSIM_EXE) || ec) return false;
+  std::ifstream in(proc + "/status");
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind("SigCgt:", 0) == 0)
+      return (std::stoull(line.substr(7), nullptr, 16) >> (signal - 1)) & 1ULL;
+  return false;
+}
+
+// Newline-terminated lines in `p` so far (a line being written is not counted).
+inline long complete_lines(const fs::path& p) {
+  const std::string text = slurp(p);
+  return static_cast<long>(std::count(text.begin(), text.end(), '\n'));
 }
 
 }  // namespace knitsim::test

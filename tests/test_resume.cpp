@@ -10,13 +10,12 @@
 
 #include <algorithm>
 #include <catch2/catch.hpp>
-#include <chrono>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
-#include <thread>
 
 #include "src/fit/ica.hpp"
 #include "src/fit/test_functions.hpp"
@@ -84,31 +83,16 @@ void check_same_run(const IcaResult& r, const IcaResult& ref) {
   }
 }
 
-// Starts `knitsim <args>` (writing into `out`) in the background and sends it `signal` half a
-// second after `out` appears (the handler is installed right after --out is made); returns its
-// wait status, or -1 if it had not ended 60 s after the start (it is then killed).
-int interrupted_run(const std::string& args, const std::filesystem::path& out, int signal,
+// Starts `knitsim <args>` in the background, sends it `signal` once `ready(pid)` holds (checked
+// with the run stopped: cli_runner.hpp, signal_when) and waits for it to end; returns its wait
+// status, or -1 if it ended before ready() held or had not ended 600 s after the start.
+int interrupted_run(const std::string& args, int signal, const std::function<bool(pid_t)>& ready,
                     const knitsim::test::TempDir& tmp) {
   const pid_t pid = knitsim::test::start_knitsim(args, tmp);
   if (pid <= 0) return -1;
-  int status = 0;
-  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  while (!std::filesystem::exists(out) && std::chrono::steady_clock::now() < give_up &&
-         ::waitpid(pid, &status, WNOHANG) == 0)
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  std::this_thread::sleep_for(std::chrono::milliseconds(500));
-  ::kill(pid, signal);
-  // Ends at its next residual check (Euler: every 1000 steps, well under a second).
-  pid_t done = 0;
-  while ((done = ::waitpid(pid, &status, WNOHANG)) == 0 &&
-         std::chrono::steady_clock::now() < give_up)
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  if (done == 0) {
-    ::kill(pid, SIGKILL);
-    ::waitpid(pid, &status, 0);
-    return -1;
-  }
-  return status;
+  const knitsim::test::SignalledRun r =
+      knitsim::test::signal_when(pid, signal, [&] { return ready(pid); });
+  return r.signalled ? r.status : -1;
 }
 
 // The arguments of a small, fast fit on a 30 cm four_corner sheet (add --decades, --seed,
@@ -129,28 +113,24 @@ std::string small_fit_args(const knitsim::test::TempDir& tmp) {
 }
 
 // Starts the fit `args` writing into `out`, sends it `signal` once its checkpoint holds decade 1
-// or later (or at the latest 60 s after the start) and waits for it to end; returns its wait
-// status, and in `decade` the checkpoint's decade seen before the signal (-1 if none).
+// or later (checked with the fit stopped, so it cannot run on to its end in between:
+// cli_runner.hpp, signal_when) and waits for it to end; returns its wait status (-1 if it ended
+// first), and in `decade` the checkpoint's decade when the signal was sent (-1 if none).
 int fit_signalled_after_decade_one(const std::string& args, const std::filesystem::path& out,
                                    int signal, const knitsim::test::TempDir& tmp, int& decade) {
   const pid_t pid = knitsim::test::start_knitsim(args + " --out '" + out.string() + "'", tmp);
   if (pid <= 0) return -1;
   const std::filesystem::path checkpoint = out / "ica_checkpoint.json";
-  int status = 0;
   decade = -1;
-  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  while (decade < 1 && std::chrono::steady_clock::now() < give_up &&
-         ::waitpid(pid, &status, WNOHANG) == 0) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  const knitsim::test::SignalledRun r = knitsim::test::signal_when(pid, signal, [&] {
     if (std::filesystem::exists(checkpoint))  // written atomically: always whole
       decade = nlohmann::json::parse(knitsim::test::slurp(checkpoint))
                    .at("state")
                    .at("decade")
                    .get<int>();
-  }
-  ::kill(pid, signal);
-  ::waitpid(pid, &status, 0);
-  return status;
+    return decade >= 1;
+  });
+  return r.signalled ? r.status : -1;
 }
 
 // The fit resumed in `cut` wrote what the uninterrupted fit in `whole` did, bit for bit.
@@ -399,7 +379,8 @@ TEST_CASE(
     "interrupted, exit 128 + signal") {
   using namespace knitsim::test;
   TempDir tmp("interrupt");
-  // Two runs that take minutes (explicit Euler to equilibrium), stopped after half a second.
+  // Two runs that take minutes (explicit Euler to equilibrium), signalled as soon as their
+  // handler is installed: the run ends at its first residual check (Euler: 1000 steps).
   std::string chart;
   for (int r = 0; r < 20; ++r, chart += '\n')
     for (int c = 0; c < 20; ++c) chart += (r % 4 == 1 && c % 5 == 2) ? 'T' : 'K';
@@ -417,8 +398,9 @@ TEST_CASE(
   for (const Case& c : cases) {
     INFO(c.args);
     const fs::path out = tmp.path / ("out-" + std::to_string(c.signal));
-    const int status =
-        interrupted_run(c.args + " --quiet --out '" + out.string() + "'", out, c.signal, tmp);
+    const int status = interrupted_run(
+        c.args + " --quiet --out '" + out.string() + "'", c.signal,
+        [&](pid_t pid) { return knitsim::test::knitsim_handles(pid, c.signal); }, tmp);
     const std::string err = slurp(tmp.path / "background-stderr.txt");
     INFO("stderr: " << err);
     REQUIRE(WIFEXITED(status));
@@ -584,8 +566,11 @@ TEST_CASE("knitsim demo stopped by SIGINT: the report of the runs so far, exit 1
   using namespace knitsim::test;
   TempDir tmp("demo-interrupt");
   const fs::path out = tmp.path / "demo";
-  // The scenes take a fraction of a second; the signal lands in the integrator comparison.
-  const int status = interrupted_run("demo --out '" + out.string() + "'", out, SIGINT, tmp);
+  // Signalled once the last scene's summary is written: the signal lands in the integrator
+  // comparison (which takes minutes).
+  const int status = interrupted_run(
+      "demo --out '" + out.string() + "'", SIGINT,
+      [&](pid_t) { return fs::exists(out / "two_corner" / "summary.json"); }, tmp);
   const std::string err = slurp(tmp.path / "background-stderr.txt");
   INFO("stderr: " << err);
   REQUIRE(WIFEXITED(status));
