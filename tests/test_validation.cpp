@@ -5,14 +5,13 @@
 // (noted per case) or pins down behaviour the fuzzers and the CLI rely on.
 #include <algorithm>
 #include <catch2/catch.hpp>
-#include <chrono>
 #include <fstream>
 #include <functional>
 #include <string>
 #include <vector>
 
-#include "src/scene/scene.hpp"
 #include "src/fit/targets.hpp"
+#include "src/scene/scene.hpp"
 #include "tests/cli_runner.hpp"
 
 using namespace knitsim;
@@ -184,12 +183,12 @@ TEST_CASE("an unwritable --out fails before any work, for every command that wri
       "taguchi --responses '" + responses.string() + "'",
       "demo",
   };
+  // No run started: expect_bad_input requires an empty stdout, and the runs print as they go
+  // (fit its settings line before the first drape, demo a line per run). (A wall-clock bound
+  // stood here; it proved less and could break under a sanitizer on a loaded machine.)
   for (const fs::path& bad : {fs::path("/proc/knitsim-out"), file / "sub"})
     for (const std::string& c : commands) {
-      const auto start = std::chrono::steady_clock::now();
       expect_bad_input(c + " --out '" + bad.string() + "'", "--out " + bad.string(), tmp);
-      // No run started: a fit or a demo would take seconds to minutes.
-      CHECK(std::chrono::steady_clock::now() - start < std::chrono::seconds(5));
       CHECK(!fs::exists(bad));
     }
 }
