@@ -3,6 +3,8 @@
 //
 // Speed: the base scene is a 30 cm sheet (fabric.width = 0.3), so L0 ~ 5 cm gives a 7 x 7 grid
 // and one evaluation costs a few ms.
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -52,7 +54,8 @@ void write_twin_target(const std::string& path) {
 }
 
 Target twin_target() {
-  const std::string path = (std::filesystem::temp_directory_path() / "knitsim_test_fit.csv");
+  const std::string path = std::filesystem::temp_directory_path() /
+                           ("knitsim_test_fit_" + std::to_string(::getpid()) + ".csv");
   write_twin_target(path);
   Target read = read_target_csv(path);
   std::filesystem::remove(path);
@@ -269,7 +272,8 @@ TEST_CASE("paper 1's tables (paper_repro/data) parse and agree with the code's d
 
 TEST_CASE("knitsim fit: bad input writes nothing; a run writes the SPEC 2.10 summary") {
   namespace fs = std::filesystem;
-  const fs::path tmp = fs::temp_directory_path() / "knitsim_test_fit_cli";
+  const fs::path tmp =
+      fs::temp_directory_path() / ("knitsim_test_fit_cli_" + std::to_string(::getpid()));
   fs::remove_all(tmp);
   fs::create_directories(tmp);
   const std::string target = (tmp / "twin.csv").string();

@@ -1,6 +1,8 @@
 // Paper 1's sample data in code (src/paper/paper_data.hpp) against the committed tables, and the
 // synthetic targets of SPEC 2.8 (src/fit/synthetic_targets.hpp): exact edges without noise, the
 // noise's statistics, determinism, and regeneration of the committed files bit for bit.
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -231,7 +233,8 @@ TEST_CASE("same seed -> same numbers; another seed or scene -> other numbers") {
 TEST_CASE("knitsim targets regenerates the committed twin_sample1.csv byte for byte") {
   const fs::path committed = fs::path(kData) / "targets" / "twin_sample1.csv";
   REQUIRE(fs::exists(committed));
-  const fs::path dir = fs::temp_directory_path() / "knitsim-test-targets";
+  const fs::path dir =
+      fs::temp_directory_path() / ("knitsim-test-targets-" + std::to_string(::getpid()));
   fs::remove_all(dir);
   run_targets_command({"--set", "twin", "--samples", "1", "--out", dir.string(), "--quiet"});
   const std::string made = slurp(dir / "twin_sample1.csv");
@@ -242,7 +245,8 @@ TEST_CASE("knitsim targets regenerates the committed twin_sample1.csv byte for b
 }
 
 TEST_CASE("knitsim targets: bad input names the flag and writes nothing") {
-  const fs::path dir = fs::temp_directory_path() / "knitsim-test-targets-bad";
+  const fs::path dir =
+      fs::temp_directory_path() / ("knitsim-test-targets-bad-" + std::to_string(::getpid()));
   fs::remove_all(dir);
   const auto fails = [&](std::vector<std::string> args, const std::string& start) {
     args.insert(args.end(), {"--out", dir.string()});
