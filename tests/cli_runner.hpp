@@ -16,6 +16,7 @@
 #include <string>
 #include <system_error>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #ifndef KNITSIM_EXE
@@ -56,11 +57,15 @@ struct Run {
   std::string out, err;
 };
 
-// Runs `knitsim <args>` (args already shell-quoted) with stdout/stderr captured in `tmp`.
-inline Run run_knitsim(const std::string& args, const TempDir& tmp) {
+// Runs `knitsim <args>` (args already shell-quoted) with stdout/stderr captured in `tmp`, and
+// `env` (name, value: no single quotes) added to its environment.
+inline Run run_knitsim(const std::string& args, const TempDir& tmp,
+                       const std::vector<std::pair<std::string, std::string>>& env = {}) {
   const fs::path out = tmp.path / "stdout.txt", err = tmp.path / "stderr.txt";
-  const std::string cmd = std::string("'") + KNITSIM_EXE + "' " + args + " >'" + out.string() +
-                          "' 2>'" + err.string() + "' </dev/null";
+  std::string vars;
+  for (const auto& [name, value] : env) vars += name + "='" + value + "' ";
+  const std::string cmd = vars + "'" + KNITSIM_EXE + "' " + args + " >'" + out.string() + "' 2>'" +
+                          err.string() + "' </dev/null";
   const int raw = std::system(cmd.c_str());
   Run r;
   r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
