@@ -4,9 +4,11 @@
 // ~6.9 cm for c. Two integrators of different kinds must agree with each other and with it.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <vector>
 
 #include "models/drape_grid.hpp"
 #include "solvers/integrator.hpp"
+#include "tests/test_systems.hpp"
 
 using namespace knitsim;
 
@@ -29,18 +31,25 @@ TEST_CASE("four_corner centre sag per topology matches the independent implement
     const DrapeGrid g = build_drape_grid(p);
     REQUIRE(g.n == 10);
     double sag[2];
+    std::vector<double> x[2];
+    RunStats s[2];
     const char* methods[2] = {"cvode-bdf", "implicit-euler"};
     for (int k = 0; k < 2; ++k) {
       IntegratorOptions opt;
       if (k == 1) opt.dt = 10.0;
-      std::vector<double> x, v;
-      const RunStats s = run_to_equilibrium(g.network, methods[k], opt, x, v);
-      REQUIRE(s.status == RunStatus::Equilibrium);
-      sag[k] = 100.0 * centre_sag(g, x);
+      std::vector<double> v;
+      s[k] = run_to_equilibrium(g.network, methods[k], opt, x[k], v);
+      REQUIRE(s[k].status == RunStatus::Equilibrium);
+      sag[k] = 100.0 * centre_sag(g, x[k]);
     }
-    INFO("topology " << a.topology << ": cvode-bdf " << sag[0] << " cm, implicit-euler "
-                     << sag[1] << " cm, reference " << a.sag_cm << " cm");
+    // The same equilibrium: both within the stop criterion's bound of it (test_systems.hpp;
+    // measured 2026-11-27: 4.6e-11 / 3.3e-11 / 9.8e-11 m against 6.4e-10 / 7.8e-10 / 1.6e-9 m
+    // for a / b / c, where a bound of 1 micrometre stood).
+    const double bound =
+        100.0 * test::settled_distance_bound(g.network, s[1].t_final, x[1], s[0].t_final, x[0]);
+    INFO("topology " << a.topology << ": cvode-bdf " << sag[0] << " cm, implicit-euler " << sag[1]
+                     << " cm, reference " << a.sag_cm << " cm, bound " << bound << " cm");
     CHECK(std::abs(sag[0] - a.sag_cm) <= a.tolerance_cm);
-    CHECK(std::abs(sag[0] - sag[1]) <= 1e-4);  // cm: the same equilibrium to 1 micrometre
+    CHECK(std::abs(sag[0] - sag[1]) <= bound);
   }
 }
