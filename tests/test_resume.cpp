@@ -570,8 +570,8 @@ TEST_CASE("knitsim demo stopped by SIGINT: the report of the runs so far, exit 1
   using namespace knitsim::test;
   TempDir tmp("demo-interrupt");
   const fs::path out = tmp.path / "demo";
-  // Signalled once the last scene's summary is written: the signal lands in the integrator
-  // comparison (which takes minutes).
+  // Signalled once the last scene's summary is written: the scenes are done, and the
+  // integrator comparison (a minute) is cut short at its first run or before it starts.
   const int status = interrupted_run(
       "demo --out '" + out.string() + "'", SIGINT,
       [&](pid_t) { return fs::exists(out / "two_corner" / "summary.json"); }, tmp);
