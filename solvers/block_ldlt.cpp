@@ -304,4 +304,11 @@ void BlockLdlt::solve(const double* b, double* x) {
     for (int r = 0; r < size_[k]; ++r) x[first_[k] + r] = w[3 * k + r];
 }
 
+int BlockLdlt::negative_pivots() const {
+  int negative = 0;
+  for (int k = 0; k < nb_; ++k)
+    for (int c = 0; c < 3; ++c) negative += pivot_[6 * static_cast<std::size_t>(k) + c] < 0.0;
+  return negative;
+}
+
 }  // namespace knitsim::detail

@@ -43,6 +43,9 @@ class BlockLdlt {
   bool factorize(const Eigen::SparseMatrix<double>& S);
   // x = S^-1 b for the latest successful factorisation; b and x must not overlap.
   void solve(const double* b, double* x);
+  // Negative pivots d of the latest successful factorisation: by Sylvester's law of inertia the
+  // number of negative eigenvalues of S (padded coordinates have pivot 1).
+  int negative_pivots() const;
 
   // Stored entries of L (3 x 3 blocks, counted as scalars).
   long nonzeros_l() const { return 9L * lp_.back(); }

@@ -18,5 +18,6 @@ std::unique_ptr<Integrator> make_arkode_erk();
 std::unique_ptr<Integrator> make_arkode_dirk();
 std::unique_ptr<Integrator> make_arkode_imex();
 std::unique_ptr<Integrator> make_static();
+std::unique_ptr<Integrator> make_equilibrium();
 
 }  // namespace knitsim::detail

@@ -11,6 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "solvers/equilibrium_check.hpp"
 #include "solvers/factories.hpp"
 
 namespace knitsim {
@@ -21,6 +22,15 @@ namespace {
 // is never loosened by more (equilibrium_tol = 1e-300 still means "run to t_max"). It also
 // bounds when the floor (one pass over the springs) is worth evaluating.
 constexpr double kFloorCheckFactor = 1e3;
+// The stop in positions is tested (one factorisation of K) once the static residual is below
+// max(kProbeStart, equilibrium_tol), then each time it has fallen kProbeDrop-fold since the last
+// test, or after kProbeEvery checks, or once t has doubled since (an adaptive integrator's slow
+// tail takes few, long steps), and at t_max: a few factorisations per run.
+constexpr double kProbeStart = 1e-4;
+constexpr double kProbeDrop = 10.0;
+constexpr long kProbeEvery = 50;
+// The energy check's allowance for round-off, relative to the energies compared.
+constexpr double kEnergyRoundoff = 1e-9;
 
 [[noreturn]] void bad_option(const std::string& field, double value, const std::string& range) {
   std::ostringstream os;
@@ -51,6 +61,7 @@ const std::vector<Entry>& registry() {
     add(detail::make_arkode_dirk);
     add(detail::make_arkode_imex);
     add(detail::make_static);
+    add(detail::make_equilibrium);
     return e;
   }();
   return entries;
@@ -75,6 +86,8 @@ void IntegratorOptions::validate() const {
   if (!(t_max >= 1e-9 && t_max <= 1e15)) bad_option("t_max", t_max, "must be in [1e-9, 1e15] s");
   if (!(equilibrium_tol > 0.0) || !std::isfinite(equilibrium_tol))
     bad_option("equilibrium_tol", equilibrium_tol, "must be > 0");
+  if (!(position_tol > 0.0 && position_tol <= 1e-2))
+    bad_option("position_tol", position_tol, "must be in (0, 1e-2] m");
   if (!(max_wall_seconds >= 0.0) || !std::isfinite(max_wall_seconds))
     bad_option("max_wall_seconds", max_wall_seconds, "must be >= 0 s and finite (0 = no cap)");
   if (check_every < 0)
@@ -133,6 +146,8 @@ const char* to_string(RunStatus s) {
   switch (s) {
     case RunStatus::Equilibrium:
       return "equilibrium";
+    case RunStatus::SpuriousEquilibrium:
+      return "spurious_equilibrium";
     case RunStatus::TimeLimit:
       return "time_limit";
     case RunStatus::StepLimit:
@@ -221,14 +236,20 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
   const long check_every = opt.check_every > 0 ? opt.check_every : (cheap_steps ? 1000 : 1);
   const double t_start_eq = sys.equilibrium_start_time();
   long restarts = 0;
+  std::unique_ptr<detail::StiffnessProbe> probe;  // K at the stop's tests, made at the first
   auto finish = [&](RunStatus status, std::string message) {
     const double t = integ.time();
     std::copy_n(integ.positions(), n, x.begin());
     std::copy_n(integ.velocities(), n, v.begin());
     integ.fill_stats(stats);
+    if (probe) stats.stop_factorisations = probe->factorisations();
     stats.restarts = restarts;
     stats.status = status;
     stats.message = std::move(message);
+    if (stats.saddle_escapes > 0)
+      stats.message += "; left " + std::to_string(stats.saddle_escapes) +
+                       " saddle(s) along a negative mode (the symmetry broke)";
+    if (stats.fallbacks > 0) stats.message += "; the flow stalled: fell back to the dynamics";
     stats.t_final = t;
     stats.residual = sys.static_residual(t, x.data());
     stats.residual_floor = sys.residual_roundoff(t, x.data());
@@ -244,11 +265,78 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
     return true;
   };
 
+  // The energy check's reference: the total energy once the pins have stopped. From then on
+  // damping can only lower it, so no state the dynamics reach lies above it.
+  double energy_reference = std::numeric_limits<double>::quiet_NaN();
+  auto note_reference = [&](double t, const double* xs, const double* vs) {
+    if (std::isnan(energy_reference) && t >= t_start_eq)
+      energy_reference = sys.potential_energy(t, xs) + sys.kinetic_energy(vs);
+  };
+  note_reference(t0, x.data(), v.data());
+
+  // The stop: a probe of K where the residual is small (equilibrium_check.hpp).
+  double next_probe = std::max(kProbeStart, opt.equilibrium_tol);
+  long checks_since_probe = 0;
+  double t_probe = std::numeric_limits<double>::infinity();  // t of the latest test
+  // Returns the status message if (t, xs) passes the stop, with the certificate in stats.
+  auto stop_test = [&](double t, const double* xs, double r, bool force) -> std::string {
+    ++checks_since_probe;
+    if (!(r <= std::max(kProbeStart, opt.equilibrium_tol))) return "";
+    if (!force && r > next_probe && checks_since_probe < kProbeEvery &&
+        !(t > 0.0 && t >= 2.0 * t_probe))
+      return "";
+    next_probe = r / kProbeDrop;
+    checks_since_probe = 0;
+    t_probe = t;
+    if (!probe) probe = std::make_unique<detail::StiffnessProbe>(sys, opt.factorization);
+    const detail::StiffnessProbe::Result p = probe->probe(t, xs);
+    std::ostringstream os;
+    if (p.singular) {  // rigid-body or mechanism modes: the residual decides
+      const double threshold = equilibrium_threshold(sys, t, xs, opt.equilibrium_tol);
+      if (!(r <= threshold)) return "";
+      os << "static residual " << r << " below " << threshold
+         << " (the stop in positions does not apply: the stiffness is singular)";
+      stats.certificate = "inconclusive";
+    } else {
+      if (p.negative_pivots > 0) return "";  // a saddle: not yet
+      const double tol = std::max(opt.position_tol, p.newton_floor);
+      if (!(p.newton_step <= tol)) return "";
+      os << "Newton correction " << p.newton_step << " m below "
+         << (p.newton_floor > opt.position_tol ? "its round-off floor " : "position_tol ") << tol
+         << " m";
+      stats.certificate = "stable_minimum";
+    }
+    stats.negative_pivots = p.negative_pivots;
+    stats.min_eigenvalue = p.min_eigenvalue;
+    stats.eigenvalue_threshold = p.threshold;
+    stats.newton_step = p.newton_step;
+    stats.newton_floor = p.newton_floor;
+    return os.str();
+  };
+  // An end state that passed the stop: Equilibrium, unless it fails the energy check.
+  auto conclude = [&](std::string message) {
+    const double t = integ.time();
+    const double e = sys.potential_energy(t, integ.positions()) +
+                     sys.kinetic_energy(integ.velocities());
+    stats.energy = e;
+    stats.energy_reference = energy_reference;
+    const double allowance = kEnergyRoundoff * (std::abs(e) + std::abs(energy_reference));
+    if (e > energy_reference + allowance) {
+      std::ostringstream os;
+      os << "energy " << e << " J above the " << energy_reference
+         << " J the run had once the pins stopped: the damped dynamics cannot reach this state ("
+         << message << ")";
+      stats.certificate = "";
+      return finish(RunStatus::SpuriousEquilibrium, os.str());
+    }
+    return finish(RunStatus::Equilibrium, message);
+  };
+
   // The initial state may already be at rest (e.g. a plain knit chart).
-  {
+  if (t_start_eq <= t0) {
     const double r0 = sys.static_residual(t0, x.data());
-    if (t_start_eq <= t0 && r0 <= opt.equilibrium_tol)
-      return finish(RunStatus::Equilibrium, "initial state is already at equilibrium");
+    const std::string why = stop_test(t0, x.data(), r0, true);
+    if (!why.empty()) return conclude("initial state is already at equilibrium: " + why);
   }
 
   long steps = 0;
@@ -281,17 +369,10 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
       }
       const double r = sys.static_residual(t, integ.positions());
       if (observer) observer->on_check(t, integ.positions(), integ.velocities(), r);
-      if (t >= t_start_eq && r <= opt.equilibrium_tol)
-        return finish(RunStatus::Equilibrium, "static residual below equilibrium_tol");
-      if (t >= t_start_eq && r <= kFloorCheckFactor * opt.equilibrium_tol) {
-        const double threshold =
-            equilibrium_threshold(sys, t, integ.positions(), opt.equilibrium_tol);
-        if (r <= threshold) {
-          std::ostringstream os;
-          os << "static residual " << r << " at its round-off floor " << threshold
-             << " (above equilibrium_tol " << opt.equilibrium_tol << ")";
-          return finish(RunStatus::Equilibrium, os.str());
-        }
+      note_reference(t, integ.positions(), integ.velocities());
+      if (t >= t_start_eq) {
+        const std::string why = stop_test(t, integ.positions(), r, t >= opt.t_max);
+        if (!why.empty()) return conclude(why);
       }
       if (opt.max_wall_seconds > 0.0 && wall() > opt.max_wall_seconds)
         return finish(RunStatus::WallLimit, "wall-clock cap reached");

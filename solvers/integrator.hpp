@@ -50,7 +50,15 @@ struct IntegratorOptions {
   int max_order = 0;       // cap on the method order (CVODE BDF <= 5, Adams <= 12); 0 = default
   long max_steps = 500'000'000;   // step cap per run
   double t_max = 1e7;             // s, physical end time if no equilibrium is reached, [1e-9, 1e15]
-  double equilibrium_tol = 1e-8;  // static residual at which the run stops (dimensionless)
+  // Static residual (dimensionless) below which a run tests the stop in positions, and the stop
+  // itself where the stiffness is singular (solvers/equilibrium_check.hpp).
+  double equilibrium_tol = 1e-8;
+  // m: the stop in positions. A run is at equilibrium when the Newton correction ||K^-1 F||_inf
+  // at a state where K is positive definite is below this (or below its round-off floor).
+  // 1e-10 m is 2.5e-10 to 5e-10 of the built-in sheets' 0.2-0.4 m: six decades below the
+  // edge measurement's resolution (0.1 mm photo noise, SPEC 2.8), where one more Newton step
+  // costs one solve.
+  double position_tol = 1e-10;
   double max_wall_seconds = 0.0;  // wall-clock cap per run, s; 0 = none
   // A request to stop from outside (e.g. the CLI's SIGINT/SIGTERM handler, src/cli/interrupt.hpp):
   // when it reads true the run ends with status Interrupted and its state so far. Read at each
@@ -119,7 +127,11 @@ struct IntegratorOptions {
 };
 
 enum class RunStatus {
-  Equilibrium,    // static residual <= max(equilibrium_tol, its round-off floor)
+  Equilibrium,    // the stop in positions (or the residual where K is singular), energy checked
+  // A state the stop accepts but the damped dynamics cannot reach: its potential energy is
+  // above the total energy the run had once the pins stopped (e.g. implicit-euler at a very
+  // large dt landing on a crumpled equilibrium).
+  SpuriousEquilibrium,
   TimeLimit,      // reached t_max first
   StepLimit,      // reached max_steps first
   WallLimit,      // reached max_wall_seconds first
@@ -166,6 +178,24 @@ struct RunStats {
   long err_test_fails = 0;
   long restarts = 0;  // restarts after recoverable step failures (IntegratorOptions::max_restarts)
   int max_order_used = 0;
+  // The end state's checks (solvers/equilibrium_check.hpp), where the stop was tested:
+  //   certificate  "stable_minimum": K positive definite (no negative LDL^T pivot, smallest
+  //                eigenvalue above n eps ||K||) and the energy check holds; "not_minimum":
+  //                negative pivots (a saddle); "inconclusive": K singular (rigid-body or
+  //                mechanism modes); "" where the stop was never tested.
+  std::string certificate;
+  int negative_pivots = 0;
+  double min_eigenvalue = 0.0;        // N/m, K's eigenvalue nearest 0
+  double eigenvalue_threshold = 0.0;  // N/m, n eps ||K||_inf
+  double newton_step = 0.0;           // m, ||K^-1 F||_inf at the end
+  double newton_floor = 0.0;          // m, its round-off floor
+  // J: potential energy at the end, and the total (potential + kinetic) energy once the pins
+  // had stopped, which damped motion can only lower; set where the stop passed, else 0.
+  double energy = 0.0;
+  double energy_reference = 0.0;
+  long stop_factorisations = 0;  // factorisations of K by the stop's tests (not in factorisations)
+  long saddle_escapes = 0;  // times the equilibrium solver left a saddle along its negative mode
+  long fallbacks = 0;       // times the equilibrium solver handed the run to the dynamics
   double wall_seconds = 0.0;
   double cpu_seconds = 0.0;  // process CPU time during the run (robust on a loaded machine;
                              // counts all threads of the process)
@@ -185,6 +215,9 @@ struct IntegratorInfo {
   // Its numerical damping (a large fixed step of an L-stable method) brings even an undamped
   // system to rest, so damping = 0 is no cause for a warning.
   bool damps_numerically = false;
+  // Its t is physical time throughout. False for `equilibrium`, whose t stops where the pins
+  // stop: after that it follows the overdamped flow, whose step is not time.
+  bool follows_time = true;
 };
 
 class Integrator {

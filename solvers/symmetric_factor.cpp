@@ -168,6 +168,13 @@ void SymmetricFactor::solve(const Eigen::Ref<const Eigen::VectorXd>& b,
 
 SymmetricFactor::Backend SymmetricFactor::backend() const { return impl_->chosen; }
 
+int SymmetricFactor::negative_pivots() const {
+  const Impl& c = *impl_;
+  if (!c.latest_is_ldlt) return 0;
+  if (c.ldlt_kind == Backend::Block) return c.block.negative_pivots();
+  return static_cast<int>((c.ldlt.vectorD().array() < 0.0).count());
+}
+
 double SymmetricFactor::factor_nonzeros() const {
   const Impl& c = *impl_;
   if (c.chosen == Backend::Supernodal)  // CHOLMOD's lnz counts the diagonal

@@ -62,6 +62,10 @@ class SymmetricFactor {
   // x = S^-1 b for the latest successful factorisation; b and x must not overlap.
   void solve(const Eigen::Ref<const Eigen::VectorXd>& b, Eigen::Ref<Eigen::VectorXd> x);
 
+  // Negative eigenvalues of the latest factorised S (Sylvester's law of inertia, from the LDL^T
+  // pivots; 0 after a successful supernodal LL^T, which exists only for positive definite S).
+  int negative_pivots() const;
+
   // The back end analyze() chose (Simplicial, Block or Supernodal).
   Backend backend() const;
   // Factorisations the supernodal back end handed to LDL^T because S was not positive definite.

@@ -350,9 +350,7 @@ TEST_CASE(
   CHECK(std::stod(r6[col(h6, "paper_error")]) == paper.table6_error);
   const DrapeFitProblem two(sample_scene("two_corner", 1), target, fo);
   const DrapeEvaluation e6 = two.evaluate(x);
-  // The row records the re-run as it ended (with cvode-bdf a tiny-budget fit's parameters
-  // could end two_corner at t_max, the corrector's noise hovering at 1e-8..1e-7; `static`, the
-  // repro default, polishes it: README "Known limitations").
+  // The row records the re-run as it ended (the repro default, `equilibrium`, settles it).
   INFO("two_corner re-run: " << to_string(e6.status) << ", " << e6.message);
   REQUIRE_FALSE(e6.failed);
   CHECK(r6[col(h6, "drape_status")] == "equilibrium");
@@ -360,8 +358,8 @@ TEST_CASE(
 
   // The report and the manifest are there, naming the integrator.
   CHECK(fs::exists(d1 / "report.md"));
-  CHECK(knitsim::test::slurp(d1 / "report.md").find("; integrator static,") != std::string::npos);
-  CHECK(knitsim::test::slurp(d1 / "manifest.json").find("\"integrator\": \"static\"") !=
+  CHECK(knitsim::test::slurp(d1 / "report.md").find("; integrator equilibrium,") != std::string::npos);
+  CHECK(knitsim::test::slurp(d1 / "manifest.json").find("\"integrator\": \"equilibrium\"") !=
         std::string::npos);
 }
 

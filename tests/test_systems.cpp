@@ -121,8 +121,12 @@ double equilibrium_distance_bound(const SpringNetwork& net, double t, const std:
 
 double settled_distance_bound(const SpringNetwork& net, double ta, const std::vector<double>& xa,
                               double tb, const std::vector<double>& xb, double equilibrium_tol) {
-  const double ra = equilibrium_threshold(net, ta, xa.data(), equilibrium_tol);
-  const double rb = equilibrium_threshold(net, tb, xb.data(), equilibrium_tol);
+  // The residual each run stopped at: below the threshold, or above it where the stop in
+  // positions ended the run first (solvers/equilibrium_check.hpp).
+  const double ra = std::max(equilibrium_threshold(net, ta, xa.data(), equilibrium_tol),
+                             net.static_residual(ta, xa.data()));
+  const double rb = std::max(equilibrium_threshold(net, tb, xb.data(), equilibrium_tol),
+                             net.static_residual(tb, xb.data()));
   return equilibrium_distance_bound(net, tb, xb, ra + rb);  // linear in the residual
 }
 

@@ -100,8 +100,8 @@ double equilibrium_distance_bound(const SpringNetwork& net, double t, const std:
                                   double residual);
 
 // The stop criterion's bound on how far apart (m, max norm) two settled runs of `net` can end,
-// at (ta, xa) and (tb, xb): each stopped at a static residual <= equilibrium_threshold (the
-// tolerance, or the round-off floor where that is larger), so each is within
+// at (ta, xa) and (tb, xb): each stopped at its static residual (at most equilibrium_threshold,
+// the tolerance or the round-off floor, unless the stop in positions came first), so each is within
 // equilibrium_distance_bound of it from the exact equilibrium (K evaluated at xb).
 double settled_distance_bound(const SpringNetwork& net, double ta, const std::vector<double>& xa,
                               double tb, const std::vector<double>& xb,

@@ -256,7 +256,8 @@ TEST_CASE("option values: integers decimal, 64-bit overflow refused, text not em
   // An empty text value: `--integrator ''` ran the default integrator.
   expect_bad_input("drape --integrator ''" + out, "--integrator: must not be empty", tmp);
   CHECK(!fs::exists(tmp.path / "o"));
-  const Run r = run_knitsim("drape --max-steps 010 --no-pictures --quiet" + out, tmp);
+  const Run r =
+      run_knitsim("drape --integrator cvode-bdf --max-steps 010 --no-pictures --quiet" + out, tmp);
   CHECK(r.status == 3);  // stopped by the step cap of ten, not eight
   CHECK(slurp(tmp.path / "o" / "summary.json").find("\"steps\": 10,") != std::string::npos);
 }
@@ -265,7 +266,8 @@ TEST_CASE("an integrator option refused at run start names its flag and leaves n
   TempDir tmp("validation-run-start");
   const fs::path chart = tmp.path / "c.chart";
   std::ofstream(chart) << "KKK\nKTK\nKKK\n";
-  for (const std::string& cmd : {std::string("drape"), "knit --chart '" + chart.string() + "'"}) {
+  for (const std::string& cmd :
+       {std::string("drape --integrator cvode-bdf"), "knit --chart '" + chart.string() + "'"}) {
     expect_bad_input(cmd + " --max-order 9 --out '" + (tmp.path / "o").string() + "'",
                      "--max-order = 9: must be in 0..5 for cvode-bdf", tmp);
     CHECK(!fs::exists(tmp.path / "o"));
@@ -279,17 +281,21 @@ TEST_CASE("valid but misleading input: one warning line, the run goes on") {
                            (tmp.path / "o").string() + "' " + args,
                        tmp);
   };
-  // No damping: it used to run for hours without a word (capped here at 0.2 s of wall time).
-  const Run undamped = run("--set model.damping=0 --max-wall 0.2");
+  // No damping: the dynamics used to run for hours without a word (capped here at 0.2 s of wall
+  // time); the equilibrium solver (the default) needs no damping and says nothing.
+  const Run undamped = run("--integrator cvode-bdf --set model.damping=0 --max-wall 0.2");
   CHECK(undamped.status == 3);
   CHECK(undamped.err.find("knitsim drape: warning: model.damping = 0: with no damping nothing "
                           "comes to rest") != std::string::npos);
+  const Run undamped_default = run("--set model.damping=0");
+  CHECK(undamped_default.status == 0);
+  CHECK(undamped_default.err.empty());
   // --dt with an adaptive integrator is ignored: said so, and the result is the plain run's.
-  const Run plain = run("");
+  const Run plain = run("--integrator cvode-bdf");
   REQUIRE(plain.status == 0);
   CHECK(plain.err.empty());
   const std::string nodes = slurp(tmp.path / "o" / "nodes.csv");
-  const Run with_dt = run("--dt 5");
+  const Run with_dt = run("--integrator cvode-bdf --dt 5");
   CHECK(with_dt.status == 0);
   CHECK(count_lines(with_dt.err) == 1);
   CHECK(with_dt.err.find("warning: --dt is for the fixed-step integrators; cvode-bdf chooses "

@@ -151,8 +151,8 @@ void register_drape_command(CLI::App& app) {
       ->allow_extra_args(false)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_option("--integrator", args->integrator,
-                  "Integrator (knitsim list integrators); default cvode-bdf if built, else "
-                  "implicit-euler");
+                  "Integrator (knitsim list integrators); default equilibrium (the state the "
+                  "damped dynamics reach, found without integrating the transient)");
   add_run_options(cmd, args->options);
   cmd->add_option("--out", args->out,
                   "Output folder (default: a fresh out/drape-<scene>-<YYYYmmdd-HHMMSS>)");

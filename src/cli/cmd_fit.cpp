@@ -467,7 +467,7 @@ void register_fit_command(CLI::App& app) {
       ->capture_default_str()
       ->group(kLmOptionGroup);
   cmd->add_option("--integrator", args->integrator,
-                  "Integrator of every evaluation (knitsim list integrators); default cvode-bdf");
+                  "Integrator of every evaluation (knitsim list integrators); default equilibrium");
   cmd->add_option("--rtol", args->rtol, "Relative tolerance of every drape run (adaptive methods)")
       ->capture_default_str();
   add_atol_options(cmd, args->atol, args->velocity_atol);

@@ -82,7 +82,7 @@ constexpr double kStabilisedVelocityAtol = 1e-3;  // m/s, see the file comment
 struct KnitArgs {
   std::string chart;
   std::vector<std::string> sets;
-  std::string integrator;            // empty: default_integrator()
+  std::string integrator;            // empty: default_knit_integrator()
   IntegratorOptions options;         // only the fields add_run_options binds are taken from here
   bool velocity_atol_given = false;  // --velocity-atol on the command line
   int frames = 4;
@@ -429,7 +429,7 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
 
 void run(const KnitArgs& args) {
   const KnitChart chart = read_chart(args.chart);
-  const std::string integrator = args.integrator.empty() ? default_integrator() : args.integrator;
+  const std::string integrator = args.integrator.empty() ? default_knit_integrator() : args.integrator;
   std::unique_ptr<Integrator> integ;
   try {
     integ = make_integrator(integrator);
@@ -540,8 +540,7 @@ void register_knit_command(CLI::App& app) {
       ->allow_extra_args(false)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_option("--integrator", args->integrator,
-                  "Integrator (knitsim list integrators); default cvode-bdf if built, else "
-                  "implicit-euler");
+                  "Integrator (knitsim list integrators); default cvode-bdf");
   CLI::Option* velocity_atol = add_run_options(cmd, args->options);
   velocity_atol->description(velocity_atol->get_description() +
                              "; not given: 0, or 0.001 with knit.stabiliser > 0");

@@ -186,9 +186,8 @@ void register_repro_command(CLI::App& app) {
                   "models/mirror_reduced.hpp); two_corner stays whole");
   cmd->add_option("--integrator", args->integrator,
                   "Integrator of every fit drape and picture (knitsim list integrators; default "
-                  "static: cvode-bdf's relaxation, then a Newton polish, which settles the "
-                  "drapes whose cvode-bdf stop is a round-off lottery); part of the "
-                  "checkpoints' settings");
+                  "equilibrium, the state the damped dynamics reach, found without integrating "
+                  "the transient); part of the checkpoints' settings");
   cmd->add_flag("--no-pictures", args->no_pictures, "Skip the fitted drapes' pictures");
   cmd->add_flag("--quiet", args->quiet, "Nothing on stdout");
   cmd->callback([args, cmd] { run(*args, *cmd); });

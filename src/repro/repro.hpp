@@ -107,7 +107,7 @@ struct ReproOptions {
   int taguchi_replicates = 3;  // >= 1 (the paper does not say; 3 is our choice)
   std::array<int, 3> taguchi_decades = {10, 20, 40};
   std::uint64_t seed = 2017;  // base seed of every unit (unit_seed)
-  // Integrator of every fit drape and picture; empty: repro_default_integrator(), `static`.
+  // Integrator of every fit drape and picture; empty: repro_default_integrator().
   std::string integrator;
   // model.symmetry of every four_corner fit and drape (none | quarter | eighth): the ICA and LM
   // fits are all on four_corner (Table 6 evaluates their parameters on two_corner, which stays
@@ -134,12 +134,9 @@ struct ReproOptions {
   void validate() const;
 };
 
-// The integrator repro runs when ReproOptions::integrator is empty: `static` where it is built
-// (else default_integrator()). Tables 4 and 6 need only each drape's equilibrium, and
-// `static` (cvode-bdf's relaxation, then a Newton polish, solvers/static_newton.cpp) reaches
-// the one cvode-bdf would, without the round-off lottery of cvode-bdf's stop in the slow tail:
-// at the paper preset cvode-bdf failed 36 of 176 214 fit drapes and left two Table 6 cells
-// empty, `static` none, at +6 % CPU on the quick preset (paper_repro/README.md, "Integrator").
+// The integrator repro runs when ReproOptions::integrator is empty: default_integrator(),
+// `equilibrium`. Tables 4 and 6 need only each drape's equilibrium, which it finds without
+// integrating the transient (solvers/equilibrium_solver.cpp).
 std::string repro_default_integrator();
 // o.integrator, or repro_default_integrator() if it is empty.
 std::string repro_integrator(const ReproOptions& o);

@@ -100,11 +100,7 @@ void ReproOptions::validate() const {
   synthetic.validate();
 }
 
-std::string repro_default_integrator() {
-  for (const IntegratorInfo& info : integrator_catalog())
-    if (info.name == "static") return info.name;
-  return default_integrator();
-}
+std::string repro_default_integrator() { return default_integrator(); }
 
 std::string repro_integrator(const ReproOptions& o) {
   return o.integrator.empty() ? repro_default_integrator() : o.integrator;

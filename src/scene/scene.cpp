@@ -103,6 +103,7 @@ const std::vector<Key>& keys() {
     number("pins.move_time", [](Scene& s) -> double& { return s.params.pin_move_time; });
     number("run.t_max", [](Scene& s) -> double& { return s.options.t_max; });
     number("run.equilibrium_tol", [](Scene& s) -> double& { return s.options.equilibrium_tol; });
+    number("run.position_tol", [](Scene& s) -> double& { return s.options.position_tol; });
     return k;
   }();
   return table;
@@ -283,11 +284,9 @@ std::string scene_description(const std::string& toml_text) {
   return hash == std::string::npos ? "" : trim(line.substr(hash + 1));
 }
 
-std::string default_integrator() {
-  for (const IntegratorInfo& info : integrator_catalog())
-    if (info.name == "cvode-bdf") return info.name;
-  return "implicit-euler";
-}
+std::string default_integrator() { return "equilibrium"; }
+
+std::string default_knit_integrator() { return "cvode-bdf"; }
 
 DrapeResult run_drape(const Scene& scene, const std::string& integrator, RunObserver* observer,
                       const RunState* from) {
@@ -343,6 +342,7 @@ const std::vector<std::pair<std::string, std::string>>& run_option_names() {
   static const std::vector<std::pair<std::string, std::string>> names = {
       {"t_max", "run.t_max"},
       {"equilibrium_tol", "run.equilibrium_tol"},
+      {"position_tol", "run.position_tol"},
       {"rtol", "--rtol"},
       {"atol", "--atol"},
       {"velocity_atol", "--velocity-atol"},

@@ -10,7 +10,8 @@
 //            symmetry (none|half|quarter|eighth: integrate one half of the grid, or one
 //            quarter or eighth of four_corner, unfolded after)
 //   [pins]   layout (four_corner|two_corner), span (fraction of the width), move_time (s)
-//   [run]    t_max (s), equilibrium_tol (static residual, dimensionless)
+//   [run]    t_max (s), equilibrium_tol (static residual below which the stop is tested,
+//            dimensionless), position_tol (m: the stop in positions, solvers/equilibrium_check.hpp)
 // Line 2 of a scene file is a comment that describes it in one line (`knitsim list scenes`).
 //
 // Failure modes: every bad input throws std::invalid_argument with one line naming the key as
@@ -72,9 +73,13 @@ std::vector<std::string> scene_keys();
 // The one-line description of a scene file: its line 2 without the leading "#".
 std::string scene_description(const std::string& toml_text);
 
-// cvode-bdf if the registry has it, otherwise implicit-euler (SPEC 2.4: cvode-bdf is the
-// default).
+// The integrator of drape, fit, repro and demo's first row: `equilibrium`, the solver for the
+// state the damped dynamics reach (solvers/equilibrium_solver.cpp).
 std::string default_integrator();
+// The knit model's: cvode-bdf. Paper 2's network is a mechanism (its stiffness is singular), on
+// which the overdamped flow crawls along the zero modes: the 40 x 40 tuck chart took 100 s CPU
+// by `equilibrium` against 10 s by cvode-bdf.
+std::string default_knit_integrator();
 
 // One drape run and the quantities every report of it shows.
 struct DrapeResult {

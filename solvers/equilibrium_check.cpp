@@ -1,0 +1,127 @@
+#include "solvers/equilibrium_check.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "solvers/schur_matrix.hpp"
+#include "solvers/symmetric_factor.hpp"
+
+namespace knitsim::detail {
+
+namespace {
+
+constexpr int kInverseIterations = 8;
+constexpr int kPowerIterations = 2000;
+
+double inf_norm(const Eigen::VectorXd& v) { return v.size() ? v.cwiseAbs().maxCoeff() : 0.0; }
+
+// A fixed, non-symmetric start vector: the same on every run and every machine.
+Eigen::VectorXd start_vector(int n) {
+  Eigen::VectorXd v(n);
+  for (int i = 0; i < n; ++i) v[i] = 1.0 + 0.5 * std::sin(1.0 + 0.7 * i);
+  return v / v.norm();
+}
+
+}  // namespace
+
+void fill_flow_values(const MechanicalSystem& sys, double inv_h, const double* ax,
+                      Eigen::SparseMatrix<double>& A) {
+  const CscPattern& p = sys.stiffness_pattern();
+  const auto& m = sys.mass();
+  const auto& g = sys.damping_rate();
+  double* a = A.valuePtr();
+  for (int c = 0; c < p.cols; ++c)
+    for (int k = p.colptr[c]; k < p.colptr[c + 1]; ++k) {
+      const int i = p.rowind[k];
+      a[k] = -m[i] * ax[k];
+      if (i == c) a[k] += m[i] * g[i] * inv_h;
+    }
+}
+
+StiffnessProbe::StiffnessProbe(const MechanicalSystem& sys,
+                               IntegratorOptions::Factorization which)
+    : sys_(&sys),
+      K_(schur_matrix(sys)),
+      factor_(std::make_unique<SymmetricFactor>(which)),
+      ax_(sys.stiffness_pattern().nnz()),
+      f_(sys.dof()) {
+  factor_->analyze(K_);
+}
+
+StiffnessProbe::~StiffnessProbe() = default;
+
+StiffnessProbe::Result StiffnessProbe::probe(double t, const double* x) {
+  const int n = sys_->dof();
+  Result r;
+  sys_->stiffness_values(t, x, ax_.data());
+  fill_flow_values(*sys_, 0.0, ax_.data(), K_);
+  double norm_k = 0.0;  // ||K||_inf (K symmetric: the largest column sum)
+  for (int c = 0; c < n; ++c) {
+    double sum = 0.0;
+    for (Eigen::SparseMatrix<double>::InnerIterator it(K_, c); it; ++it) sum += std::abs(it.value());
+    norm_k = std::max(norm_k, sum);
+  }
+  r.threshold = n * std::numeric_limits<double>::epsilon() * norm_k;
+  ++factorisations_;
+  r.factored = factor_->factorize(K_);
+  if (!r.factored) {
+    r.singular = true;
+    return r;
+  }
+  r.negative_pivots = factor_->negative_pivots();
+  // The eigenvalue nearest 0: inverse iteration with the same factor.
+  Eigen::VectorXd v = start_vector(n), w(n);
+  for (int it = 0; it < kInverseIterations; ++it) {
+    factor_->solve(v, w);
+    const double norm = w.norm();
+    if (!(norm > 0.0) || !std::isfinite(norm)) break;
+    v = w / norm;
+  }
+  r.min_eigenvalue = v.dot(K_.selfadjointView<Eigen::Lower>() * v);
+  r.singular = !(std::abs(r.min_eigenvalue) > r.threshold);
+  // Newton correction and its round-off floor.
+  sys_->conservative_acceleration(t, x, f_.data());
+  const auto& m = sys_->mass();
+  Eigen::VectorXd F(n);
+  for (int i = 0; i < n; ++i) F[i] = m[i] * f_[i];
+  factor_->solve(F, w);
+  r.newton_step = inf_norm(w);
+  // The model's floor is in its residual's units; their ratio to |F|_inf converts it to N.
+  const double fmax = inf_norm(F), residual = sys_->static_residual(t, x);
+  if (fmax > 0.0 && residual > 0.0) {
+    const double floor_force = sys_->residual_roundoff(t, x) * fmax / residual;
+    factor_->solve(Eigen::VectorXd::Constant(n, floor_force), w);
+    r.newton_floor = inf_norm(w);
+  }
+  return r;
+}
+
+std::vector<double> StiffnessProbe::negative_mode(double t, const double* x) {
+  const int n = sys_->dof();
+  sys_->stiffness_values(t, x, ax_.data());
+  fill_flow_values(*sys_, 0.0, ax_.data(), K_);
+  const auto K = K_.selfadjointView<Eigen::Lower>();
+  double shift = 0.0;  // Gershgorin: every eigenvalue of K is below it
+  for (int c = 0; c < n; ++c) {
+    double sum = 0.0;
+    for (Eigen::SparseMatrix<double>::InnerIterator it(K_, c); it; ++it) sum += std::abs(it.value());
+    shift = std::max(shift, sum);
+  }
+  Eigen::VectorXd v = start_vector(n), w(n);
+  double lambda = 0.0;
+  for (int it = 0; it < kPowerIterations; ++it) {
+    w = shift * v - K * v;
+    v = w / w.norm();
+    const double next = v.dot(K * v);
+    if (it > 10 && std::abs(next - lambda) <= 1e-10 * shift) break;
+    lambda = next;
+  }
+  if (!(lambda < 0.0)) return {};
+  Eigen::Index at = 0;
+  v.cwiseAbs().maxCoeff(&at);
+  if (v[at] < 0.0) v = -v;
+  return {v.data(), v.data() + n};
+}
+
+}  // namespace knitsim::detail

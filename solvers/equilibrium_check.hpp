@@ -1,0 +1,65 @@
+// What makes an end state an equilibrium, for every integrator (SPEC 2.3): a stop in positions
+// and a certificate that the state is a stable minimum the damped dynamics can reach.
+//
+//   K = -M Ax        the symmetric stiffness (N/m): the Hessian of the potential energy, from the
+//                    model's stiffness values (Ax = da_c/dx, row i over m_i)
+//   F = M a_c(t, x)  the net static force (N); F = -dE/dx
+//   delta = K^-1 F   the Newton correction (m): the distance to the equilibrium to first order
+//
+// Stop: delta's largest component below IntegratorOptions::position_tol, or below its round-off
+// floor (one solve against the forces' round-off, MechanicalSystem::residual_roundoff) where
+// that is larger, at a state where K is positive definite (LDL^T with no negative pivot).
+// Where K is singular (rigid-body or mechanism modes: its smallest eigenvalue within
+// n eps ||K||_inf of 0) the static residual decides, as before, and the certificate is
+// inconclusive.
+#pragma once
+
+#include <Eigen/SparseCore>
+#include <memory>
+#include <vector>
+
+#include "solvers/integrator.hpp"
+
+namespace knitsim::detail {
+
+class SymmetricFactor;
+
+// An n x n matrix with the model's stiffness pattern (values zero); A(h) = C / h + K with
+// C = M Gamma the damping matrix (N s/m), written by fill_flow_values (inv_h = 1 / h; 0 gives K).
+void fill_flow_values(const MechanicalSystem& sys, double inv_h, const double* ax,
+                      Eigen::SparseMatrix<double>& A);
+
+// K at states of one model: analysed once, factorised per call.
+class StiffnessProbe {
+ public:
+  StiffnessProbe(const MechanicalSystem& sys, IntegratorOptions::Factorization which);
+  ~StiffnessProbe();
+  StiffnessProbe(const StiffnessProbe&) = delete;
+  StiffnessProbe& operator=(const StiffnessProbe&) = delete;
+
+  struct Result {
+    bool factored = false;     // K factorised (false: a zero pivot, K singular)
+    int negative_pivots = 0;   // negative eigenvalues of K (inertia)
+    bool singular = false;     // not factored, or |smallest eigenvalue| <= threshold
+    double min_eigenvalue = 0.0;  // N/m: the eigenvalue of K nearest 0 (inverse iteration)
+    double threshold = 0.0;       // N/m: n eps ||K||_inf, what round-off cannot tell from 0
+    double newton_step = 0.0;     // m: ||K^-1 F||_inf
+    double newton_floor = 0.0;    // m: ||K^-1 f||_inf, f the forces' round-off, uniform
+  };
+  // Factorises K at (t, x) and measures it.
+  Result probe(double t, const double* x);
+  // A unit eigenvector of K's most negative eigenvalue after probe() found negative pivots
+  // (power iteration on s I - K, s a Gershgorin bound; deterministic), its largest component
+  // positive (the documented sign of a saddle escape). Empty if it did not converge.
+  std::vector<double> negative_mode(double t, const double* x);
+  long factorisations() const { return factorisations_; }
+
+ private:
+  const MechanicalSystem* sys_;
+  Eigen::SparseMatrix<double> K_;
+  std::unique_ptr<SymmetricFactor> factor_;
+  std::vector<double> ax_, f_;
+  long factorisations_ = 0;
+};
+
+}  // namespace knitsim::detail
