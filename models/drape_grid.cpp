@@ -29,6 +29,8 @@ const char* to_string(DrapeSymmetry symmetry) {
       return "quarter";
     case DrapeSymmetry::Eighth:
       return "eighth";
+    case DrapeSymmetry::Auto:
+      return "auto";
     case DrapeSymmetry::None:
       break;
   }
@@ -69,7 +71,7 @@ void DrapeParams::validate() const {
     throw std::invalid_argument(std::string("model.symmetry = ") + to_string(symmetry) +
                                 ": needs pins.layout = four_corner (two_corner is not symmetric "
                                 "about the mid-plane y = W/2)");
-  if (symmetry != DrapeSymmetry::None && perturbation != 0.0)
+  if (symmetry != DrapeSymmetry::None && symmetry != DrapeSymmetry::Auto && perturbation != 0.0)
     bad("model.perturbation", perturbation,
         std::string("must be 0 with model.symmetry = ") + to_string(symmetry) +
             " (a perturbed start is not mirror-symmetric)");

@@ -29,7 +29,8 @@ enum class PinLayout { FourCorner, TwoCorner };
 // x = W/2 (four_corner or two_corner); one quarter of a four_corner grid with mirror conditions
 // on both mid-planes; or one eighth with the diagonal mirror too (models/mirror_reduced.hpp; the
 // result is unfolded).
-enum class DrapeSymmetry { None, Half, Quarter, Eighth };
+// Auto: the largest mirror group the scene and its start have (src/scene/scene.hpp run_drape).
+enum class DrapeSymmetry { None, Half, Quarter, Eighth, Auto };
 
 struct DrapeParams {
   double width = 0.50;            // W, m (paper: 50 x 50 cm samples)
@@ -44,9 +45,9 @@ struct DrapeParams {
   double pin_move_time = 100.0;  // s, duration of the pin move when pin_span < 1
   double perturbation = 0.0;     // m, amplitude of the seeded initial z perturbation
   unsigned seed = 1;             // seed of that perturbation
-  // none | half | quarter | eighth (without perturbation; quarter and eighth four_corner only;
-  // models/mirror_reduced.hpp)
-  DrapeSymmetry symmetry = DrapeSymmetry::None;
+  // auto | none | half | quarter | eighth (without perturbation; quarter and eighth
+  // four_corner only; models/mirror_reduced.hpp). auto: the largest the scene allows.
+  DrapeSymmetry symmetry = DrapeSymmetry::Auto;
   long max_particles = 4'000'000;  // refuse larger grids before allocating
 
   // Throws std::invalid_argument naming the field and the accepted range.
@@ -87,6 +88,6 @@ const char* to_string(DrapeParameter p);  // stiffness | damping | elongation_li
 SpringNetworkTangent drape_tangent(const DrapeGrid& grid, DrapeParameter p, double t);
 
 const char* to_string(PinLayout layout);
-const char* to_string(DrapeSymmetry symmetry);  // none | half | quarter | eighth
+const char* to_string(DrapeSymmetry symmetry);  // none | half | quarter | eighth | auto
 
 }  // namespace knitsim

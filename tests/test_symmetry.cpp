@@ -205,7 +205,8 @@ TEST_CASE("the unfolded quarter and eighth equilibria are the full four_corner e
     for (const std::string& integ : {default_integrator(), std::string("implicit-euler")}) {
       for (const char* topo : {"a", "c"}) {
         CAPTURE(sym, integ, topo);
-        Scene full_scene = load_scene("four_corner", {std::string("model.topology=") + topo});
+        Scene full_scene = load_scene("four_corner",
+                                      {std::string("model.topology=") + topo, "model.symmetry=none"});
         Scene reduced_scene = load_scene(
             "four_corner", {std::string("model.topology=") + topo, "model.symmetry=" + sym});
         if (integ != "implicit-euler") full_scene.options.rtol = reduced_scene.options.rtol = 1e-8;
@@ -226,7 +227,7 @@ TEST_CASE("the unfolded two_corner half equilibrium is the full two_corner equil
   // t_max with the block factorisation of its padded nodes (commit ca7b793), at equilibrium
   // with the scalar one, and the scalar one's own half ends at t_max with stiffness 852.1
   // instead of 852.
-  const Scene full_scene = load_scene("two_corner");
+  const Scene full_scene = load_scene("two_corner", {"model.symmetry=none"});
   const Scene half_scene = load_scene("two_corner", {"model.symmetry=half"});
   const DrapeResult full = run_drape(full_scene, "static");
   const DrapeResult half = run_drape(half_scene, "static");
@@ -244,7 +245,7 @@ TEST_CASE("asymmetric scenes and networks are refused with one line") {
         "model.perturbation = 0.001: must be 0 with model.symmetry = quarter (a perturbed "
         "start is not mirror-symmetric)");
   CHECK(error_of([] { load_scene("four_corner", {"model.symmetry=third"}); }) ==
-        "model.symmetry = third: must be one of none, half, quarter, eighth");
+        "model.symmetry = third: must be one of auto, none, half, quarter, eighth");
   CHECK(error_of([] {
           load_scene("two_corner", {"model.symmetry=half", "model.perturbation=0.001"});
         }) ==
@@ -291,4 +292,35 @@ TEST_CASE("asymmetric scenes and networks are refused with one line") {
       [&] { (void)MirrorReduced(anisotropic, drape_mirror_planes(g, DrapeSymmetry::Eighth)); });
   CHECK(eighth.find("has no mirror image with the same rest length and stiffness") !=
         std::string::npos);
+}
+
+TEST_CASE("model.symmetry = auto: the largest group the scene and its start allow, certified whole") {
+  struct Case {
+    std::vector<std::string> sets;
+    DrapeSymmetry expected;
+  };
+  const std::vector<Case> cases = {
+      {{}, DrapeSymmetry::Eighth},                                // four_corner
+      {{"pins.layout=two_corner"}, DrapeSymmetry::Half},          // one mirror plane
+      {{"model.perturbation=0.001"}, DrapeSymmetry::None}};       // a perturbed start: none
+  for (const Case& c : cases) {
+    Scene scene = load_scene("four_corner", c.sets);
+    REQUIRE(scene.params.symmetry == DrapeSymmetry::Auto);
+    const DrapeResult r = run_drape(scene, default_integrator());
+    CAPTURE(to_string(c.expected), r.stats.message);
+    CHECK(r.symmetry == c.expected);
+    CHECK(r.whole_sheet_checked == (c.expected != DrapeSymmetry::None));
+    CHECK(r.stats.status == RunStatus::Equilibrium);
+    CHECK(r.stats.certificate == "stable_minimum");
+    if (c.expected == DrapeSymmetry::None) continue;
+    // The unfolded state is the whole sheet's equilibrium: the whole sheet's run from rest
+    // ends within the two stops' bounds of it.
+    scene.params.symmetry = DrapeSymmetry::None;
+    const DrapeResult whole = run_drape(scene, default_integrator());
+    double d = 0.0;
+    for (size_t p = 0; p < whole.positions.size(); ++p)
+      d = std::max(d, norm(whole.positions[p] - r.positions[p]));
+    CHECK(d <= 2.0 * (std::max(scene.options.position_tol, whole.stats.newton_floor) +
+                      std::max(scene.options.position_tol, r.stats.newton_floor)));
+  }
 }

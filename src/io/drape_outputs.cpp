@@ -54,6 +54,8 @@ nlohmann::json drape_summary(const Scene& scene, const DrapeResult& r) {
                {"dof", net.dof()},
                {"integrated_dof", r.integrated_dof}};
   j["t_start"] = r.t_start;
+  j["symmetry"] = to_string(r.symmetry);  // the reduction that ran (model.symmetry resolved)
+  j["whole_sheet_certified"] = r.whole_sheet_checked;
   j["max_strain"] = r.max_strain;
   j["centre_sag_m"] = r.centre_sag;
   j["params"] = to_json(scene.params);

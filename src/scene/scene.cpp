@@ -16,6 +16,7 @@
 #include <utility>
 
 #include "models/mirror_reduced.hpp"
+#include "solvers/equilibrium_check.hpp"
 #include "src/base/files.hpp"
 #include "src/base/text.hpp"
 
@@ -92,7 +93,8 @@ const std::vector<Key>& keys() {
         },
         "an integer in 0..4294967295");
     choice("model.symmetry", &DrapeParams::symmetry,
-           std::vector<std::pair<std::string, DrapeSymmetry>>{{"none", DrapeSymmetry::None},
+           std::vector<std::pair<std::string, DrapeSymmetry>>{{"auto", DrapeSymmetry::Auto},
+                                                              {"none", DrapeSymmetry::None},
                                                               {"half", DrapeSymmetry::Half},
                                                               {"quarter", DrapeSymmetry::Quarter},
                                                               {"eighth", DrapeSymmetry::Eighth}});
@@ -288,6 +290,55 @@ std::string default_integrator() { return "equilibrium"; }
 
 std::string default_knit_integrator() { return "cvode-bdf"; }
 
+namespace {
+
+// The largest mirror group of the grid and its start: eighth, quarter, half, or none (a
+// perturbed start, two_corner for quarter and eighth, a topology without the diagonal mirror).
+DrapeSymmetry largest_symmetry(const DrapeGrid& grid) {
+  for (DrapeSymmetry s : {DrapeSymmetry::Eighth, DrapeSymmetry::Quarter, DrapeSymmetry::Half}) {
+    try {
+      (void)make_drape_reduced(grid, s);
+      return s;
+    } catch (const std::invalid_argument&) {
+    }
+  }
+  return DrapeSymmetry::None;
+}
+
+// model.symmetry = auto: the reduced model cannot see the antisymmetric modes, so its unfolded
+// equilibrium is certified on the whole sheet. Where the whole sheet's K has a negative pivot,
+// the state is moved 1 mm along the most negative mode (largest component positive) and the
+// whole sheet runs on from there; the certificate is the whole sheet's either way.
+void certify_whole_sheet(const Scene& scene, const SpringNetwork& net, Integrator& integ,
+                         RunObserver* observer, std::vector<double>& x, DrapeResult& r) {
+  const double t = r.stats.t_final;
+  detail::StiffnessProbe probe(net, scene.options.factorization);
+  const detail::StiffnessProbe::Result p = probe.probe(t, x.data());
+  r.whole_sheet_checked = true;
+  if (p.factored && !p.singular && p.negative_pivots == 0) {
+    r.stats.min_eigenvalue = p.min_eigenvalue;  // the whole sheet's, not the reduction's
+    r.stats.eigenvalue_threshold = p.threshold;
+    return;
+  }
+  const std::vector<double> mode = probe.negative_mode(t, x.data());
+  double largest = 0.0;
+  for (double d : mode) largest = std::max(largest, std::abs(d));
+  for (size_t i = 0; i < mode.size(); ++i) x[i] += 1e-3 * mode[i] / largest;
+  std::vector<double> v(x.size(), 0.0);
+  IntegratorOptions options = scene.options;
+  const RunStats reduced = r.stats;
+  r.stats = run_to_equilibrium(net, integ, options, x, v, observer, t);
+  add_counters(r.stats, reduced);
+  r.stats.message += "; the " + std::string(to_string(r.symmetry)) +
+                     "'s equilibrium is not a minimum of the whole sheet: continued on it";
+  r.symmetry = DrapeSymmetry::None;
+  r.state_x = x;
+  r.state_v = v;
+  r.integrated_dof = net.dof();
+}
+
+}  // namespace
+
 DrapeResult run_drape(const Scene& scene, const std::string& integrator, RunObserver* observer,
                       const RunState* from) {
   scene.validate();
@@ -308,11 +359,18 @@ DrapeResult run_drape(const Scene& scene, const std::string& integrator, RunObse
     r.integrated_dof = sys.dof();
   };
   std::vector<double> x;
-  if (scene.params.symmetry != DrapeSymmetry::None) {
-    const MirrorReduced reduced = make_drape_reduced(r.grid, scene.params.symmetry);
+  r.symmetry = scene.params.symmetry;
+  if (r.symmetry == DrapeSymmetry::Auto)
+    r.symmetry = (from && static_cast<int>(from->x.size()) == net.dof())
+                     ? DrapeSymmetry::None  // continuing a whole-sheet state
+                     : largest_symmetry(r.grid);
+  if (r.symmetry != DrapeSymmetry::None) {
+    const MirrorReduced reduced = make_drape_reduced(r.grid, r.symmetry);
     run(reduced);
     x.resize(net.dof());
     reduced.unfold(q.data(), x.data());
+    if (scene.params.symmetry == DrapeSymmetry::Auto && r.stats.status == RunStatus::Equilibrium)
+      certify_whole_sheet(scene, net, *integ, observer, x, r);
   } else {
     run(net);
     x = q;

@@ -95,6 +95,10 @@ struct DrapeResult {
   // model.symmetry is set): what `knitsim drape --continue` starts from (state.json).
   std::vector<double> state_x, state_v;
   double t_start = 0.0;  // s: where the run began (0, or the t of the state it continued from)
+  // The reduction that ran (model.symmetry = auto resolved; none after a whole-sheet restart),
+  // and whether the whole sheet's K was checked at the unfolded state (auto only).
+  DrapeSymmetry symmetry = DrapeSymmetry::None;
+  bool whole_sheet_checked = false;
 };
 
 // Where a run continues from (knitsim drape|knit --continue): the integrated state (x, v) at
