@@ -7,8 +7,7 @@
 // response, a curve from the best run's history, a sum of squares from the level means).
 //
 // Cost (Release, one core, 2026-11-27): taguchi and optimize < 0.1 s, demo 3 s (its comparison
-// capped at 0.5 s per integrator through the KNITSIM_DEMO_WALL_CAP test hook, src/cli/
-// cmd_demo.cpp), repro fig13 0.2 s; repro taguchi and repro all ~10 s each (the Taguchi
+// capped at 0.5 s per integrator by demo --max-wall), repro fig13 0.2 s; repro taguchi and repro all ~10 s each (the Taguchi
 // experiment's 27 ICA fits have no budget option below the quick preset's). ctest runs the two
 // repro cases as test_commands_repro_taguchi and test_commands_repro_all, in parallel with the
 // rest.
@@ -256,7 +255,7 @@ TEST_CASE("knitsim demo: scenes, the comparison of every integrator, report, exi
   TempDir tmp("commands-demo");
   const fs::path out = tmp.path / "demo";
   const Run run =
-      run_knitsim("demo --out '" + out.string() + "'", tmp, {{"KNITSIM_DEMO_WALL_CAP", "0.5"}});
+      run_knitsim("demo --max-wall 0.5 --out '" + out.string() + "'", tmp);
   INFO(run.err);
   REQUIRE(run.status == 0);
   CHECK(contains(run.out, "report: " + (out / "report.md").string()));

@@ -48,7 +48,7 @@ def main():
                 continue
             if l0 == "0.0025" and integ != "equilibrium":
                 continue
-            n = 1 if fine and integ != "equilibrium" else (3 if fine else repeats)
+            n = 1 if (fine and integ != "equilibrium") or l0 == "0.0025" else (3 if fine else repeats)
             for k in range(n):
                 label = "%s_%s_%s_%d" % (scene, l0, integ, k)
                 sets = ["model.symmetry=none"] + (["model.natural_length=" + l0] if l0 else [])

@@ -13,7 +13,6 @@
 // the rest, writes the report of the runs so far and exits 128 + the signal.
 #include <CLI/CLI.hpp>
 #include <algorithm>
-#include <cstdlib>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -39,20 +38,6 @@ namespace fs = std::filesystem;
 
 constexpr double kComparisonWallCap = 15.0;  // s of wall time per integrator in step 2
 
-// kComparisonWallCap, or the environment's KNITSIM_DEMO_WALL_CAP (s, > 0): a test hook, so that
-// tests/test_commands.cpp can run the whole command in seconds (a full run takes ~1 min, most of
-// it in the explicit and non-stiff methods). Not an option: users get the comparison as is.
-double comparison_wall_cap() {
-  const char* text = std::getenv("KNITSIM_DEMO_WALL_CAP");
-  if (text == nullptr) return kComparisonWallCap;
-  char* end = nullptr;
-  const double cap = std::strtod(text, &end);
-  if (end == text || *end != '\0' || !(cap > 0.0 && cap <= 1e6))
-    throw std::invalid_argument("KNITSIM_DEMO_WALL_CAP = " + std::string(text) +
-                                ": must be seconds in (0, 1e6]");
-  return cap;
-}
-
 const std::vector<std::string> kScenes = {"four_corner", "two_corner"};
 const std::string kComparisonScene = "four_corner";
 
@@ -73,8 +58,14 @@ double max_distance(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
   return d;
 }
 
-void run(const std::string& out) {
-  const double wall_cap = comparison_wall_cap();
+struct DemoArgs {
+  std::string out;
+  double wall_cap = kComparisonWallCap;  // s, --max-wall
+};
+
+void run(const DemoArgs& args) {
+  const std::string& out = args.out;
+  const double wall_cap = args.wall_cap;
   const fs::path dir = make_output_dir(out, "demo");
   const std::string integrator = default_integrator();
   bool all_settled = true;
@@ -184,11 +175,17 @@ void run(const std::string& out) {
 }  // namespace
 
 void register_demo_command(CLI::App& app) {
-  auto out = std::make_shared<std::string>();
+  auto args = std::make_shared<DemoArgs>();
   CLI::App* cmd = app.add_subcommand(
       "demo", "Built-in scenes and an integrator comparison, with a Markdown report");
-  cmd->add_option("--out", *out, "Output folder (default: a fresh out/demo-<YYYYmmdd-HHMMSS>)");
-  cmd->callback([out] { run(*out); });
+  cmd->add_option("--out", args->out,
+                  "Output folder (default: a fresh out/demo-<YYYYmmdd-HHMMSS>)");
+  cmd->add_option("--max-wall", args->wall_cap,
+                  "Wall-clock cap per integrator of the comparison, s (the explicit and non-stiff "
+                  "methods take most of a full run's minute)")
+      ->capture_default_str()
+      ->check(CLI::Range(1e-3, 1e6));
+  cmd->callback([args] { run(*args); });
 }
 
 }  // namespace knitsim
