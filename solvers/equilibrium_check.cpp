@@ -16,6 +16,18 @@ constexpr int kPowerIterations = 2000;
 
 double inf_norm(const Eigen::VectorXd& v) { return v.size() ? v.cwiseAbs().maxCoeff() : 0.0; }
 
+// ||A||_inf of a symmetric matrix stored whole (its largest column sum of |a_ij|): a Gershgorin
+// bound on its eigenvalues.
+double gershgorin(const Eigen::SparseMatrix<double>& A) {
+  double bound = 0.0;
+  for (int c = 0; c < A.outerSize(); ++c) {
+    double sum = 0.0;
+    for (Eigen::SparseMatrix<double>::InnerIterator it(A, c); it; ++it) sum += std::abs(it.value());
+    bound = std::max(bound, sum);
+  }
+  return bound;
+}
+
 // A fixed, non-symmetric start vector: the same on every run and every machine.
 Eigen::VectorXd start_vector(int n) {
   Eigen::VectorXd v(n);
@@ -56,13 +68,7 @@ StiffnessProbe::Result StiffnessProbe::probe(double t, const double* x) {
   Result r;
   sys_->stiffness_values(t, x, ax_.data());
   fill_flow_values(*sys_, 0.0, ax_.data(), K_);
-  double norm_k = 0.0;  // ||K||_inf (K symmetric: the largest column sum)
-  for (int c = 0; c < n; ++c) {
-    double sum = 0.0;
-    for (Eigen::SparseMatrix<double>::InnerIterator it(K_, c); it; ++it) sum += std::abs(it.value());
-    norm_k = std::max(norm_k, sum);
-  }
-  r.threshold = n * std::numeric_limits<double>::epsilon() * norm_k;
+  r.threshold = n * std::numeric_limits<double>::epsilon() * gershgorin(K_);
   ++factorisations_;
   r.factored = factor_->factorize(K_);
   if (!r.factored) {
@@ -102,12 +108,7 @@ std::vector<double> StiffnessProbe::negative_mode(double t, const double* x) {
   sys_->stiffness_values(t, x, ax_.data());
   fill_flow_values(*sys_, 0.0, ax_.data(), K_);
   const auto K = K_.selfadjointView<Eigen::Lower>();
-  double shift = 0.0;  // Gershgorin: every eigenvalue of K is below it
-  for (int c = 0; c < n; ++c) {
-    double sum = 0.0;
-    for (Eigen::SparseMatrix<double>::InnerIterator it(K_, c); it; ++it) sum += std::abs(it.value());
-    shift = std::max(shift, sum);
-  }
+  const double shift = gershgorin(K_);  // every eigenvalue of K is below it
   Eigen::VectorXd v = start_vector(n), w(n);
   double lambda = 0.0;
   for (int it = 0; it < kPowerIterations; ++it) {
@@ -122,6 +123,15 @@ std::vector<double> StiffnessProbe::negative_mode(double t, const double* x) {
   v.cwiseAbs().maxCoeff(&at);
   if (v[at] < 0.0) v = -v;
   return {v.data(), v.data() + n};
+}
+
+bool StiffnessProbe::leave_saddle(double t, double* x, double move) {
+  const std::vector<double> mode = negative_mode(t, x);
+  if (mode.empty()) return false;
+  double largest = 0.0;
+  for (double d : mode) largest = std::max(largest, std::abs(d));
+  for (size_t i = 0; i < mode.size(); ++i) x[i] += move * mode[i] / largest;
+  return true;
 }
 
 }  // namespace knitsim::detail

@@ -253,11 +253,7 @@ class EquilibriumSolver final : public Integrator {
     if (!probe_) probe_ = std::make_unique<StiffnessProbe>(*sys_, opt_.factorization);
     const StiffnessProbe::Result r = probe_->probe(t_, x_.data());
     if (!r.factored || r.negative_pivots == 0) return;
-    const std::vector<double> mode = probe_->negative_mode(t_, x_.data());
-    if (mode.empty()) return;
-    double largest = 0.0;
-    for (double d : mode) largest = std::max(largest, std::abs(d));
-    for (int i = 0; i < n_; ++i) x_[i] += kEscape * mode[i] / largest;
+    if (!probe_->leave_saddle(t_, x_.data(), kEscape)) return;
     ++escapes_;
     evaluate(x_.data());
     h_ = first_h();

@@ -320,10 +320,7 @@ void certify_whole_sheet(const Scene& scene, const SpringNetwork& net, Integrato
     r.stats.eigenvalue_threshold = p.threshold;
     return;
   }
-  const std::vector<double> mode = probe.negative_mode(t, x.data());
-  double largest = 0.0;
-  for (double d : mode) largest = std::max(largest, std::abs(d));
-  for (size_t i = 0; i < mode.size(); ++i) x[i] += 1e-3 * mode[i] / largest;
+  probe.leave_saddle(t, x.data(), 1e-3);  // m; a singular sheet runs on as it is
   std::vector<double> v(x.size(), 0.0);
   IntegratorOptions options = scene.options;
   const RunStats reduced = r.stats;
