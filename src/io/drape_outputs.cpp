@@ -89,8 +89,11 @@ void write_drape_picture(const fs::path& path, const Scene& scene, const DrapeRe
   mesh.quads = quads;
   mesh.markers = g.network.spec().pinned;
   RenderView view;
-  view.title = scene.name + ": " + r.stats.integrator + ", " + to_string(r.stats.status) +
-               " at t = " + format_number(r.stats.t_final, 4) + " s";
+  // The equilibrium solver's t stays where the pins stop (0 for fixed pins): no time to show.
+  view.title = scene.name + ": " + to_string(r.stats.status) +
+               (r.stats.certificate.empty() ? "" : " (" + r.stats.certificate + ")") + " by " +
+               r.stats.integrator +
+               (r.stats.t_final > 0.0 ? " at t = " + format_number(r.stats.t_final, 4) + " s" : "");
   const DrapeParams& p = scene.params;
   view.caption = {"k = " + format_number(p.stiffness) + " N/m, c = " + format_number(p.damping) +
                       " N s/m, L0 = " + format_number(100 * p.natural_length) + " cm, topology " +
