@@ -85,7 +85,12 @@ def run_knitsim(out, label, args, timeout=None):
     """knitsim ARGS --quiet --out OUT/runs/LABEL. Exit 0 (equilibrium) and 3 (another status,
     outputs written) are results; anything else (bad input) stops the driver."""
     folder = os.path.join(out, "runs", label)
-    cmd = [knitsim_path()] + [str(a) for a in args] + ["--quiet", "--out", folder]
+    args = [str(a) for a in args]
+    # The studies measure whole sheets unless a row names a reduction: knitsim's default
+    # model.symmetry = auto would otherwise reduce drapes and fits behind their backs.
+    if args and args[0] in ("drape", "fit") and not any("model.symmetry" in a for a in args):
+        args += ["--set", "model.symmetry=none"]
+    cmd = [knitsim_path()] + args + ["--quiet", "--out", folder]
     summary_path = os.path.join(folder, "summary.json")
     manifest_path = os.path.join(folder, "manifest.json")
     if REUSE and os.path.exists(summary_path) and os.path.exists(manifest_path) and \

@@ -324,3 +324,17 @@ TEST_CASE("model.symmetry = auto: the largest group the scene and its start allo
                       std::max(scene.options.position_tol, r.stats.newton_floor)));
   }
 }
+
+TEST_CASE("model.symmetry = auto runs whole where the integrator needs the whole sheet") {
+  // cvode-bdf-gmres's block-Jacobi preconditioner works on every particle's x, y, z: it refuses
+  // a mirror reduction at its start, and auto falls back to the whole sheet.
+  Scene scene = load_scene("four_corner", {"model.natural_length=0.1"});
+  scene.options.gmres_preconditioner = IntegratorOptions::GmresPreconditioner::BlockJacobi;
+  const DrapeResult r = run_drape(scene, "cvode-bdf-gmres");
+  CHECK(r.symmetry == DrapeSymmetry::None);
+  CHECK(r.integrated_dof == r.grid.network.dof());
+  CHECK(r.stats.status == RunStatus::Equilibrium);
+  scene.params.symmetry = DrapeSymmetry::Eighth;  // asked for explicitly: refused, as before
+  CHECK_THROWS_AS(run_drape(scene, "cvode-bdf-gmres"), std::invalid_argument);
+}
+

@@ -40,7 +40,8 @@ drape() {
   local scene=$1 integ=$2 rep=$3; shift 3
   local dir=$OUT/runs/$scene-$integ-$rep
   rm -rf "$dir"
-  "$KNITSIM" drape --scene "$scene" --integrator "$integ" --quiet --out "$dir" "$@" >/dev/null || true
+  "$KNITSIM" drape --scene "$scene" --integrator "$integ" --quiet --out "$dir" \
+    --set model.symmetry=none "$@" >/dev/null || true
   python3 - "$dir/summary.json" "$scene" "$integ" "$rep" >> "$runs_csv" <<'PY'
 import json, sys
 s = json.load(open(sys.argv[1]))

@@ -97,7 +97,7 @@ run() {
   rm -rf "$dir"; mkdir -p "$dir"
   /usr/bin/time -v -o "$dir/time.txt" "$KNITSIM" drape --scene four_corner \
     --set model.natural_length="$L0" --set model.damping="$c" --integrator "$integ" \
-    --max-wall "$MAX_WALL" --quiet --out "$dir/drape" "$@" > "$dir/stdout.txt" 2>&1 || true
+    --max-wall "$MAX_WALL" --quiet --out "$dir/drape" --set model.symmetry=none "$@" > "$dir/stdout.txt" 2>&1 || true
   python3 - "$dir" "$n" "$solver" "$L0" "$c" "$ROUND" >> "$runs_csv" <<'PY'
 import json, re, sys
 d, n, solver, L0, c, rnd = sys.argv[1:7]

@@ -363,7 +363,22 @@ DrapeResult run_drape(const Scene& scene, const std::string& integrator, RunObse
                      : largest_symmetry(r.grid);
   if (r.symmetry != DrapeSymmetry::None) {
     const MirrorReduced reduced = make_drape_reduced(r.grid, r.symmetry);
-    run(reduced);
+    try {
+      run(reduced);
+    } catch (const std::invalid_argument&) {
+      // auto: an integrator option that needs the whole sheet (cvode-bdf-gmres's block-Jacobi
+      // preconditioner) refuses the reduction at its start: run whole instead.
+      if (scene.params.symmetry != DrapeSymmetry::Auto) throw;
+      r.symmetry = DrapeSymmetry::None;
+      if (from) {
+        q = from->x, qv = from->v;
+      } else {
+        q.clear(), qv.clear();  // the whole sheet's own start
+      }
+    }
+  }
+  if (r.symmetry != DrapeSymmetry::None) {
+    const MirrorReduced reduced = make_drape_reduced(r.grid, r.symmetry);
     x.resize(net.dof());
     reduced.unfold(q.data(), x.data());
     if (scene.params.symmetry == DrapeSymmetry::Auto && r.stats.status == RunStatus::Equilibrium)
