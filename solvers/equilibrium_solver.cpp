@@ -96,7 +96,7 @@ class EquilibriumSolver final : public Integrator {
   }
 
   Step step(double t_stop) override {
-    if (inner_ && fallback_) return fallback_step(t_stop);
+    if (inner_ && fallback_) return inner_step(t_stop);
     if (inner_) return motion_step(t_stop);
     if (fresh_) {
       std::fill(v_.begin(), v_.end(), 0.0);
@@ -154,7 +154,8 @@ class EquilibriumSolver final : public Integrator {
     double move = 0.0;  // m, ||dx||_inf of an accepted step
   };
 
-  Step fallback_step(double t_stop) {
+  // One step of the dynamics (the pins' motion, or a fallback), its state taken over.
+  Step inner_step(double t_stop) {
     const Step st = inner_->step(t_stop);
     t_ = inner_->time();
     std::copy_n(inner_->positions(), n_, x_.begin());
@@ -164,10 +165,7 @@ class EquilibriumSolver final : public Integrator {
 
   Step motion_step(double t_stop) {
     const double t_end = sys_->equilibrium_start_time();
-    const Step st = inner_->step(std::min(t_stop, t_end));
-    t_ = inner_->time();
-    std::copy_n(inner_->positions(), n_, x_.begin());
-    std::copy_n(inner_->velocities(), n_, v_.begin());
+    const Step st = inner_step(std::min(t_stop, t_end));
     if (st.ok && t_ >= t_end) {
       inner_->fill_stats(motion_);
       inner_.reset();
