@@ -366,6 +366,11 @@ double SpringNetwork::max_strain(double t, const double* x) const {
   return worst;
 }
 
+bool SpringNetwork::free_floating() const {
+  return spec_.free_floating && spec_.pinned.empty() && spec_.gravity.x == 0.0 &&
+         spec_.gravity.y == 0.0 && spec_.gravity.z == 0.0;
+}
+
 std::string SpringNetwork::describe() const {
   std::ostringstream os;
   os << particle_count() << " particles (" << free_count_ << " free), " << spec_.springs.size()

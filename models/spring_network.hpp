@@ -68,6 +68,10 @@ struct SpringNetworkSpec {
   double limit_stiffness_factor = 100.0;  // k_lim / k above the limit (implicit paths)
   Vec3 gravity{0.0, 0.0, -9.81};          // m/s^2
   double residual_force_scale = 0.0;      // N; 0: mean free mass x |g|
+  // Declares a body free in space (no pins, no gravity): the equilibrium certificate then factors
+  // out its 6 rigid-body modes (MechanicalSystem::free_floating). Opt-in: a planar network whose
+  // out-of-plane motion has no stiffness (paper 2's knit) would have those modes read as a saddle.
+  bool free_floating = false;
 };
 
 // A direction in the network's data (d(data)/dp for one parameter p), for the equilibrium
@@ -96,6 +100,7 @@ class SpringNetwork final : public MechanicalSystem {
   double static_residual(double t, const double* x) const override;
   double residual_roundoff(double t, const double* x) const override;
   double equilibrium_start_time() const override { return pin_move_time_; }
+  bool free_floating() const override;  // spec.free_floating, with no pins and no gravity
   bool project(double t, double* x, double* v) const override;
   double potential_energy(double t, const double* x) const override;
   std::string describe() const override;

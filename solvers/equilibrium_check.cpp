@@ -1,5 +1,7 @@
 #include "solvers/equilibrium_check.hpp"
 
+#include <Eigen/Geometry>
+#include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -35,6 +37,32 @@ Eigen::VectorXd start_vector(int n) {
   return v / v.norm();
 }
 
+// Six dofs of a free-floating state x (3 per particle) at which its rigid-body modes are
+// independent: the first pivots of a column-pivoted QR of the modes' transpose (3 translations
+// and 3 rotations about the centroid, each scaled to unit norm). Holding these dofs removes the
+// modes: K restricted to the others has K's nonzero inertia when the modes span its null space.
+std::vector<int> gauge_dofs(const double* x, int n) {
+  const int particles = n / 3;
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (int p = 0; p < particles; ++p) centroid += Eigen::Vector3d(x + 3 * p);
+  centroid /= std::max(particles, 1);
+  Eigen::MatrixXd modes = Eigen::MatrixXd::Zero(6, n);
+  for (int p = 0; p < particles; ++p) {
+    const Eigen::Vector3d r = Eigen::Vector3d(x + 3 * p) - centroid;
+    for (int a = 0; a < 3; ++a) {
+      modes(a, 3 * p + a) = 1.0;
+      const Eigen::Vector3d u = Eigen::Vector3d::Unit(a).cross(r);
+      modes.block<1, 3>(3 + a, 3 * p) = u.transpose();
+    }
+  }
+  for (int k = 0; k < 6; ++k)
+    if (modes.row(k).norm() > 0.0) modes.row(k).normalize();
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(modes);
+  std::vector<int> dofs;
+  for (int k = 0; k < std::min(6, n); ++k) dofs.push_back(qr.colsPermutation().indices()[k]);
+  return dofs;
+}
+
 }  // namespace
 
 void fill_flow_values(const MechanicalSystem& sys, double inv_h, const double* ax,
@@ -66,8 +94,7 @@ StiffnessProbe::~StiffnessProbe() = default;
 StiffnessProbe::Result StiffnessProbe::probe(double t, const double* x) {
   const int n = sys_->dof();
   Result r;
-  sys_->stiffness_values(t, x, ax_.data());
-  fill_flow_values(*sys_, 0.0, ax_.data(), K_);
+  fill_stiffness(t, x);
   r.threshold = n * std::numeric_limits<double>::epsilon() * gershgorin(K_);
   ++factorisations_;
   r.factored = factor_->factorize(K_);
@@ -78,8 +105,10 @@ StiffnessProbe::Result StiffnessProbe::probe(double t, const double* x) {
   r.negative_pivots = factor_->negative_pivots();
   // The eigenvalue nearest 0: inverse iteration with the same factor.
   Eigen::VectorXd v = start_vector(n), w(n);
+  hold_gauge(v);
   for (int it = 0; it < kInverseIterations; ++it) {
     factor_->solve(v, w);
+    hold_gauge(w);
     const double norm = w.norm();
     if (!(norm > 0.0) || !std::isfinite(norm)) break;
     v = w / norm;
@@ -91,13 +120,16 @@ StiffnessProbe::Result StiffnessProbe::probe(double t, const double* x) {
   const auto& m = sys_->mass();
   Eigen::VectorXd F(n);
   for (int i = 0; i < n; ++i) F[i] = m[i] * f_[i];
+  hold_gauge(F);
   factor_->solve(F, w);
   r.newton_step = inf_norm(w);
   // The model's floor is in its residual's units; their ratio to |F|_inf converts it to N.
   const double fmax = inf_norm(F), residual = sys_->static_residual(t, x);
   if (fmax > 0.0 && residual > 0.0) {
     const double floor_force = sys_->residual_roundoff(t, x) * fmax / residual;
-    factor_->solve(Eigen::VectorXd::Constant(n, floor_force), w);
+    Eigen::VectorXd round_off = Eigen::VectorXd::Constant(n, floor_force);
+    hold_gauge(round_off);
+    factor_->solve(round_off, w);
     r.newton_floor = inf_norm(w);
   }
   return r;
@@ -105,14 +137,15 @@ StiffnessProbe::Result StiffnessProbe::probe(double t, const double* x) {
 
 std::vector<double> StiffnessProbe::negative_mode(double t, const double* x) {
   const int n = sys_->dof();
-  sys_->stiffness_values(t, x, ax_.data());
-  fill_flow_values(*sys_, 0.0, ax_.data(), K_);
+  fill_stiffness(t, x);
   const auto K = K_.selfadjointView<Eigen::Lower>();
   const double shift = gershgorin(K_);  // every eigenvalue of K is below it
   Eigen::VectorXd v = start_vector(n), w(n);
+  hold_gauge(v);
   double lambda = 0.0;
   for (int it = 0; it < kPowerIterations; ++it) {
     w = shift * v - K * v;
+    hold_gauge(w);
     v = w / w.norm();
     const double next = v.dot(K * v);
     if (it > 10 && std::abs(next - lambda) <= 1e-10 * shift) break;
@@ -123,6 +156,32 @@ std::vector<double> StiffnessProbe::negative_mode(double t, const double* x) {
   v.cwiseAbs().maxCoeff(&at);
   if (v[at] < 0.0) v = -v;
   return {v.data(), v.data() + n};
+}
+
+void StiffnessProbe::fill_stiffness(double t, const double* x) {
+  sys_->stiffness_values(t, x, ax_.data());
+  fill_flow_values(*sys_, 0.0, ax_.data(), K_);
+  gauge_.clear();
+  if (!sys_->free_floating()) return;
+  // Rows and columns of the gauge dofs become those of a stiff support: zero off the diagonal,
+  // K's largest diagonal entry on it (6 eigenvalues there, far from the smallest).
+  const int n = sys_->dof();
+  gauge_ = gauge_dofs(x, n);
+  std::vector<char> held(n, 0);
+  for (int g : gauge_) held[g] = 1;
+  double diagonal = 0.0;
+  for (int c = 0; c < n; ++c) diagonal = std::max(diagonal, std::abs(K_.coeff(c, c)));
+  if (!(diagonal > 0.0)) diagonal = 1.0;
+  double* values = K_.valuePtr();
+  for (int c = 0; c < K_.outerSize(); ++c)
+    for (int k = K_.outerIndexPtr()[c]; k < K_.outerIndexPtr()[c + 1]; ++k) {
+      const int i = K_.innerIndexPtr()[k];
+      if (held[i] || held[c]) values[k] = (i == c) ? diagonal : 0.0;
+    }
+}
+
+void StiffnessProbe::hold_gauge(Eigen::VectorXd& v) const {
+  for (int g : gauge_) v[g] = 0.0;
 }
 
 bool StiffnessProbe::leave_saddle(double t, double* x, double move) {

@@ -9,9 +9,12 @@
 // Stop: delta's largest component below IntegratorOptions::position_tol, or below its round-off
 // floor (one solve against the forces' round-off, MechanicalSystem::residual_roundoff) where
 // that is larger, at a state where K is positive definite (LDL^T with no negative pivot).
-// Where K is singular (rigid-body or mechanism modes: its smallest eigenvalue within
-// n eps ||K||_inf of 0) the static residual decides, as before, and the certificate is
-// inconclusive.
+// A free-floating model (MechanicalSystem::free_floating: no pins, no external field) has the
+// 6 rigid-body modes in K's null space; they are factored out by holding 6 gauge dofs (where
+// the modes are independent) fixed in K, the forces and the Newton correction, so a free knit
+// chart is certified on its deformations. Where K is still singular (mechanism modes: its
+// smallest eigenvalue within n eps ||K||_inf of 0) the static residual decides, as before, and
+// the certificate is inconclusive.
 #pragma once
 
 #include <Eigen/SparseCore>
@@ -57,12 +60,18 @@ class StiffnessProbe {
   // False, x unchanged, where no negative mode is found.
   bool leave_saddle(double t, double* x, double move);
   long factorisations() const { return factorisations_; }
+  // The gauge dofs of the last factorisation (empty unless the model is free-floating).
+  const std::vector<int>& gauge() const { return gauge_; }
 
  private:
+  void fill_stiffness(double t, const double* x);  // K at (t, x), the gauge held
+  void hold_gauge(Eigen::VectorXd& v) const;       // zero v at the gauge dofs
+
   const MechanicalSystem* sys_;
   Eigen::SparseMatrix<double> K_;
   std::unique_ptr<SymmetricFactor> factor_;
   std::vector<double> ax_, f_;
+  std::vector<int> gauge_;
   long factorisations_ = 0;
 };
 

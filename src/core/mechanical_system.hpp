@@ -64,6 +64,13 @@ class MechanicalSystem {
   // Default 0: no floor known.
   virtual double residual_roundoff(double /*t*/, const double* /*x*/) const { return 0.0; }
 
+  // True when the forces do not see rigid motions of the whole state (no pins, no external
+  // field: a free-floating body, e.g. a knit chart without pins or gravity). Its stiffness then
+  // has the 6 rigid-body modes (3 translations, 3 rotations of the particles, 3 dofs each) in
+  // its null space; the equilibrium certificate factors them out. Default: false (a model whose
+  // other zero-stiffness modes would then read as a saddle must not declare it).
+  virtual bool free_floating() const { return false; }
+
   // Equilibrium may only be declared from this time on (e.g. after prescribed pin motion).
   virtual double equilibrium_start_time() const { return 0.0; }
 
