@@ -345,8 +345,8 @@ ProcessGroup::ProcessGroup(int& argc, char**& argv) {
   void* module = dlopen(KNITSIM_MPI_MODULE, RTLD_NOW | RTLD_GLOBAL);
   void* open = module ? dlsym(module, detail::open_message_passing_symbol) : nullptr;
   if (open == nullptr) {  // a broken build folder: the module is built with every binary
-    std::fprintf(stderr, "knitsim: error: cannot load the MPI module %s: %s\n",
-                 KNITSIM_MPI_MODULE, dlerror());
+    std::fprintf(stderr, "knitsim: error: cannot load the MPI module %s: %s\n", KNITSIM_MPI_MODULE,
+                 dlerror());
     std::exit(1);
   }
   message_passing().reset(reinterpret_cast<detail::OpenMessagePassing>(open)(&argc, &argv));
