@@ -1,5 +1,6 @@
 #include "src/parallel/work_units.hpp"
 
+#include <dlfcn.h>
 #include <fcntl.h>
 #include <unistd.h>
 
@@ -8,21 +9,24 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <deque>
 #include <fstream>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
 #include <unordered_map>
 
-#ifdef KNITSIM_HAVE_MPI
-#include <mpi.h>
-#include <nlohmann/json.hpp>
-#endif
+#include "src/parallel/message_passing.hpp"
 
 namespace knitsim {
 
 namespace {
+
+// MPI, once ProcessGroup has loaded the module (only under an MPI launcher); null in a process
+// of its own.
+std::unique_ptr<detail::MessagePassing>& message_passing() {
+  static std::unique_ptr<detail::MessagePassing> mp;
+  return mp;
+}
 
 using json = nlohmann::json;
 
@@ -165,31 +169,12 @@ class UnitProgress {
   Clock::time_point start_ = Clock::now();
 };
 
-// ---- messages between ranks (no-ops in one process) -------------------------------------------
-
-#ifdef KNITSIM_HAVE_MPI
-constexpr int kResultTag = 7301;
-
-bool mpi_running() {
-  int initialized = 0, finalized = 0;
-  MPI_Initialized(&initialized);
-  MPI_Finalized(&finalized);
-  return initialized && !finalized;
-}
-#endif
-
 }  // namespace
 
+// ---- messages between ranks (no-ops in one process) -------------------------------------------
+
 void broadcast(std::string& text) {
-#ifdef KNITSIM_HAVE_MPI
-  if (process_count() == 1) return;
-  long long size = static_cast<long long>(text.size());
-  MPI_Bcast(&size, 1, MPI_LONG_LONG, 0, MPI_COMM_WORLD);
-  text.resize(static_cast<std::size_t>(size));
-  MPI_Bcast(text.data(), static_cast<int>(size), MPI_CHAR, 0, MPI_COMM_WORLD);
-#else
-  (void)text;
-#endif
+  if (process_count() > 1) message_passing()->broadcast(text);
 }
 
 namespace {
@@ -199,68 +184,19 @@ std::string result_message(int index, const std::string& result) {
   return "[" + std::to_string(index) + "," + result + "]";
 }
 
-// Sends from ranks > 0 without waiting for rank 0 (which polls between its own units); every
-// send is complete when the object is destroyed.
-class ResultSender {
- public:
-  void send(std::string message) {
-#ifdef KNITSIM_HAVE_MPI
-    buffers_.push_back(std::move(message));
-    requests_.emplace_back();
-    MPI_Isend(buffers_.back().data(), static_cast<int>(buffers_.back().size()), MPI_CHAR, 0,
-              kResultTag, MPI_COMM_WORLD, &requests_.back());
-#else
-    (void)message;
-#endif
-  }
-  ~ResultSender() {
-#ifdef KNITSIM_HAVE_MPI
-    if (!requests_.empty())
-      MPI_Waitall(static_cast<int>(requests_.size()), requests_.data(), MPI_STATUSES_IGNORE);
-#endif
-  }
-
- private:
-#ifdef KNITSIM_HAVE_MPI
-  std::deque<std::string> buffers_;  // stable addresses while the sends are under way
-  std::vector<MPI_Request> requests_;
-#endif
-};
-
 // Rank 0: the next message of another rank, if one has arrived (wait = false) or when it does.
 bool receive_result(bool wait, std::string& message) {
-#ifdef KNITSIM_HAVE_MPI
-  if (process_count() == 1) return false;
-  MPI_Status status;
-  int arrived = 1;
-  if (wait)
-    MPI_Probe(MPI_ANY_SOURCE, kResultTag, MPI_COMM_WORLD, &status);
-  else
-    MPI_Iprobe(MPI_ANY_SOURCE, kResultTag, MPI_COMM_WORLD, &arrived, &status);
-  if (!arrived) return false;
-  int size = 0;
-  MPI_Get_count(&status, MPI_CHAR, &size);
-  message.resize(static_cast<std::size_t>(size));
-  MPI_Recv(message.data(), size, MPI_CHAR, status.MPI_SOURCE, kResultTag, MPI_COMM_WORLD,
-           MPI_STATUS_IGNORE);
-  return true;
-#else
-  (void)wait;
-  (void)message;
-  return false;
-#endif
+  return process_count() > 1 && message_passing()->receive(wait, message);
 }
 
 // Ends every rank after an error on rank 0 that the others cannot know of (they would wait
 // forever); in one process it is an ordinary exception.
 [[noreturn]] void fail_everywhere(const std::exception& e) {
-#ifdef KNITSIM_HAVE_MPI
   if (process_count() > 1) {
     std::fprintf(stderr, "knitsim: error: %s\n", e.what());
     std::fflush(stderr);
-    MPI_Abort(MPI_COMM_WORLD, 1);
+    message_passing()->abort_all(1);
   }
-#endif
   throw;
 }
 
@@ -357,10 +293,10 @@ std::vector<json> run_work_units(const std::vector<WorkUnit>& units,
 
   // Static split of what is left: pending[j] runs on rank j % size.
   const int n = static_cast<int>(pending.size());
-  if (rank != 0) {
-    ResultSender sender;
+  if (rank != 0) {  // only under MPI: send each result without waiting for rank 0 to take it
     for (int j = rank; j < n; j += size)
-      sender.send(result_message(pending[j], run_unit(units[pending[j]])));
+      message_passing()->send_to_root(result_message(pending[j], run_unit(units[pending[j]])));
+    message_passing()->complete_sends();
     return {};
   }
   try {
@@ -381,44 +317,18 @@ std::vector<json> run_work_units(const std::vector<WorkUnit>& units,
 
 // ---- processes -------------------------------------------------------------------------------
 
-int process_rank() {
-#ifdef KNITSIM_HAVE_MPI
-  if (mpi_running()) {
-    int rank = 0;
-    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-    return rank;
-  }
-#endif
-  return 0;
-}
+int process_rank() { return message_passing() ? message_passing()->rank() : 0; }
+
+int process_count() { return message_passing() ? message_passing()->size() : 1; }
 
 std::string mpi_library_version() {
-#ifdef KNITSIM_HAVE_MPI
-  char text[MPI_MAX_LIBRARY_VERSION_STRING];
-  int length = 0;
-  MPI_Get_library_version(text, &length);  // allowed before MPI_Init
-  const std::string version(text, static_cast<std::size_t>(length));
-  return version.substr(0, version.find_first_of(",\n"));  // "Open MPI v4.1.4, package: ..."
-#else
-  return "none";
-#endif
-}
-
-int process_count() {
-#ifdef KNITSIM_HAVE_MPI
-  if (mpi_running()) {
-    int size = 1;
-    MPI_Comm_size(MPI_COMM_WORLD, &size);
-    return size;
-  }
-#endif
-  return 1;
+  return message_passing() ? message_passing()->library_version() : KNITSIM_MPI_LIBRARY;
 }
 
 namespace {
 
 // Whether an MPI launcher started this process (Open MPI's mpirun, MPICH/Intel hydra, PMIx
-// launchers such as srun --mpi=pmix). A plain `knitsim ...` never initialises MPI.
+// launchers such as srun --mpi=pmix). A plain `knitsim ...` never loads MPI.
 bool launched_by_mpi() {
   for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK"})
     if (std::getenv(name) != nullptr) return true;
@@ -428,22 +338,24 @@ bool launched_by_mpi() {
 }  // namespace
 
 ProcessGroup::ProcessGroup(int& argc, char**& argv) {
-#ifdef KNITSIM_HAVE_MPI
-  if (launched_by_mpi()) {
-    int provided = 0;
-    // Only the main thread calls MPI (the ICA's worker threads only evaluate costs).
-    MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
+#ifdef KNITSIM_MPI_MODULE
+  if (!launched_by_mpi()) return;
+  // RTLD_GLOBAL: Open MPI's own plug-ins, which it dlopens in turn, look for libmpi's symbols
+  // in the global scope. The module stays loaded until the process ends.
+  void* module = dlopen(KNITSIM_MPI_MODULE, RTLD_NOW | RTLD_GLOBAL);
+  void* open = module ? dlsym(module, detail::open_message_passing_symbol) : nullptr;
+  if (open == nullptr) {  // a broken build folder: the module is built with every binary
+    std::fprintf(stderr, "knitsim: error: cannot load the MPI module %s: %s\n", KNITSIM_MPI_MODULE,
+                 dlerror());
+    std::exit(1);
   }
+  message_passing().reset(reinterpret_cast<detail::OpenMessagePassing>(open)(&argc, &argv));
 #else
   (void)argc;
   (void)argv;
 #endif
 }
 
-ProcessGroup::~ProcessGroup() {
-#ifdef KNITSIM_HAVE_MPI
-  if (mpi_running()) MPI_Finalize();
-#endif
-}
+ProcessGroup::~ProcessGroup() { message_passing().reset(); }
 
 }  // namespace knitsim

@@ -40,17 +40,22 @@ std::vector<nlohmann::json> run_work_units(const std::vector<WorkUnit>& units,
 // a resume with other settings gives (here and in knitsim fit --resume).
 std::string first_config_difference(const nlohmann::json& saved, const nlohmann::json& now);
 
-// MPI (when built with it; otherwise one process of rank 0 of 1).
+// MPI ranks once ProcessGroup has started MPI; otherwise one process of rank 0 of 1.
 int process_rank();
 int process_count();
-// The MPI library this binary is built with ("Open MPI v4.1.4"; "none" without MPI), for
-// manifests.
+// The MPI library, for manifests ("Open MPI v4.1.4"; "none" when built without MPI): under an
+// MPI launcher the loaded library's own MPI_Get_library_version, otherwise the same string of
+// the library found when the build was configured (a plain run does not load MPI).
 std::string mpi_library_version();
 // Rank 0's `text` on every rank (nothing to do in one process). Collective: every rank calls
 // it, at the same point. For a decision only rank 0 can make (it alone owns the output folder)
 // that every rank must then act on alike.
 void broadcast(std::string& text);
-// Owns MPI_Init/MPI_Finalize for main(); a no-op without MPI.
+// Owns MPI_Init/MPI_Finalize for main(). Only when an MPI launcher started the process
+// (OMPI_COMM_WORLD_SIZE, PMI_SIZE or PMIX_RANK set) does it load MPI, as the module
+// libknitsim_mpi.so of the build folder (src/parallel/message_passing.hpp); otherwise, or when
+// built without MPI, it does nothing. A missing module under a launcher ends the process
+// (exit 1, one line on stderr).
 class ProcessGroup {
  public:
   ProcessGroup(int& argc, char**& argv);

@@ -610,6 +610,6 @@ void render_strokes_png(const std::string& path, const std::vector<Stroke>& stro
   finish_and_write(c, path, p, view);
 }
 
-std::string render_library_version() { return cairo_version_string(); }
+std::string render_library_version() { return CAIRO_VERSION_STRING; }
 
 }  // namespace knitsim

@@ -94,7 +94,9 @@ void render_mesh_png(const std::string& path, const MeshScene& mesh, const Rende
 void render_strokes_png(const std::string& path, const std::vector<Stroke>& strokes,
                         const std::vector<Vec3>& markers, const RenderView& view);
 
-// The version of the drawing library (cairo), for manifests.
+// The version of the drawing library (cairo), for manifests: that of the cairo headers the
+// binary was built with (libcairo2-dev requires the same libcairo2), since cairo is loaded only
+// when a picture is drawn (render/cairo_on_demand.cpp).
 std::string render_library_version();
 
 }  // namespace knitsim
