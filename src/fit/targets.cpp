@@ -1,6 +1,8 @@
 #include "src/fit/targets.hpp"
 
 #include <cmath>
+#include <cerrno>
+#include <cstring>
 #include <cstdlib>
 #include <fstream>
 #include <map>
@@ -368,7 +370,8 @@ void write_target_csv(const Target& target, const std::string& path,
         out << row << "point," << edge.points.s[k] << ',' << edge.points.d[k] << '\n';
     }
   }
-  if (!out) throw std::runtime_error("cannot write " + path);
+  out.close();  // buffered text that cannot be written fails here (a full disk)
+  if (!out) throw std::runtime_error(std::strerror(errno));  // the caller names the file
 }
 
 }  // namespace knitsim
