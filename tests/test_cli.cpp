@@ -17,6 +17,7 @@
 #include "src/io/drape_outputs.hpp"
 #include "src/io/vtk.hpp"
 #include "src/measure/measurement.hpp"
+#include "src/scene/scene.hpp"
 
 using namespace knitsim;
 using namespace knitsim::test;
@@ -382,4 +383,50 @@ TEST_CASE("fit --optimizer lm: a noise-free target of the model itself, end to e
     CHECK(bad.err.find(names) != std::string::npos);
     CHECK_FALSE(fs::exists(none));
   }
+}
+
+TEST_CASE("knitsim list keys: every scene key with its unit, default and accepted values") {
+  TempDir tmp("list-keys");
+  const Run text = run_knitsim("list keys", tmp);
+  REQUIRE(text.status == 0);
+  CHECK(lines(text.out).size() == 1 + scene_keys().size());
+  for (const std::string& key : scene_keys()) CHECK(text.out.find(key) != std::string::npos);
+  // The ranges are the validators' own, the defaults sample 1's.
+  CHECK(text.out.find("> 0 N/m") != std::string::npos);
+  CHECK(text.out.find("a = structural + shear + bending, b = structural + shear, c = structural "
+                      "+ bending") != std::string::npos);
+  const Run md = run_knitsim("list keys --format markdown", tmp);
+  REQUIRE(md.status == 0);
+  CHECK(md.out.rfind("| key | unit | default | accepted | meaning |", 0) == 0);
+  CHECK(md.out.find("| model.stiffness | N/m | 852 | > 0 N/m |") != std::string::npos);
+  // drape --help lists the keys and defines the topologies.
+  const Run help = run_knitsim("drape --help", tmp);
+  CHECK(help.out.find("model.elongation_limit") != std::string::npos);
+  CHECK(help.out.find("c = structural + bending") != std::string::npos);
+}
+
+TEST_CASE("a partial scene file: one note naming the physical keys left at sample 1's values") {
+  TempDir tmp("partial-scene");
+  const fs::path partial = tmp.path / "partial.toml";
+  std::ofstream(partial) << "# my sheet\n[fabric]\nareal_density = 180.0\n\n[model]\n"
+                            "stiffness = 1500.0\nnatural_length = 0.04\n";
+  const std::string out = " --no-pictures --quiet --out '" + (tmp.path / "o").string() + "'";
+  const Run r = run_knitsim("drape --scene '" + partial.string() + "'" + out, tmp);
+  REQUIRE(r.status == 0);
+  REQUIRE(lines(r.err).size() == 1);
+  CHECK(r.err.find("knitsim drape: note: " + partial.string() +
+                   " leaves fabric.width = 0.5 m, model.damping = 12 N s/m, "
+                   "model.elongation_limit = 5 %, model.topology = a, pins.layout = four_corner "
+                   "at sample 1's values") != std::string::npos);
+  // A key given by --set is not inherited; the keys the file gives are not listed.
+  const Run set = run_knitsim("drape --scene '" + partial.string() +
+                                  "' --set model.elongation_limit=0" + out,
+                              tmp);
+  CHECK(set.err.find("model.elongation_limit") == std::string::npos);
+  CHECK(set.err.find("model.stiffness") == std::string::npos);
+  // A file that names every physical key (docs/examples/my_fabric.toml), and a built-in scene:
+  // no note.
+  CHECK(run_knitsim("drape --scene '" KNITSIM_DOCS_DIR "/examples/my_fabric.toml'" + out, tmp)
+            .err.empty());
+  CHECK(run_knitsim("drape --scene four_corner" + out, tmp).err.empty());
 }
