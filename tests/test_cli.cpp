@@ -430,3 +430,54 @@ TEST_CASE("a partial scene file: one note naming the physical keys left at sampl
             .err.empty());
   CHECK(run_knitsim("drape --scene four_corner" + out, tmp).err.empty());
 }
+
+TEST_CASE("the lab-data example fits; upside-down lab data are warned about") {
+  TempDir tmp("lab-fit");
+  const std::string lab = KNITSIM_DOCS_DIR "/examples/lab_targets.csv";
+  const std::string fit = "fit --scene '" KNITSIM_DOCS_DIR "/examples/my_fabric.toml' --target ";
+  const fs::path out = tmp.path / "fit";
+  const Run r = run_knitsim(fit + "'" + lab + "' --optimizer lm --out '" + out.string() + "'", tmp);
+  INFO(r.err);
+  REQUIRE(r.status == 0);
+  CHECK(r.err.empty());
+  const auto s = nlohmann::json::parse(slurp(out / "summary.json"));
+  // Made from a drape of my_fabric.toml at k = 600 N/m, L0 = 0.04 m, topology a, with 0.1 mm
+  // noise (docs/examples/make_lab_targets.py): the fit finds its k / L0 within a few percent
+  // (the noise floor), its topology and its mesh.
+  const double ratio =
+      s["params"]["stiffness"].get<double>() / s["params"]["natural_length"].get<double>();
+  CHECK(std::abs(ratio / (600.0 / 0.04) - 1.0) < 0.05);
+  CHECK(s["params"]["topology"] == "a");
+  CHECK(s["objective"].get<double>() < 2.5);
+  // The printout leads with what the edges determine and says why the rest is not.
+  const size_t ratio_row = r.out.find("k / L0 (determined)");
+  CHECK(ratio_row != std::string::npos);
+  CHECK(ratio_row < r.out.find("\nstiffness "));
+  CHECK(r.out.find("not determined by the edges: stiffness and natural_length enter the edges "
+                   "only as k / L0 at a fixed mesh; damping does not enter the equilibrium; "
+                   "the elongation limit") != std::string::npos);
+  CHECK(r.out.find("note: the fitted natural_length") != std::string::npos);
+  CHECK(r.out.find("also sets the mesh: n = round(fabric.width / L0) = 10 cells per side") !=
+        std::string::npos);
+
+  // The same photos with z growing downward (image rows): one warning line, the fit runs on.
+  const fs::path flipped = tmp.path / "flipped.csv";
+  {
+    std::ifstream in(lab);
+    std::ofstream f(flipped);
+    for (std::string line; std::getline(in, line);) {
+      if (line.rfind("four_corner,", 0) == 0) {
+        const size_t comma = line.rfind(',');
+        const double z = std::stod(line.substr(comma + 1));
+        line = line.substr(0, comma + 1) + format_number(-z, 17);
+      }
+      f << line << "\n";
+    }
+  }
+  const Run up = run_knitsim(fit + "'" + flipped.string() + "' --optimizer lm --quiet --out '" +
+                                 (tmp.path / "up").string() + "'",
+                             tmp);
+  REQUIRE(lines(up.err).size() == 1);
+  CHECK(up.err.find("knitsim fit: warning: --target " + flipped.string() +
+                    ": every edge of four_corner hangs above its pins") != std::string::npos);
+}
