@@ -27,7 +27,7 @@
 // the paper's k = 1000 N/m on four_corner, 3.6e-7 at k = 1e5 N/m, where the residual measured
 // at rest is ~2.5e-8 whatever the integrator (static included), so the bound is ~14x loose
 // there; stopping at it (t = 236 s) instead of integrating on to t_max moved the positions by
-// 8e-11 m (`knitsim drape --set model.stiffness=1e5`, README "Known limitations").
+// 8e-11 m (`knitsim drape --set model.stiffness=1e5`, README at 1e1ee2d, "Known limitations").
 //
 // Failure modes: bad specs (index out of range, non-positive mass or rest length, a spring
 // joining a particle to itself, NaN) throw std::invalid_argument at construction. Evaluation

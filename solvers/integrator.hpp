@@ -74,7 +74,7 @@ struct IntegratorOptions {
   // of ending the run with solver_failure. 0 = never. Why: on two_corner, cvode-bdf-gmres at order
   // 4, h ~ 130 s failed the error test seven times in a row (CVODE's limit) down to h ~ 2e-3 s at 4
   // of 6 eps_lin values tried; those steps pass only below ~1e-6 s (a tenth of the velocity
-  // relaxation time m/c), and a restart gets there (README "Integrators", "Restarts").
+  // relaxation time m/c), and a restart gets there (README at 1e1ee2d, "Integrators", "Restarts").
   int max_restarts = 10;
   // cvode-bdf-gmres: Krylov dimension (0 = SUNDIALS' default, 5) and CVODE's linear-solver
   // tolerance factor (CVodeSetEpsLin: GMRES stops at eps_lin x the Newton tolerance; SUNDIALS'
@@ -82,7 +82,7 @@ struct IntegratorOptions {
   // four_corner 11 x 11, Krylov 30, ends at t_max on a floor of 2.9e-5 / 2.8e-6 / 3.8e-7 /
   // 4.6e-8 at eps_lin 5e-2 / 5e-3 / 5e-4 / 5e-5, and settles (residual < 1e-8) at 5e-6 (230
   // steps), 5e-7 (204), 1e-7 (226), 1e-8 (216). With Krylov 5 it fails the corrector at any
-  // eps_lin (2026-11-23, README "Integrators").
+  // eps_lin (2026-11-23, README at 1e1ee2d, "Integrators").
   int krylov_dim = 30;
   double krylov_eps_lin = 5e-7;
   // Linear solver for the Newton systems of cvode-bdf, arkode-dirk and arkode-imex:
@@ -95,7 +95,8 @@ struct IntegratorOptions {
   // All three solve the same Newton systems; KLU and SchurLdl take the same steps, SchurCgLdl
   // the same on four_corner and within a few steps where step control is on a knife edge.
   // SchurLdl measured 1.3x faster than KLU on both drape scenes, and SchurCgLdl ~2x faster than
-  // SchurLdl on the knit model's microsecond steps (README, "Integrators"), hence the default.
+  // SchurLdl on the knit model's microsecond steps (README at 1e1ee2d, "Integrators"), hence the
+  // default.
   enum class NewtonSolver { Klu, SchurLdl, SchurCgLdl };
   NewtonSolver newton_solver = NewtonSolver::SchurCgLdl;  // names: to_string below
   // Left preconditioner of cvode-bdf-gmres, P ~ I - gamma J at CVODE's preconditioner set-ups
@@ -107,7 +108,7 @@ struct IntegratorOptions {
   //   SchurLdl     S by sparse LDL^T, factorised at each preconditioner set-up and lagged
   //                between them (GMRES corrects the lag, so the Newton systems are solved to
   //                eps_lin with the current gamma and Jacobian).
-  // Measured in experiments/scaling and README "Integrators".
+  // Measured in experiments/scaling and README at 1e1ee2d, "Integrators".
   enum class GmresPreconditioner { None, BlockJacobi, SchurIc, SchurLdl };
   GmresPreconditioner gmres_preconditioner = GmresPreconditioner::SchurLdl;
   // Sparse factorisation of the symmetric reduced matrix S (implicit-euler, the ldl / cg-ldl
@@ -118,7 +119,7 @@ struct IntegratorOptions {
   //   Supernodal  CHOLMOD's supernodal LL^T, falling back to LDL^T (Block where it applies)
   //               where S is not positive definite;
   //   Automatic   Block (or Simplicial) below SymmetricFactor::supernodal_min_dof unknowns,
-  //               Supernodal from there (above the measured tie, README "Performance").
+  //               Supernodal from there (above the measured tie, README at 1e1ee2d, "Performance").
   enum class Factorization { Automatic, Simplicial, Block, Supernodal };
   Factorization factorization = Factorization::Automatic;
 

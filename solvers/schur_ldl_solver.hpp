@@ -34,7 +34,7 @@
 // four_corner (tests/test_schur_ldl.cpp); where CVODE's step control sits on a knife edge
 // they can drift by a few steps (tests/test_knit.cpp).
 // Measured on the knit model's ringing phase, where CVODE takes hundreds of microsecond steps
-// (README, "Knit model"). On drapes most steps are large, the radius test fails, and the
+// (README at 1e1ee2d, "Knit model"). On drapes most steps are large, the radius test fails, and the
 // added cost is one pass over S per setup.
 //
 // Requirements: A is the SUNMatrix that CVODE/ARKODE hold, a CSC sparse matrix with exactly

@@ -28,7 +28,8 @@
 //   11151   124 ms / 3.2 ms      66 ms / 1.4 ms       75 ms / 1.2 ms
 //   19671   386 ms / 8.5 ms      211 ms / 5.1 ms      172 ms / 4.3 ms
 //   30591   653 ms / 13 ms       366 ms / 8.8 ms      267 ms / 6.8 ms
-// Whole drapes (README "Factorisation back end", CPU s): block and supernodal tie at 19 671 dof
+// Whole drapes (README at 1e1ee2d, "Factorisation back end", CPU s): block and supernodal tie at
+// 19 671 dof
 // (27 s), block leads at 30 591 (48 vs 52 s) and trails at 59 631 (226 vs 121 s); the threshold
 // interpolates that crossover log-linearly. At 11 151 dof block takes 7.7 s against
 // supernodal's 10.7-12.1 s. With Debian's

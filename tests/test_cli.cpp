@@ -17,6 +17,7 @@
 #include "src/io/drape_outputs.hpp"
 #include "src/io/vtk.hpp"
 #include "src/measure/measurement.hpp"
+#include "src/scene/scene.hpp"
 
 using namespace knitsim;
 using namespace knitsim::test;
@@ -257,7 +258,7 @@ TEST_CASE("output writers: tables, VTK, atomic files and output folders") {
   write_file_atomic(tmp.path / "f.txt", "two");
   CHECK(slurp(tmp.path / "f.txt") == "two");
   CHECK(!fs::exists(tmp.path / "f.txt.tmp"));
-  CHECK_THROWS_AS(write_file_atomic(tmp.path / "no-such-dir" / "f.txt", "x"), std::runtime_error);
+  CHECK_THROWS_AS(write_file_atomic(tmp.path / "no-such-dir" / "f.txt", "x"), OutputError);
 
   // Default folders are fresh: a second one in the same second gets -2.
   const fs::path cwd = fs::current_path();
@@ -270,7 +271,11 @@ TEST_CASE("output writers: tables, VTK, atomic files and output folders") {
   CHECK(a != b);
   CHECK(fs::is_directory(tmp.path / a));
   CHECK(fs::is_directory(tmp.path / b));
-  CHECK(fs::is_empty(tmp.path / a));  // the writability probe is removed
+  // The writability probe is removed; the folder holds only its lock file (held by this
+  // process until it ends).
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(tmp.path / a)) names.push_back(e.path().filename());
+  CHECK(names == std::vector<std::string>{kOutputLockFile});
 }
 
 TEST_CASE("drape --target: edges.csv always, Eq. 5 objective against a target") {
@@ -378,4 +383,101 @@ TEST_CASE("fit --optimizer lm: a noise-free target of the model itself, end to e
     CHECK(bad.err.find(names) != std::string::npos);
     CHECK_FALSE(fs::exists(none));
   }
+}
+
+TEST_CASE("knitsim list keys: every scene key with its unit, default and accepted values") {
+  TempDir tmp("list-keys");
+  const Run text = run_knitsim("list keys", tmp);
+  REQUIRE(text.status == 0);
+  CHECK(lines(text.out).size() == 1 + scene_keys().size());
+  for (const std::string& key : scene_keys()) CHECK(text.out.find(key) != std::string::npos);
+  // The ranges are the validators' own, the defaults sample 1's.
+  CHECK(text.out.find("> 0 N/m") != std::string::npos);
+  CHECK(text.out.find("a = structural + shear + bending, b = structural + shear, c = structural "
+                      "+ bending") != std::string::npos);
+  const Run md = run_knitsim("list keys --format markdown", tmp);
+  REQUIRE(md.status == 0);
+  CHECK(md.out.rfind("| key | unit | default | accepted | meaning |", 0) == 0);
+  CHECK(md.out.find("| model.stiffness | N/m | 852 | > 0 N/m |") != std::string::npos);
+  // drape --help lists the keys and defines the topologies.
+  const Run help = run_knitsim("drape --help", tmp);
+  CHECK(help.out.find("model.elongation_limit") != std::string::npos);
+  CHECK(help.out.find("c = structural + bending") != std::string::npos);
+}
+
+TEST_CASE("a partial scene file: one note naming the physical keys left at sample 1's values") {
+  TempDir tmp("partial-scene");
+  const fs::path partial = tmp.path / "partial.toml";
+  std::ofstream(partial) << "# my sheet\n[fabric]\nareal_density = 180.0\n\n[model]\n"
+                            "stiffness = 1500.0\nnatural_length = 0.04\n";
+  const std::string out = " --no-pictures --quiet --out '" + (tmp.path / "o").string() + "'";
+  const Run r = run_knitsim("drape --scene '" + partial.string() + "'" + out, tmp);
+  REQUIRE(r.status == 0);
+  REQUIRE(lines(r.err).size() == 1);
+  CHECK(r.err.find("knitsim drape: note: " + partial.string() +
+                   " leaves fabric.width = 0.5 m, model.damping = 12 N s/m, "
+                   "model.elongation_limit = 5 %, model.topology = a, pins.layout = four_corner "
+                   "at sample 1's values") != std::string::npos);
+  // A key given by --set is not inherited; the keys the file gives are not listed.
+  const Run set = run_knitsim("drape --scene '" + partial.string() +
+                                  "' --set model.elongation_limit=0" + out,
+                              tmp);
+  CHECK(set.err.find("model.elongation_limit") == std::string::npos);
+  CHECK(set.err.find("model.stiffness") == std::string::npos);
+  // A file that names every physical key (docs/examples/my_fabric.toml), and a built-in scene:
+  // no note.
+  CHECK(run_knitsim("drape --scene '" KNITSIM_DOCS_DIR "/examples/my_fabric.toml'" + out, tmp)
+            .err.empty());
+  CHECK(run_knitsim("drape --scene four_corner" + out, tmp).err.empty());
+}
+
+TEST_CASE("the lab-data example fits; upside-down lab data are warned about") {
+  TempDir tmp("lab-fit");
+  const std::string lab = KNITSIM_DOCS_DIR "/examples/lab_targets.csv";
+  const std::string fit = "fit --scene '" KNITSIM_DOCS_DIR "/examples/my_fabric.toml' --target ";
+  const fs::path out = tmp.path / "fit";
+  const Run r = run_knitsim(fit + "'" + lab + "' --optimizer lm --out '" + out.string() + "'", tmp);
+  INFO(r.err);
+  REQUIRE(r.status == 0);
+  CHECK(r.err.empty());
+  const auto s = nlohmann::json::parse(slurp(out / "summary.json"));
+  // Made from a drape of my_fabric.toml at k = 600 N/m, L0 = 0.04 m, topology a, with 0.1 mm
+  // noise (docs/examples/make_lab_targets.py): the fit finds its k / L0 within a few percent
+  // (the noise floor), its topology and its mesh.
+  const double ratio =
+      s["params"]["stiffness"].get<double>() / s["params"]["natural_length"].get<double>();
+  CHECK(std::abs(ratio / (600.0 / 0.04) - 1.0) < 0.05);
+  CHECK(s["params"]["topology"] == "a");
+  CHECK(s["objective"].get<double>() < 2.5);
+  // The printout leads with what the edges determine and says why the rest is not.
+  const size_t ratio_row = r.out.find("k / L0 (determined)");
+  CHECK(ratio_row != std::string::npos);
+  CHECK(ratio_row < r.out.find("\nstiffness "));
+  CHECK(r.out.find("not determined by the edges: stiffness and natural_length enter the edges "
+                   "only as k / L0 at a fixed mesh; damping does not enter the equilibrium; "
+                   "the elongation limit") != std::string::npos);
+  CHECK(r.out.find("note: the fitted natural_length") != std::string::npos);
+  CHECK(r.out.find("also sets the mesh: n = round(fabric.width / L0) = 10 cells per side") !=
+        std::string::npos);
+
+  // The same photos with z growing downward (image rows): one warning line, the fit runs on.
+  const fs::path flipped = tmp.path / "flipped.csv";
+  {
+    std::ifstream in(lab);
+    std::ofstream f(flipped);
+    for (std::string line; std::getline(in, line);) {
+      if (line.rfind("four_corner,", 0) == 0) {
+        const size_t comma = line.rfind(',');
+        const double z = std::stod(line.substr(comma + 1));
+        line = line.substr(0, comma + 1) + format_number(-z, 17);
+      }
+      f << line << "\n";
+    }
+  }
+  const Run up = run_knitsim(fit + "'" + flipped.string() + "' --optimizer lm --quiet --out '" +
+                                 (tmp.path / "up").string() + "'",
+                             tmp);
+  REQUIRE(lines(up.err).size() == 1);
+  CHECK(up.err.find("knitsim fit: warning: --target " + flipped.string() +
+                    ": every edge of four_corner hangs above its pins") != std::string::npos);
 }

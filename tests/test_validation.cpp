@@ -3,13 +3,19 @@
 // keys where knit --set and the target reader missed them, and an unwritable --out for every
 // command that writes. Each case states the message it expects; each failed before its fix
 // (noted per case) or pins down behaviour the fuzzers and the CLI rely on.
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 #include <fstream>
 #include <functional>
 #include <string>
 #include <vector>
 
+#include "src/base/files.hpp"
 #include "src/fit/targets.hpp"
 #include "src/scene/scene.hpp"
 #include "tests/cli_runner.hpp"
@@ -330,4 +336,60 @@ TEST_CASE("an unknown command is named; --version answers") {
   CHECK(version.status == 0);
   CHECK(version.out.rfind("knitsim ", 0) == 0);
   CHECK(version.out.find("(commit ") != std::string::npos);
+}
+
+TEST_CASE("a write that fails mid-run (a full disk): exit 4, one line naming the file") {
+  TempDir tmp("validation-write-fails");
+  // A file size limit of 2 KiB (SIGXFSZ ignored, so a write past it fails with EFBIG, as on a
+  // full disk): --out is made and probed, the run settles, the first larger output fails.
+  const fs::path out = tmp.path / "o";
+  const std::string cmd = "sh -c \"trap '' XFSZ; ulimit -f 2; exec '" + std::string(KNITSIM_EXE) +
+                          "' drape --no-pictures --quiet --out '" + out.string() + "'\" 2>'" +
+                          (tmp.path / "err.txt").string() + "'";
+  const int raw = std::system(cmd.c_str());
+  REQUIRE(WIFEXITED(raw));
+  CHECK(WEXITSTATUS(raw) == 4);
+  const std::string err = slurp(tmp.path / "err.txt");
+  CHECK(count_lines(err) == 1);
+  CHECK(err.rfind("knitsim: error: cannot write " + out.string() + "/", 0) == 0);
+  CHECK(err.find("File too large") != std::string::npos);
+  for (const auto& e : fs::directory_iterator(out)) CHECK(e.path().extension() != ".tmp");
+}
+
+TEST_CASE("one run per --out: a second run into a busy folder exits 5; no stale lock") {
+  TempDir tmp("validation-busy");
+  const fs::path out = tmp.path / "o";
+  const fs::path lock = out / kOutputLockFile;
+  // Whether some process holds the folder's lock (tried from here, released at once).
+  const auto held = [&lock] {
+    const int fd = ::open(lock.c_str(), O_RDWR | O_CLOEXEC);
+    if (fd < 0) return false;
+    const bool busy = ::flock(fd, LOCK_EX | LOCK_NB) != 0;
+    ::close(fd);
+    return busy;
+  };
+  const std::string slow = "drape --integrator euler --max-wall 300 --no-pictures --quiet --out '" +
+                           out.string() + "'";
+  // The second run is made while the first is stopped holding the lock (signal_when), so the
+  // outcome does not depend on timing; then the first is interrupted and writes its outputs.
+  Run second;
+  const SignalledRun first = signal_when(start_knitsim(slow, tmp), SIGINT, [&] {
+    if (!held()) return false;
+    second = run_knitsim("drape --no-pictures --quiet --out '" + out.string() + "'", tmp);
+    return true;
+  });
+  REQUIRE(first.signalled);
+  CHECK(WEXITSTATUS(first.status) == 130);
+  CHECK(second.status == 5);
+  CHECK(count_lines(second.err) == 1);
+  CHECK(second.err.find("knitsim: error: --out " + out.string() +
+                        ": in use by another knitsim run") != std::string::npos);
+  CHECK(fs::exists(out / "summary.json"));  // the first run's, written after the refusal
+  CHECK(nlohmann::json::parse(slurp(out / "summary.json"))["integrator"] == "euler");
+  // The lock ends with its process, however it ends: after a SIGKILL the folder is free.
+  const SignalledRun killed = signal_when(start_knitsim(slow, tmp), SIGKILL, held);
+  REQUIRE(killed.signalled);
+  CHECK(WIFSIGNALED(killed.status));
+  CHECK_FALSE(held());
+  CHECK(run_knitsim("drape --no-pictures --quiet --out '" + out.string() + "'", tmp).status == 0);
 }

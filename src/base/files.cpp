@@ -1,5 +1,7 @@
 #include "src/base/files.hpp"
 
+#include <fcntl.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -7,6 +9,8 @@
 #include <cstring>
 #include <ctime>
 #include <fstream>
+#include <map>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
@@ -25,7 +29,7 @@ void commit_tmp(const fs::path& path) {
   fs::rename(tmp_name(path), path, ec);
   if (ec) {
     fs::remove(tmp_name(path), ec);
-    throw std::runtime_error("cannot write " + path.string() + ": " + ec.message());
+    throw OutputError("cannot write " + path.string() + ": " + ec.message());
   }
 }
 
@@ -57,7 +61,7 @@ void write_file_atomic_with(const fs::path& path,
   } catch (const std::exception& e) {
     std::error_code ec;
     fs::remove(tmp_name(path), ec);
-    throw std::runtime_error("cannot write " + path.string() + ": " + e.what());
+    throw OutputError("cannot write " + path.string() + ": " + e.what());
   }
   commit_tmp(path);
 }
@@ -83,6 +87,31 @@ void refuse_other_commands_folder(const fs::path& dir, const std::string& reques
   if (owner.empty() || owner == command_name()) return;
   throw std::invalid_argument("--out " + requested + ": holds the results of `knitsim " + owner +
                               "` (its manifest.json); give another folder or remove that one");
+}
+
+// Takes the advisory lock of `dir` (kOutputLockFile) for the rest of the process, once per
+// folder: the descriptors stay open until exit, when the kernel releases them. Returns false if
+// another process holds it; throws std::invalid_argument if the lock file cannot be made.
+bool lock_output_dir(const fs::path& dir, const std::string& shown) {
+  static std::mutex mutex;
+  static std::map<fs::path, int> held;  // canonical folder -> descriptor of its lock file
+  std::error_code ec;
+  fs::path key = fs::canonical(dir, ec);
+  if (ec) key = fs::absolute(dir);
+  const std::lock_guard<std::mutex> guard(mutex);
+  if (held.count(key)) return true;
+  const fs::path file = dir / kOutputLockFile;
+  const int fd = ::open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd < 0)
+    throw std::invalid_argument("--out " + shown + ": cannot write: " + std::strerror(errno));
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    const int err = errno;
+    ::close(fd);
+    if (err == EWOULDBLOCK) return false;
+    throw std::invalid_argument("--out " + shown + ": cannot lock: " + std::strerror(err));
+  }
+  held[key] = fd;
+  return true;
 }
 
 }  // namespace
@@ -121,6 +150,10 @@ fs::path make_output_dir(const std::string& requested, const std::string& stem, 
     if (created) fs::remove(dir, ec);
     throw std::invalid_argument("--out " + dir.string() + ": cannot write: " + std::strerror(err));
   }
+  if (!lock_output_dir(dir, dir.string()))
+    throw OutputFolderBusy("--out " + dir.string() +
+                           ": in use by another knitsim run (it holds " + kOutputLockFile +
+                           "); wait for it to end, or give another folder");
   if (created_out) *created_out = created;
   return dir;
 }
@@ -139,12 +172,15 @@ void refuse_fresh_start_over_checkpoint(const std::string& out,
 void remove_stale_output(const fs::path& file) {
   std::error_code ec;
   fs::remove_all(file, ec);
-  if (ec) throw std::runtime_error("cannot remove " + file.string() + ": " + ec.message());
+  if (ec) throw OutputError("cannot remove " + file.string() + ": " + ec.message());
 }
 
 void remove_if_unused(const fs::path& dir, bool created) {
   std::error_code ec;
-  if (created && fs::is_empty(dir, ec) && !ec) fs::remove(dir, ec);
+  if (!created) return;
+  for (const fs::directory_entry& entry : fs::directory_iterator(dir, ec))
+    if (entry.path().filename() != kOutputLockFile) return;
+  if (!ec) fs::remove_all(dir, ec);
 }
 
 bool read_input_file(const std::string& path, std::size_t max_bytes, std::string& text,

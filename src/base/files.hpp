@@ -3,17 +3,31 @@
 // Every file is written atomically: to `<name>.tmp` in the same folder, then renamed over
 // `<name>` (POSIX rename: a reader sees the old file or the new one, never half of one).
 // Failure modes: bad --out folders are bad input (std::invalid_argument naming --out); a write
-// that fails later (disk full, ...) throws std::runtime_error("cannot write PATH: reason").
+// that fails later (disk full, a file size limit, ...) throws OutputError("cannot write PATH:
+// reason"), which the command line maps to exit status 4; an --out folder that another running
+// knitsim holds throws OutputFolderBusy (exit status 5). src/cli/main.cpp has the exit codes.
 #pragma once
 
 #include <cstddef>
 #include <filesystem>
 #include <functional>
 #include <nlohmann/json_fwd.hpp>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 namespace knitsim {
+
+// An output that could not be written once the run had started (disk full, quota, a file size
+// limit, a path that became unwritable): "cannot write PATH: reason".
+struct OutputError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// The --out folder is in use by another knitsim process that is still running.
+struct OutputFolderBusy : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
 
 void write_file_atomic(const std::filesystem::path& path, const std::string& content);
 // For writers that take a file name (the PNG renderer): write(tmp) must create the file tmp.
@@ -30,6 +44,11 @@ void write_json_atomic(const std::filesystem::path& path, const nlohmann::json& 
 //     and files of the same names in it are replaced -- unless its manifest.json names another
 //     command than this process's (command_name()): that folder holds another command's
 //     results, and the call throws rather than overwrite them.
+// The folder is then locked for the life of the process: an advisory flock(LOCK_EX) on the
+// file .knitsim-lock inside it (the kernel drops the lock when the process ends, however it
+// ends, so a killed run leaves no stale lock; the empty file stays). A second knitsim given the
+// same folder while the first runs throws OutputFolderBusy, before it writes anything; the same
+// process may ask for its own folder again.
 // Throws std::invalid_argument("--out DIR: cannot create|write ...: reason"). `created`, if
 // given, says whether the folder is new (for remove_if_unused).
 std::filesystem::path make_output_dir(const std::string& requested, const std::string& stem,
@@ -43,7 +62,10 @@ void refuse_fresh_start_over_checkpoint(const std::string& out,
 // --no-pictures, steps.csv without --step-history, ...). Left in a reused --out folder, an
 // earlier run's file would read as this run's.
 void remove_stale_output(const std::filesystem::path& file);
-// Removes `dir` if `created` and it is still empty: for bad input found only once the run
+// The name of the lock file make_output_dir keeps in every output folder.
+inline constexpr const char* kOutputLockFile = ".knitsim-lock";
+
+// Removes `dir` if `created` and it holds nothing but its lock file: for bad input found only once the run
 // starts (an integrator option the model refuses), so that nothing is left behind.
 void remove_if_unused(const std::filesystem::path& dir, bool created);
 

@@ -261,6 +261,28 @@ void warn(const std::string& message) {
   std::cerr << "knitsim " << command_name() << ": warning: " << message << std::endl;
 }
 
+void note(const std::string& message) {
+  std::cerr << "knitsim " << command_name() << ": note: " << message << std::endl;
+}
+
+void note_keys_not_given(const Scene& scene, const std::vector<std::string>& among) {
+  if (scene.source == "built-in") return;
+  const std::vector<std::string> missing = keys_not_given(scene, among);
+  if (missing.empty()) return;
+  std::string list;
+  for (const std::string& key : missing)
+    list += (list.empty() ? "" : ", ") + key + " = " + scene_key_value(scene, key);
+  note(scene.source + " leaves " + list +
+       " at sample 1's values (set them in the file or with --set; knitsim list keys)");
+}
+
+const std::vector<std::string>& physical_scene_keys() {
+  static const std::vector<std::string> keys = {
+      "fabric.width",           "fabric.areal_density",   "model.stiffness", "model.damping",
+      "model.elongation_limit", "model.natural_length",   "model.topology",  "pins.layout"};
+  return keys;
+}
+
 void warn_about_run(const std::string& damping_key, double damping, const IntegratorInfo& integ,
                     const IntegratorOptions& flags, double t_max) {
   if (damping == 0.0 && !integ.damps_numerically)

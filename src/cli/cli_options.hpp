@@ -12,6 +12,7 @@
 #include "solvers/integrator.hpp"
 #include "src/fit/ica.hpp"
 #include "src/cli/interrupt.hpp"
+#include "src/scene/scene.hpp"
 
 namespace CLI {
 class App;
@@ -80,6 +81,15 @@ void copy_run_flags(const IntegratorOptions& flags, IntegratorOptions& into);
 // One line on stderr, "knitsim <command>: warning: <message>": input that is valid but will not
 // do what it seems to. The run goes on.
 void warn(const std::string& message);
+// One line on stderr, "knitsim <command>: note: <message>": what the run assumed without being
+// told. The run goes on.
+void note(const std::string& message);
+// For a scene read from a file: one note naming the keys of `among` the file and --set left
+// out, with the values they keep (sample 1's defaults). Silent for a built-in scene.
+void note_keys_not_given(const Scene& scene, const std::vector<std::string>& among);
+// The keys drape notes: those that change the physics (fabric, material, topology, pins).
+const std::vector<std::string>& physical_scene_keys();
+
 // drape's and knit's warnings before a run: no damping (`damping_key` is 0: only
 // implicit-euler's numerical damping settles such a run, any other integrator goes on to
 // `t_max`, for hours with the defaults), and --dt given (`flags.dt` > 0) to an adaptive

@@ -112,6 +112,7 @@ void run(const DrapeArgs& args) {
   const std::filesystem::path dir = make_output_dir(args.out, "drape-" + scene.name, &created);
   warn_about_run("model.damping", scene.params.damping, integ->info(), args.options,
                  scene.options.t_max);
+  note_keys_not_given(scene, physical_scene_keys());
   const InterruptScope interrupt;
   scene.options.interrupt = interrupt.flag();
   std::string steps_csv;
@@ -162,12 +163,21 @@ void register_drape_command(CLI::App& app) {
   cmd->add_option("--out", args->out,
                   "Output folder (default: a fresh out/drape-<scene>-<YYYYmmdd-HHMMSS>)");
   cmd->add_option("--target", args->target,
-                  "Target edges (CSV, src/fit/targets.hpp): adds the Eq. 5 objective and both sets of "
-                  "edge coefficients to summary.json and writes target_edges.csv");
+                  "Target edges (CSV; format: docs/fitting.md): adds the Eq. 5 objective and both "
+                  "sets of edge coefficients to summary.json and writes target_edges.csv");
   cmd->add_flag("--no-pictures", args->no_pictures,
                 "Skip drape.png (its rendering costs about as much as a four_corner solve)");
   add_history_and_continue_options(cmd, args->step_history, args->continue_from, "scene and --set");
   cmd->add_flag("--quiet", args->quiet, "No progress line and no summary on stdout");
+  std::string keys;
+  for (const std::string& key : scene_keys()) keys += (keys.empty() ? "" : ", ") + key;
+  cmd->footer(
+      "Scene keys (TOML sections of a scene file, or --set section.key=value; units, defaults "
+      "and accepted values: knitsim list keys; docs/scenes.md):\n  " +
+      keys +
+      "\nmodel.topology, the springs of each particle: a = structural + shear + bending, "
+      "b = structural + shear, c = structural + bending.\nA scene file sets only the keys it "
+      "names; the rest keep sample 1's values (a note on stderr lists the physical ones).");
   cmd->callback([args] { run(*args); });
 }
 

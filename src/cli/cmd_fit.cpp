@@ -36,6 +36,7 @@
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
@@ -49,6 +50,7 @@
 #include "src/cli/commands.hpp"
 #include "src/fit/drape_fit.hpp"
 #include "src/fit/lm_fit.hpp"
+#include "src/fit/targets.hpp"
 #include "src/io/drape_outputs.hpp"
 #include "src/io/json.hpp"
 #include "src/io/manifest.hpp"
@@ -104,6 +106,35 @@ void warn_about_fit(const FitArgs& args, const std::string& integrator) {
          ": stability-limited, so each drape of the fit takes minutes (four_corner with euler: "
          "~10 min), against milliseconds with cvode-bdf or static");
 }
+
+// One warning when every edge of the target that can tell hangs above its pins (sags_upward):
+// lab data with z growing downward (image rows), which the fit would chase to a box corner.
+void warn_if_target_upside_down(const DrapeFitProblem& problem, const std::string& target) {
+  int upward = 0, counted = 0;
+  for (const EdgeFit& edge : problem.measured())
+    if (const std::optional<bool> up = sags_upward(edge, problem.target_scene()))
+      ++counted, upward += *up ? 1 : 0;
+  if (counted > 0 && upward == counted)
+    warn("--target " + target + ": every edge of " + problem.target_scene() +
+         " hangs above its pins; lab z must grow upward (negate image rows; docs/fitting.md)");
+}
+
+// One line on stdout: the fitted natural length also sets the mesh (n = round(W / L0) cells per
+// side) and the model sheet's side n L0, so a fitted L0 is a fitted mesh (docs/fitting.md).
+std::string mesh_note(const Scene& base, const DrapeParams& fitted) {
+  const int n = fitted.cells(), n0 = base.params.cells();
+  return "note: the fitted natural_length " + format_number(fitted.natural_length, 6) +
+         " m also sets the mesh: n = round(fabric.width / L0) = " + std::to_string(n) +
+         " cells per side, a model sheet of n L0 = " +
+         format_number(n * fitted.natural_length, 4) + " m (the base scene: " +
+         std::to_string(n0) + " cells, " + format_number(n0 * base.params.natural_length, 4) +
+         " m)\n";
+}
+
+// Scene keys of a fit's base scene that matter and are not fitted: a scene file that leaves
+// them out runs sample 1's values, said in one note.
+const std::vector<std::string> kFitBaseKeys = {"fabric.width", "fabric.areal_density",
+                                               "pins.layout"};
 
 constexpr const char* kCheckpointFile = "ica_checkpoint.json";
 
@@ -166,6 +197,29 @@ std::shared_ptr<const IcaState> read_checkpoint(const std::filesystem::path& pat
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(where + ": " + e.what());
   }
+}
+
+// The one line under the LM fit's table saying why the parameters with no standard error are
+// not determined: k and L0 enter the edges only as k / L0 at a fixed mesh; a parameter whose
+// column of sensitivities is zero does not move the equilibrium at all (the damping never; the
+// elongation limit while no spring reaches it).
+std::string not_determined_line(const DrapeIdentifiability& id, double max_strain,
+                                const DrapeParams& p) {
+  std::vector<std::string> why;
+  const auto& par = id.parameters;
+  if (!std::isfinite(par[0].standard_error) && !std::isfinite(par[3].standard_error) &&
+      std::isfinite(par[0].conditional_standard_error))
+    why.push_back("stiffness and natural_length enter the edges only as k / L0 at a fixed mesh");
+  if (!std::isfinite(par[1].conditional_standard_error))
+    why.push_back("damping does not enter the equilibrium");
+  if (!std::isfinite(par[2].conditional_standard_error))
+    why.push_back("the elongation limit " + format_number(p.elongation_limit, 4) +
+                  " % is not reached (max strain " + format_number(100.0 * max_strain, 3) +
+                  " %), so it does not act");
+  if (why.empty()) return "";
+  std::string line = "not determined by the edges: ";
+  for (size_t i = 0; i < why.size(); ++i) line += (i ? "; " : "") + why[i];
+  return line + " (docs/fitting.md)\n";
 }
 
 // --optimizer lm: the multi-start Levenberg-Marquardt fit and its outputs in dir: summary.json
@@ -235,10 +289,12 @@ void run_lm_fit(const FitArgs& args, const Scene& base, const DrapeFitProblem& p
                                    {"run_options", to_json(base.options)}};
   nlohmann::json summary = settings;
   bool drape_ok = false;
+  double max_strain = 0.0;  // of the fitted drape
   if (fit.ok) {
     const Scene fitted = problem.scene_of(fit.best_x);
     const DrapeResult drape = run_drape(fitted, problem.integrator());
     drape_ok = drape.stats.status == RunStatus::Equilibrium;
+    max_strain = drape.max_strain;
     std::filesystem::create_directories(dir / "drape");
     write_drape_outputs(dir / "drape", fitted, drape, &problem.measured());
     summary["params"] = params_json(fit.params);
@@ -266,20 +322,31 @@ void run_lm_fit(const FitArgs& args, const Scene& base, const DrapeFitProblem& p
   write_json_atomic(dir / "manifest.json", manifest(settings));
   if (!args.quiet) {
     std::cout << starts.text() << "\nstatus: " << fit.message << "\n";
+    // What the edges determine first: k / L0 (with the topology and n, chosen by the
+    // screening); then the parameters one by one, whose standard errors are infinite where the
+    // data cannot separate them, and one line saying why.
     Table t;
     t.columns = {"parameter", "fitted", "standard error", "if the others were known"};
     const char* units[kDrapeContinuous] = {" N/m", " N s/m", " %", " m"};
+    auto error = [](double v) { return std::isfinite(v) ? format_number(v, 3) : "none"; };
+    if (fit.ok)
+      t.rows.push_back({"k / L0 (determined)",
+                        format_number(fit.params.stiffness / fit.params.natural_length, 6) +
+                            " N/m^2",
+                        format_number(100.0 * id.ratio_relative_error, 3) + " %", ""});
+    t.rows.push_back({"topology", fit.ok ? std::string(1, fit.params.topology) : "-", "", ""});
+    if (fit.ok) t.rows.push_back({"cells per side n", std::to_string(fit.params.cells()), "", ""});
     for (int g = 0; g < kDrapeContinuous && fit.ok; ++g)
       t.rows.push_back({drape_gene_names()[g], format_number(fit.best_x[g], 6) + units[g],
-                        format_number(id.parameters[g].standard_error, 3),
-                        format_number(id.parameters[g].conditional_standard_error, 3)});
-    t.rows.push_back({"topology", fit.ok ? std::string(1, fit.params.topology) : "-", "", ""});
+                        error(id.parameters[g].standard_error),
+                        error(id.parameters[g].conditional_standard_error)});
     t.rows.push_back({"objective", format_number(fit.objective, 6) + " %", "", ""});
-    t.rows.push_back({"k / L0", "", format_number(100.0 * id.ratio_relative_error, 3) + " %", ""});
     t.rows.push_back({"evaluations", std::to_string(fit.evaluations), "", ""});
     t.rows.push_back({"cpu", format_number(fit.cpu_seconds, 4) + " s", "", ""});
     t.rows.push_back({"outputs", dir.string() + "/", "", ""});
-    std::cout << t.text() << std::flush;
+    std::cout << t.text();
+    if (fit.ok) std::cout << not_determined_line(id, max_strain, fit.params) << mesh_note(base, fit.params);
+    std::cout << std::flush;
   }
   if (!fit.ok || !drape_ok) throw CLI::RuntimeError(3);
 }
@@ -328,6 +395,8 @@ void run(const FitArgs& args) {
   }
   dir = make_output_dir(args.out, "fit-" + base.name);
   warn_about_fit(args, problem->integrator());
+  note_keys_not_given(base, kFitBaseKeys);
+  warn_if_target_upside_down(*problem, args.target);
   if (args.optimizer == "lm") return run_lm_fit(args, base, *problem, dir);
 
   if (!args.quiet) {
@@ -420,7 +489,7 @@ void run(const FitArgs& args) {
                                   std::to_string(fit.failed_evaluations) + " failed)"},
               {"wall", format_number(fit.wall_seconds, 4) + " s"},
               {"outputs", dir.string() + "/"}};
-    std::cout << t.text() << std::flush;
+    std::cout << t.text() << mesh_note(base, fit.params) << std::flush;
   }
   if (interrupted) {
     std::cerr << "knitsim fit: interrupted by " << interrupt->signal_name() << " after decade "
@@ -448,7 +517,9 @@ void register_fit_command(CLI::App& app) {
   cmd->add_option("--set", args->sets, "Override a scene key of the base scene (repeatable)")
       ->allow_extra_args(false)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-  cmd->add_option("--target", args->target, "Target edges CSV (src/fit/targets.hpp format)")
+  cmd->add_option("--target", args->target,
+                  "Target edges CSV: normalised points, coefficients or lab points in mm with "
+                  "the pins (format and a worked lab example: docs/fitting.md)")
       ->required();
   cmd->add_option("--optimizer", args->optimizer,
                   "Optimiser: ica, or lm (multi-start Levenberg-Marquardt with analytic "

@@ -1,4 +1,5 @@
-// knitsim list integrators|scenes (SPEC 2.10): what the registry and the built-in scenes offer.
+// knitsim list integrators|scenes|keys (SPEC 2.10): what the registry, the built-in scenes and
+// the scene files offer. --format markdown is what docs/generate_reference.sh commits.
 #include <CLI/CLI.hpp>
 #include <iostream>
 #include <memory>
@@ -33,12 +34,21 @@ Table scenes_table() {
 
 void register_list_command(CLI::App& app) {
   auto what = std::make_shared<std::string>();
-  CLI::App* cmd = app.add_subcommand("list", "List the integrators or the built-in scenes");
-  cmd->add_option("what", *what, "integrators | scenes")
+  auto format = std::make_shared<std::string>("text");
+  CLI::App* cmd = app.add_subcommand(
+      "list", "List the integrators, the built-in scenes or the scene keys (units, defaults, "
+              "accepted values)");
+  cmd->add_option("what", *what, "integrators | scenes | keys")
       ->required()
-      ->check(CLI::IsMember({"integrators", "scenes"}));
-  cmd->callback([what] {
-    std::cout << (*what == "integrators" ? integrators_table() : scenes_table()).text();
+      ->check(CLI::IsMember({"integrators", "scenes", "keys"}));
+  cmd->add_option("--format", *format, "text | csv | markdown")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"text", "csv", "markdown"}));
+  cmd->callback([what, format] {
+    const Table t = *what == "integrators" ? integrators_table()
+                    : *what == "scenes"    ? scenes_table()
+                                           : scene_key_table();
+    std::cout << (*format == "csv" ? t.csv() : *format == "markdown" ? t.markdown() : t.text());
   });
 }
 

@@ -122,14 +122,18 @@ void run(const TargetsArgs& args) {
       const std::clock_t cpu0 = std::clock();
       const auto wall0 = std::chrono::steady_clock::now();
       ++done;
+      Target target;
       try {
-        write_target_csv(make_synthetic_target(sample, set, args.options), path.string(),
-                         provenance(set, sample, args.options));
-      } catch (const std::runtime_error& e) {
+        target = make_synthetic_target(sample, set, args.options);
+      } catch (const std::runtime_error& e) {  // a drape that did not settle: the next sample
         std::cerr << "knitsim: error: " << e.what() << "\n";
         failed = true;
         continue;
       }
+      // A write that fails ends the command (OutputError, exit 4): the next file would too.
+      write_file_atomic_with(path, [&](const std::string& tmp) {
+        write_target_csv(target, tmp, provenance(set, sample, args.options));
+      });
       if (!args.quiet) {
         const double wall =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();

@@ -4,7 +4,9 @@
 // Contract for every command: exit status 0 on success; on bad input one line on stderr
 // naming the field and its accepted range, exit status 2; on a numerical failure of the run
 // itself the outputs are still written with the status, exit status 3 (drape and knit: 128 + the
-// signal after Ctrl-C or SIGTERM, outputs written; src/cli/interrupt.hpp).
+// signal after Ctrl-C or SIGTERM, outputs written; src/cli/interrupt.hpp); an output that cannot
+// be written exits 4, an --out folder held by another running knitsim 5 (src/cli/main.cpp has
+// the whole list; docs/commands.md is the user's).
 #pragma once
 
 namespace CLI {

@@ -7,15 +7,22 @@
 //      CLI::RuntimeError(3) after writing its outputs (CLI11 prints nothing for it)
 //   130, 143  drape or knit stopped by SIGINT or SIGTERM (128 + the signal): the run ended with
 //      status interrupted and its outputs were written (src/cli/interrupt.hpp)
-//   1  anything else (e.g. a file that cannot be written), one line on stderr
+//   4  an output that could not be written once the run had started (disk full, quota, a file
+//      size limit): one line "knitsim: error: cannot write PATH: reason" (OutputError, or a
+//      std::filesystem::filesystem_error from making an output folder or checkpoint)
+//   5  the --out folder is in use by another knitsim run still going (its .knitsim-lock is
+//      flock'ed, src/base/files.hpp): one line, nothing written
+//   1  anything else (an internal error), one line on stderr
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <exception>
+#include <filesystem>
 #include <iostream>
 #include <stdexcept>
 #include <string>
 
 #include "src/base/command_line.hpp"
+#include "src/base/files.hpp"
 #include "src/base/text.hpp"
 #include "src/cli/cli_options.hpp"
 #include "src/cli/commands.hpp"
@@ -83,6 +90,15 @@ int main(int argc, char** argv) {
     return fail(2, std::string(e.what()) + " (see knitsim --help)");
   } catch (const std::invalid_argument& e) {
     return fail(2, e.what());
+  } catch (const knitsim::OutputError& e) {
+    return fail(4, e.what());
+  } catch (const knitsim::OutputFolderBusy& e) {
+    return fail(5, e.what());
+  } catch (const std::filesystem::filesystem_error& e) {
+    std::string what = e.what();  // libstdc++: "filesystem error: cannot write: reason [path]"
+    const std::string prefix = "filesystem error: ";
+    if (what.rfind(prefix, 0) == 0) what.erase(0, prefix.size());
+    return fail(4, what);
   } catch (const std::exception& e) {
     return fail(1, e.what());
   }

@@ -1,6 +1,8 @@
 #include "src/fit/targets.hpp"
 
 #include <cmath>
+#include <cerrno>
+#include <cstring>
 #include <cstdlib>
 #include <fstream>
 #include <map>
@@ -345,6 +347,20 @@ Target parse_target_csv(const std::string& csv, const std::string& path) {
   return target;
 }
 
+std::optional<bool> sags_upward(const EdgeFit& edge, const std::string& scene) {
+  const bool side = scene != "four_corner" && (edge.name == "left" || edge.name == "right");
+  const std::vector<double>& along = side ? edge.points.s : edge.points.d;
+  if (!along.empty()) {
+    double sum = 0.0;
+    for (double v : along) sum += v;
+    return sum < 0.0;
+  }
+  if (side) return std::nullopt;
+  double d = 0.0, power = 1.0;  // d(0.5) of the given coefficients
+  for (double p : edge.coefficients) d += p * power, power *= 0.5;
+  return d < 0.0;
+}
+
 void write_target_csv(const Target& target, const std::string& path,
                       const std::vector<std::string>& comment) {
   target.validate();
@@ -368,7 +384,8 @@ void write_target_csv(const Target& target, const std::string& path,
         out << row << "point," << edge.points.s[k] << ',' << edge.points.d[k] << '\n';
     }
   }
-  if (!out) throw std::runtime_error("cannot write " + path);
+  out.close();  // buffered text that cannot be written fails here (a full disk)
+  if (!out) throw std::runtime_error(std::strerror(errno));  // the caller names the file
 }
 
 }  // namespace knitsim

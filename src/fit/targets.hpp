@@ -24,7 +24,9 @@
 //     two_corner,,pin,500,0
 //     two_corner,left,lab_point,3.1,-52.0
 //   Camera plane: x horizontal (to the right in the photo), z vertical (UP: a point below the
-//   pins has a smaller z; negate image-row coordinates, which grow downward). Millimetres by
+//   pins has a smaller z; negate image-row coordinates, which grow downward; `knitsim fit`
+//   warns when every edge hangs above its pins). A worked lab file: docs/examples/
+//   lab_targets.csv; the user's page: docs/fitting.md. Millimetres by
 //   convention; any common unit works since the normalisation divides by a pin distance.
 //   * four_corner lab data: each edge is its own photo, taken from outside the sheet
 //     perpendicular to that edge, so its points lie in that edge's vertical plane. The edge's
@@ -44,6 +46,7 @@
 #pragma once
 
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -89,6 +92,14 @@ bool is_target_scene(const std::string& name);
 // points normalised (span rule for four_corner, hanging rule otherwise) and fitted. These are
 // the `measured` argument of objective(). Throws std::invalid_argument for an invalid edge.
 std::vector<EdgeFit> fit_target_scene(const TargetScene& scene);
+
+// Whether a measured edge of target scene `scene` hangs ABOVE its pins, which no drape does:
+// the sign of lab data given with z growing downward (image rows). Span edges (four_corner;
+// top and bottom of two_corner*): the mean d of its points, or d(0.5) from its coefficients,
+// is negative. Side edges of two_corner* (left, right): the mean s (depth below the own pin)
+// of its points is negative; std::nullopt for a side edge given only as coefficients (no
+// depth range to look at). `knitsim fit` warns when every edge that can tell sags upward.
+std::optional<bool> sags_upward(const EdgeFit& edge, const std::string& scene);
 
 // Reads and validates a target CSV (format above). A file longer than kMaxTargetFileBytes is
 // refused unread ("FILE: cannot open target file: larger than ...").

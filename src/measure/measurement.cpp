@@ -2,6 +2,8 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <set>
 #include <stdexcept>
@@ -183,7 +185,8 @@ void write_edges_csv(const std::vector<EdgeFit>& edges, const std::string& path)
     for (size_t i = 0; i < e.coefficients.size(); ++i)
       out << e.name << ",coeff," << i << ",,," << e.coefficients[i] << '\n';
   }
-  if (!out) throw std::runtime_error("cannot write " + path);
+  out.close();  // buffered text that cannot be written fails here (a full disk)
+  if (!out) throw std::runtime_error(std::strerror(errno));  // the caller names the file
 }
 
 }  // namespace knitsim

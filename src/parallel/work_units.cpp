@@ -6,6 +6,7 @@
 
 #include <cerrno>
 #include <chrono>
+#include <filesystem>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -47,8 +48,11 @@ std::string run_unit(const WorkUnit& unit) {
   return serialise(result);
 }
 
+// A checkpoint that cannot be written is an output failure (exit status 4, src/cli/main.cpp):
+// std::filesystem::filesystem_error is the standard type the command line maps to it.
 [[noreturn]] void cannot_write(const std::string& path) {
-  throw std::runtime_error("cannot write " + path + ": " + std::strerror(errno));
+  throw std::filesystem::filesystem_error("cannot write", path,
+                                          std::error_code(errno, std::generic_category()));
 }
 
 // Appends whole lines to the checkpoint, each flushed to disk (fsync) before the next unit is

@@ -26,15 +26,19 @@ namespace {
 
 enum class Kind { Number, Integer, Text };
 
-// One scene key: where its value goes. Number keys expose the field (its accepted range is
-// stated once, by the validators); Integer and Text keys parse and check their own value and
-// throw `accepted` (e.g. "one of a, b, c") when it does not fit.
+// One scene key: where its value goes, its unit and what it means (`knitsim list keys`).
+// Number keys expose the field (its accepted range is stated once, by the validators); Integer
+// and Text keys parse and check their own value and throw `accepted` (e.g. "one of a, b, c")
+// when it does not fit.
 struct Key {
   std::string name;
   Kind kind;
   std::function<double&(Scene&)> number;                // Kind::Number
   std::function<bool(Scene&, const std::string&)> set;  // Integer, Text: false = bad
   std::string accepted;                                 // Integer, Text
+  std::function<std::string(const Scene&)> get;         // Integer, Text: the value as text
+  std::string unit;                                     // "" for text keys and pure numbers
+  std::string meaning;                                  // one sentence
 };
 
 bool is_name(const std::string& s) {
@@ -46,15 +50,17 @@ bool is_name(const std::string& s) {
 const std::vector<Key>& keys() {
   static const std::vector<Key> table = [] {
     std::vector<Key> k;
-    auto number = [&k](const char* name, std::function<double&(Scene&)> field) {
-      k.push_back({name, Kind::Number, std::move(field), nullptr, ""});
+    auto number = [&k](const char* name, std::function<double&(Scene&)> field, const char* unit,
+                       const char* meaning) {
+      k.push_back({name, Kind::Number, std::move(field), nullptr, "", nullptr, unit, meaning});
     };
     auto other = [&k](const char* name, Kind kind,
-                      std::function<bool(Scene&, const std::string&)> set, const char* accepted) {
-      k.push_back({name, kind, nullptr, std::move(set), accepted});
+                      std::function<bool(Scene&, const std::string&)> set, const char* accepted,
+                      std::function<std::string(const Scene&)> get, const char* meaning) {
+      k.push_back({name, kind, nullptr, std::move(set), accepted, std::move(get), "", meaning});
     };
     // A text key naming one of a few values of the DrapeParams member `field`: (name, value).
-    auto choice = [&other](const char* name, auto field, auto values) {
+    auto choice = [&other](const char* name, auto field, auto values, const char* meaning) {
       std::string accepted = "one of ";
       for (std::size_t i = 0; i < values.size(); ++i)
         accepted += (i > 0 ? ", " : "") + values[i].first;
@@ -65,21 +71,42 @@ const std::vector<Key>& keys() {
               if (v == text) return (s.params.*field = value, true);
             return false;
           },
-          accepted.c_str());
+          accepted.c_str(),
+          [field, values](const Scene& s) {
+            for (const auto& [text, value] : values)
+              if (s.params.*field == value) return text;
+            return std::string("?");
+          },
+          meaning);
     };
     other(
         "scene.name", Kind::Text,
         [](Scene& s, const std::string& v) { return is_name(v) ? (s.name = v, true) : false; },
-        "a non-empty name of letters, digits, _ and -");
-    number("fabric.width", [](Scene& s) -> double& { return s.params.width; });
-    number("fabric.areal_density", [](Scene& s) -> double& { return s.params.areal_density; });
-    number("model.stiffness", [](Scene& s) -> double& { return s.params.stiffness; });
-    number("model.damping", [](Scene& s) -> double& { return s.params.damping; });
-    number("model.elongation_limit", [](Scene& s) -> double& { return s.params.elongation_limit; });
-    number("model.natural_length", [](Scene& s) -> double& { return s.params.natural_length; });
+        "a non-empty name of letters, digits, _ and -", [](const Scene& s) { return s.name; },
+        "the label in outputs (default: the built-in name or the file's stem)");
+    number("fabric.width", [](Scene& s) -> double& { return s.params.width; }, "m",
+           "side W of the square sample; the model's side is n L0 with n = round(W / L0)");
+    number("fabric.areal_density", [](Scene& s) -> double& { return s.params.areal_density; },
+           "g/m^2", "mass per area, spread over the particles");
+    number("model.stiffness", [](Scene& s) -> double& { return s.params.stiffness; }, "N/m",
+           "spring constant k of every spring (Table 3 box of the fits: 500..1200)");
+    number("model.damping", [](Scene& s) -> double& { return s.params.damping; }, "N s/m",
+           "damping c, absolute and per particle (not scaled with the mesh); does not change "
+           "the equilibrium, only the path to it (fit box 10..20)");
+    number("model.elongation_limit",
+           [](Scene& s) -> double& { return s.params.elongation_limit; }, "%",
+           "largest spring strain before the limit acts (0 = off; fit box 5..20); inactive when "
+           "the drape's max strain stays below it");
+    number("model.natural_length", [](Scene& s) -> double& { return s.params.natural_length; },
+           "m", "rest length L0 of a structural spring; sets the mesh, n = round(W / L0) cells "
+           "per side (fit box 0.04..0.06)");
     choice("model.topology", &DrapeParams::topology,
-           std::vector<std::pair<std::string, char>>{{"a", 'a'}, {"b", 'b'}, {"c", 'c'}});
-    number("model.perturbation", [](Scene& s) -> double& { return s.params.perturbation; });
+           std::vector<std::pair<std::string, char>>{{"a", 'a'}, {"b", 'b'}, {"c", 'c'}},
+           "springs per particle: a = structural + shear + bending, b = structural + shear, "
+           "c = structural + bending (structural: to the 4 neighbours at L0; shear: the 2 "
+           "diagonals at 1.41 L0; bending: to the second neighbours at 2 L0)");
+    number("model.perturbation", [](Scene& s) -> double& { return s.params.perturbation; }, "m",
+           "amplitude of a seeded out-of-plane perturbation of the flat start (breaks symmetry)");
     other(
         "model.seed", Kind::Integer,
         [](Scene& s, const std::string& v) {
@@ -91,21 +118,32 @@ const std::vector<Key>& keys() {
           s.params.seed = static_cast<unsigned>(u);
           return true;
         },
-        "an integer in 0..4294967295");
+        "an integer in 0..4294967295", [](const Scene& s) { return std::to_string(s.params.seed); },
+        "seed of the perturbation");
     choice("model.symmetry", &DrapeParams::symmetry,
            std::vector<std::pair<std::string, DrapeSymmetry>>{{"auto", DrapeSymmetry::Auto},
                                                               {"none", DrapeSymmetry::None},
                                                               {"half", DrapeSymmetry::Half},
                                                               {"quarter", DrapeSymmetry::Quarter},
-                                                              {"eighth", DrapeSymmetry::Eighth}});
+                                                              {"eighth", DrapeSymmetry::Eighth}},
+           "integrate one mirror part of the sheet and unfold it (half: mirror x = W/2; quarter, "
+           "eighth: four_corner only); auto = the largest the scene allows, certified on the "
+           "whole sheet");
     choice("pins.layout", &DrapeParams::layout,
            std::vector<std::pair<std::string, PinLayout>>{{"four_corner", PinLayout::FourCorner},
-                                                          {"two_corner", PinLayout::TwoCorner}});
-    number("pins.span", [](Scene& s) -> double& { return s.params.pin_span; });
-    number("pins.move_time", [](Scene& s) -> double& { return s.params.pin_move_time; });
-    number("run.t_max", [](Scene& s) -> double& { return s.options.t_max; });
-    number("run.equilibrium_tol", [](Scene& s) -> double& { return s.options.equilibrium_tol; });
-    number("run.position_tol", [](Scene& s) -> double& { return s.options.position_tol; });
+                                                          {"two_corner", PinLayout::TwoCorner}},
+           "four_corner: hung from its 4 corners (paper 1, Fig. 12); two_corner: from the 2 "
+           "corners of one edge (Fig. 11)");
+    number("pins.span", [](Scene& s) -> double& { return s.params.pin_span; }, "1",
+           "two_corner: final pin distance / model width; below 1 the pins move inward");
+    number("pins.move_time", [](Scene& s) -> double& { return s.params.pin_move_time; }, "s",
+           "duration of that pin move");
+    number("run.t_max", [](Scene& s) -> double& { return s.options.t_max; }, "s",
+           "end time if no equilibrium is reached (status time_limit, exit 3)");
+    number("run.equilibrium_tol", [](Scene& s) -> double& { return s.options.equilibrium_tol; },
+           "1", "static residual (force / mean particle weight) below which the stop is tested");
+    number("run.position_tol", [](Scene& s) -> double& { return s.options.position_tol; }, "m",
+           "the stop: Newton correction |K^-1 F| below this (docs/numerics.md)");
     return k;
   }();
   return table;
@@ -180,6 +218,7 @@ void apply_override(Scene& scene, const std::string& assignment) {
   if (key.kind == Kind::Text && value.size() >= 2 && value.front() == '"' && value.back() == '"')
     value = value.substr(1, value.size() - 2);
   set_from_text(scene, key, value, value, "");
+  scene.keys_given.push_back(key.name);
 }
 
 // A TOML value as it appears in the file, for messages.
@@ -222,6 +261,7 @@ void apply_toml(Scene& scene, const std::string& text, const std::string& source
       } else {
         bad_value(key, shown(node), where(node));
       }
+      scene.keys_given.push_back(key.name);
     }
   }
 }
@@ -269,6 +309,38 @@ Scene load_scene(const std::string& name_or_path, const std::vector<std::string>
   if (!read_input_file(name_or_path, kMaxSceneFileBytes, text, why)) unreadable(name_or_path, why);
   const std::string stem = std::filesystem::path(name_or_path).stem().string();
   return load_scene_text(text, is_name(stem) ? stem : "scene", name_or_path, overrides);
+}
+
+std::string scene_key_value(const Scene& scene, const std::string& name) {
+  const Key& key = find_key(name, "");
+  if (key.kind != Kind::Number) return key.get(scene);
+  const double v = key.number(const_cast<Scene&>(scene));  // read only
+  return format_number(v, 6) + (key.unit.empty() || key.unit == "1" ? "" : " " + key.unit);
+}
+
+std::vector<std::string> keys_not_given(const Scene& scene,
+                                        const std::vector<std::string>& among) {
+  std::vector<std::string> missing;
+  for (const std::string& name : among)
+    if (std::find(scene.keys_given.begin(), scene.keys_given.end(), name) ==
+        scene.keys_given.end())
+      missing.push_back(name);
+  return missing;
+}
+
+Table scene_key_table() {
+  const Scene defaults;
+  Table t;
+  t.columns = {"key", "unit", "default", "accepted", "meaning"};
+  for (const Key& k : keys()) {
+    const std::string value =
+        k.kind == Kind::Number ? format_number(k.number(const_cast<Scene&>(defaults)), 6)
+                               : k.get(defaults);
+    std::string range = accepted(k);
+    if (k.kind == Kind::Number && range.rfind("a number ", 0) == 0) range.erase(0, 9);
+    t.rows.push_back({k.name, k.unit.empty() ? "-" : k.unit, value, range, k.meaning});
+  }
+  return t;
 }
 
 std::vector<std::string> scene_keys() {

@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "models/drape_grid.hpp"
+#include "src/base/table.hpp"
 #include "solvers/integrator.hpp"
 #include "src/core/vec3.hpp"
 
@@ -44,6 +45,9 @@ struct Scene {
   // Run options: the scene sets t_max and equilibrium_tol ([run]); the command line may set
   // the integrator's tolerances, step and caps. Everything else keeps its default.
   IntegratorOptions options;
+  // The keys the scene file or a --set gave, in that order (a key may repeat): every other
+  // key has its default, sample 1's value (`knitsim list keys`).
+  std::vector<std::string> keys_given;
 
   // DrapeParams::validate and IntegratorOptions::validate, with the offending field renamed to
   // what the user writes (run.t_max, --rtol, --max-wall, ...).
@@ -69,6 +73,15 @@ const std::vector<std::pair<std::string, std::string>>& run_option_names();
 
 // All scene keys, dotted ("model.stiffness"), in file order.
 std::vector<std::string> scene_keys();
+
+// Every scene key with its unit ("-" for text keys, "1" for ratios), default (sample 1, four
+// corners), accepted values (from the same validators that refuse bad input) and meaning:
+// what `knitsim list keys` prints and docs/reference/scene_keys.md is generated from.
+Table scene_key_table();
+// The value of scene key `name` in `scene` as text, with its unit ("852 N/m", "a").
+std::string scene_key_value(const Scene& scene, const std::string& name);
+// The keys of `among` that neither the scene file nor a --set gave (Scene::keys_given).
+std::vector<std::string> keys_not_given(const Scene& scene, const std::vector<std::string>& among);
 
 // The one-line description of a scene file: its line 2 without the leading "#".
 std::string scene_description(const std::string& toml_text);
