@@ -7,7 +7,8 @@
   limits.png  measured / predicted and measured / exact for every case and method;
   spurious.png per scene and run (integrator and setting) of spurious.csv: where it ended
               (same equilibrium as the dynamics' reference, another minimum, spurious, saddle,
-              no equilibrium) and how far from the reference (m).
+              no equilibrium, or an "equilibrium" above the reference run's total energy that
+              knitsim did not flag) and how far from the reference (m).
 Usage: plot.py OUT (reads OUT/limits.csv, OUT/map.csv, OUT/spurious.csv; writes the PNGs into
 OUT)."""
 import csv
@@ -81,9 +82,14 @@ if os.path.exists(spurious_path):
     colours = {"same equilibrium": "tab:green", "another minimum": "tab:blue",
                "spurious (energy above the reference)": "tab:red", "saddle": "tab:purple"}
     fig, ax = plt.subplots(figsize=(2.2 + 2.3 * len(scenes), 0.6 + 0.27 * len(runs)))
+    # A state above the reference run's total energy (once the pins stopped) that knitsim still
+    # called an equilibrium: unreachable by the dynamics, not flagged (orange).
+    e_dyn = {r["scene"]: float(r["energy_reference"]) for r in sp if r["setting"] == "reference"}
     for r in sp:
         x, y = scenes.index(r["scene"]), runs.index((r["integrator"], r["setting"]))
         c = colours.get(r["outcome"], "tab:gray")
+        if r["status"] == "equilibrium" and float(r["energy"]) > e_dyn[r["scene"]]:
+            c, r["outcome"] = "tab:orange", "above the dynamics' energy, not flagged"
         ax.add_patch(plt.Rectangle((x - 0.45, y - 0.4), 0.9, 0.8, color=c, alpha=0.75))
         d = float(r["distance_m"])
         ax.text(x, y, "%s, %s m" % (r["outcome"].split(" (")[0], "%.2g" % d if math.isfinite(d)
