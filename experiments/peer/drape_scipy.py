@@ -15,8 +15,14 @@ Equilibrium (SPEC 2.3): static residual r = max_i |F_i + m_i g| / (mean free mas
 <= equilibrium_tol, checked at every BDF step (a terminal event on log r - log tol).
 The elongation limit (Provot) is not modelled: with these parameters strains stay << 5 %
 (the script prints the largest strain).
+Potential energy (the equilibrium is a minimum of it, pins fixed):
+    E(x) = sum_s k/2 (L_s - L0_s)^2 + sum_i m_i g z_i,   grad E = -(F_spring + m g),
+    Hessian H = -K (sparse, the same blocks as the Jacobian's K).
 
-As a module: Drape(...) gives rhs, jacobian, residual; run_bdf integrates to equilibrium.
+As a module: Drape(...) gives rhs, jacobian, residual, energy, gradient, hessian;
+run_bdf integrates to equilibrium; run_trust minimises E by a scipy.optimize trust-region
+Newton method from the flat state; check_derivatives compares gradient and Hessian with
+finite differences.
 As a script:  drape_scipy.py --scene four_corner|two_corner [--out DIR] [--rtol R] ...
 prints one JSON line (status, t_final, steps, cpu_seconds, residual) and, with --out, writes
 nodes.csv (id,i,j,x,y,z,pinned) in knitsim's layout.
@@ -142,6 +148,30 @@ class Drape:
         N = 3 * self.nf
         return sp.csr_matrix((vals, (self.jr, self.jc)), shape=(N, N))
 
+    def energy_long(self, xf):
+        """Potential energy E (J) of the free positions xf (3 nf), springs + gravity, summed in
+        extended precision (numpy longdouble: a 64-bit mantissa on x86). run_trust subtracts E
+        at its restart point before rounding to a double (below)."""
+        X = self.positions(xf).astype(np.longdouble)
+        d = X[self.b] - X[self.a]
+        L = np.sqrt((d * d).sum(1))
+        return 0.5 * self.k * ((L - self.rest) ** 2).sum() + G * (self.mass * X[:, 2]).sum()
+
+    def energy(self, xf):
+        """Potential energy E (J), as a double."""
+        return float(self.energy_long(xf))
+
+    def gradient(self, xf):
+        """dE/dx over free dof (3 nf): minus the net static force."""
+        F, _, _ = self.spring_force(self.positions(xf))
+        F = F[self.free]
+        F[:, 2] -= self.mfree * G
+        return -F.ravel()
+
+    def hessian(self, xf):
+        """d2E/dx2 = -K over free dof (3 nf x 3 nf, CSR)."""
+        return -self.stiffness(xf)
+
     def jacobian(self, t, y):
         N = 3 * self.nf
         K = self.stiffness(y[:N])
@@ -168,6 +198,120 @@ def run_bdf(model, rtol=1e-6, atol=1e-9, equilibrium_tol=1e-8, t_max=1e7):
                 max_strain=model.max_strain(y[:N]), cpu_seconds=cpu, wall_seconds=wall), y
 
 
+TRUST_METHODS = ("trust-krylov", "trust-ncg", "trust-exact")
+
+
+class _Stopped(Exception):
+    """Raised by run_trust's callback to end scipy's minimize (scipy 1.10 has no other way)."""
+
+
+def run_trust(model, method="trust-exact", position_tol=1e-10, test_below=1e-4, maxiter=3000,
+              rounds=8):
+    """Minimise E from the flat start by scipy.optimize.minimize(method): a trust-region Newton
+    method with the analytic gradient and the sparse analytic Hessian (dense for trust-exact,
+    which factorises it; as a Hessian-vector product for trust-krylov and trust-ncg).
+
+    Stop: knitsim's stop in positions (docs/equilibrium.md): the Newton correction
+    ||H^-1 grad E||_inf (sparse LU of H) <= position_tol, m, tested in minimize's callback at
+    every iterate whose static residual is below `test_below` and has fallen tenfold since the
+    last test, and where a round ends. scipy's own stop (gtol) is 0: only this test ends a run.
+    Near the minimum a Newton step changes E by ~ |grad E|^2 / lambda_min, below a double's
+    round-off of E (~1e-18 J here) before the stop holds, and scipy's ratio test then rejects
+    every step ("A bad approximation caused failure to predict improvement"). So the objective
+    is E(x) - E(x_r), summed in extended precision (energy_long) and rounded to a double after
+    the subtraction, and minimize restarts from its last iterate x_r with E(x_r) as the new
+    shift, up to `rounds` times of at most `maxiter` iterations each (knitsim's solver instead
+    accepts a step on a falling |F| there); a restart that takes no step ends the run as
+    "stalled", its Newton correction reported. The counters add up over the rounds (hess_evals:
+    dense Hessians for trust-exact, Hessian-vector products otherwise); the certificate (H's
+    smallest eigenvalue) is computed after the timed solve."""
+    from scipy.optimize import minimize
+    from scipy.sparse.linalg import splu
+    x = model.X0[model.free].ravel()
+    cache = {}
+
+    def hess(z):  # one assembly per iterate, shared by the products at that iterate
+        key = z.tobytes()
+        if cache.get("key") != key:
+            cache["key"], cache["H"] = key, model.hessian(z)
+        return cache["H"]
+
+    state = dict(tested_at=math.inf, tests=0, newton_step=math.inf, x=x)
+    counts = dict(iterations=0, fun_evals=0, grad_evals=0, hess_evals=0)
+
+    def counted(key, f):
+        def g(*a):
+            counts[key] += 1
+            return f(*a)
+        return g
+
+    def stop_test(z):
+        state["tested_at"], state["tests"] = model.residual(z), state["tests"] + 1
+        dx = splu(hess(z).tocsc()).solve(model.gradient(z))
+        state["newton_step"] = float(np.abs(dx).max())
+        return state["newton_step"] <= position_tol
+
+    def callback(z):
+        state["x"] = z
+        counts["iterations"] += 1
+        r = model.residual(z)
+        if r <= test_below and r <= 0.1 * state["tested_at"] and stop_test(z):
+            raise _Stopped()
+
+    kw = dict(jac=counted("grad_evals", model.gradient), callback=callback,
+              options=dict(gtol=0.0, maxiter=maxiter))
+    if method == "trust-exact":
+        kw["hess"] = counted("hess_evals", lambda z: hess(z).toarray())
+    else:
+        kw["hessp"] = counted("hess_evals", lambda z, p: hess(z) @ p)
+    messages, stopped = [], False
+    cpu0, wall0 = time.process_time(), time.perf_counter()
+    for r in range(1, rounds + 1):
+        shift = model.energy_long(x)
+        try:
+            res = minimize(counted("fun_evals", lambda z: float(model.energy_long(z) - shift)),
+                           x, method=method, **kw)
+            moved = not np.array_equal(res.x, x)
+            x = res.x
+            messages.append(str(res.message))
+            if model.residual(x) <= test_below and stop_test(x):  # where scipy gave up
+                stopped = True
+                break
+            if not moved:  # a restart that cannot take a single step: scipy is stuck here
+                break
+        except _Stopped:
+            x, stopped = state["x"], True
+            messages.append("stop in positions")
+            break
+    cpu, wall = time.process_time() - cpu0, time.perf_counter() - wall0
+    lam_min = float(np.linalg.eigvalsh(model.hessian(x).toarray()).min())
+    # stalled: scipy ended (no step accepted after a restart) short of the stop in positions.
+    status = ("equilibrium" if stopped else "stalled") if lam_min > 0 else "failure"
+    return dict(method=method, status=status, message=" | ".join(messages), rounds=r,
+                stop_tests=state["tests"], newton_step=state["newton_step"],
+                energy=model.energy(x), residual=float(model.residual(x)),
+                min_eigenvalue=lam_min, max_strain=model.max_strain(x), cpu_seconds=cpu,
+                wall_seconds=wall, **counts), x
+
+
+def check_derivatives(model, seed=3, h=1e-7):
+    """Largest relative differences of gradient (vs central differences of E) and Hessian (vs
+    central differences of the gradient, along random directions) at a random state near the
+    flat start: (gradient error, Hessian error)."""
+    rng = np.random.default_rng(seed)
+    x = model.X0[model.free].ravel() + 1e-3 * rng.standard_normal(3 * model.nf)
+    g, H = model.gradient(x), model.hessian(x)
+    g_err, h_err = 0.0, 0.0
+    for _ in range(5):
+        p = rng.standard_normal(x.size)
+        p /= np.linalg.norm(p)
+        fd = (model.energy(x + h * p) - model.energy(x - h * p)) / (2 * h)
+        g_err = max(g_err, abs(fd - g @ p) / max(abs(g @ p), 1e-300))
+        fd_h = (model.gradient(x + h * p) - model.gradient(x - h * p)) / (2 * h)
+        h_err = max(h_err, np.linalg.norm(fd_h - H @ p) / np.linalg.norm(H @ p))
+    return g_err, h_err
+
+
 def write_nodes(path, model, y):
     X = model.positions(y[:3 * model.nf])
     with open(path, "w") as f:
@@ -184,9 +328,16 @@ def main():
     ap.add_argument("--atol", type=float, default=1e-9)
     ap.add_argument("--equilibrium-tol", type=float, default=1e-8)
     ap.add_argument("--out", default="")
+    ap.add_argument("--position-tol", type=float, default=1e-10,
+                    help="trust-*: the stop in positions, m")
+    ap.add_argument("--method", default="bdf", choices=("bdf",) + TRUST_METHODS,
+                    help="bdf: solve_ivp BDF to equilibrium; trust-*: minimise the energy")
     a = ap.parse_args()
     model = Drape(layout=a.scene)
-    stats, y = run_bdf(model, a.rtol, a.atol, a.equilibrium_tol)
+    if a.method == "bdf":
+        stats, y = run_bdf(model, a.rtol, a.atol, a.equilibrium_tol)
+    else:
+        stats, y = run_trust(model, a.method, a.position_tol)
     stats["scene"] = a.scene
     if a.out:
         os.makedirs(a.out, exist_ok=True)

@@ -238,6 +238,75 @@ def undamped(study, quick):
     return rows
 
 
+# Spurious equilibria at the extremes (issue 30 item 2): where each method ends, on the three
+# built-in scenes' whole sheets, against the state the damped dynamics reach from rest
+# (cvode-bdf at rtol 1e-8, atol 1e-11). Every run's end state is checked by knitsim (summary.json:
+# status, certificate, energy against energy_reference); the driver adds the distance.
+SPURIOUS_SCENES = ("four_corner", "two_corner", "two_corner_slack")
+SAME_STATE_M = 1e-6  # within this of the reference: the same equilibrium
+
+
+def spurious_plan(quick):
+    """[(integrator, setting label, knitsim options)] of the map."""
+    if quick:
+        return [("implicit-euler", "dt 1e4", ["--dt", 1e4]),
+                ("cvode-bdf", "rtol 1e-2", ["--rtol", 1e-2, "--atol", 1e-5])]
+    plan = [("implicit-euler", "dt %g" % dt, ["--dt", dt]) for dt in (10.0, 100.0, 1e3, 1e4, 1e5)]
+    for integ in ("cvode-bdf", "arkode-dirk", "arkode-imex", "cvode-bdf-gmres"):
+        plan += [(integ, "rtol %g" % r, ["--rtol", r, "--atol", 1e-3 * r])
+                 for r in (1e-1, 1e-2, 1e-3, 1e-4)]
+    # The equilibrium solver's globalisation (first flow step 1 mm, trust-region factors,
+    # 60 rejections before the fallback) is compiled in, not a scene key; what a user can
+    # set is the tolerance of its cvode-bdf phases (the pins' move, a fallback) and the stop.
+    plan += [("equilibrium", "rtol %g" % r, ["--rtol", r, "--atol", 1e-3 * r])
+             for r in (1e-1, 1e-2, 1e-3, 1e-6)]
+    plan += [("equilibrium", "position_tol %g" % t, ["--set", "run.position_tol=%g" % t])
+             for t in (1e-6, 1e-3)]
+    return plan
+
+
+def spurious(args, quick):
+    rows = []
+    n = 0
+    for scene in ((SPURIOUS_SCENES[1],) if quick else SPURIOUS_SCENES):
+        base = ["drape", "--scene", scene, "--no-pictures", "--max-wall", 60 if quick else 120]
+        ref = expkit.run_knitsim(args.out, "spurious-ref", base + [
+            "--integrator", "cvode-bdf", "--rtol", 1e-8, "--atol", 1e-11])
+        if ref.summary["status"] != "equilibrium":
+            sys.exit("stability: the reference of %s did not settle" % scene)
+        ref_x = expkit.read_positions(ref)
+        for integ, setting, extra in [("cvode-bdf", "reference", [])] + spurious_plan(quick):
+            n += 1
+            r = ref if setting == "reference" else expkit.run_knitsim(
+                args.out, "spurious-%d" % (n % 4), base + ["--integrator", integ] + extra)
+            s = r.summary or {}
+            dist = expkit.max_position_error(expkit.read_positions(r), ref_x) if s else math.nan
+            status, cert = s.get("status", "no_summary"), s.get("certificate", "")
+            if status == "equilibrium":
+                outcome = "same equilibrium" if dist <= SAME_STATE_M else "another minimum"
+            elif status == "spurious_equilibrium":
+                outcome = "spurious (energy above the reference)"
+            elif cert == "not_minimum":
+                outcome = "saddle"
+            else:
+                outcome = "no equilibrium (%s)" % status
+            rows.append(dict(scene=scene, integrator=integ, setting=setting,
+                             options=" ".join(str(e) for e in extra), status=status,
+                             certificate=cert, outcome=outcome, distance_m=dist,
+                             energy=s.get("energy", math.nan),
+                             energy_reference=s.get("energy_reference", math.nan),
+                             reference_energy=ref.summary["energy"],
+                             t_final=s.get("t_final", math.nan), steps=s.get("steps", 0),
+                             min_eigenvalue=s.get("min_eigenvalue", math.nan),
+                             saddle_escapes=s.get("saddle_escapes", 0),
+                             fallbacks=s.get("fallbacks", 0),
+                             cpu_seconds=s.get("cpu_seconds", math.nan)))
+            print("%s %s %s: %s, %s, %.3g m, E %.4g J (ref. %.4g J)" % (
+                scene, integ, setting, status, outcome, dist, rows[-1]["energy"],
+                rows[-1]["energy_reference"]), flush=True)
+    return rows
+
+
 def main():
     args = expkit.parse_args("stability", "stability")
     study = Study(args)
@@ -245,6 +314,7 @@ def main():
     expkit.write_csv(os.path.join(args.out, "undamped.csv"), undamped(study, args.quick))
     expkit.write_csv(os.path.join(args.out, "bdf.csv"), bdf_extremes(study, args.quick))
     expkit.write_csv(os.path.join(args.out, "map.csv"), stability_map(study, args.quick))
+    expkit.write_csv(os.path.join(args.out, "spurious.csv"), spurious(args, args.quick))
     explicit = [r for r in limits if r["method"] in ("euler", "verlet") and r["exact"] > 0]
     worst_pred = max(explicit, key=lambda r: abs(r["measured_over_predicted"] - 1))
     worst_est = max(explicit, key=lambda r: abs(r["measured_over_estimated"] - 1))

@@ -4,8 +4,13 @@
               error vs cvode-bdf at t_end, x = unstable) with the limit lines of limits.csv
               (predicted = Gershgorin, estimated = Lanczos-capped, exact = linear analysis,
               measured = bisection);
-  limits.png  measured / predicted and measured / exact for every case and method.
-Usage: plot.py OUT (reads OUT/limits.csv, OUT/map.csv; writes the PNGs into OUT)."""
+  limits.png  measured / predicted and measured / exact for every case and method;
+  spurious.png per scene and run (integrator and setting) of spurious.csv: where it ended
+              (same equilibrium as the dynamics' reference, another minimum, spurious, saddle,
+              no equilibrium, or an "equilibrium" above the reference run's total energy that
+              knitsim did not flag) and how far from the reference (m).
+Usage: plot.py OUT (reads OUT/limits.csv, OUT/map.csv, OUT/spurious.csv; writes the PNGs into
+OUT)."""
 import csv
 import math
 import os
@@ -68,6 +73,37 @@ ax.set_title("Stability limits: measured vs predict_stable_dt (Gershgorin), esti
              fontsize=9)
 fig.tight_layout()
 fig.savefig(os.path.join(out, "limits.png"), dpi=110)
+
+spurious_path = os.path.join(out, "spurious.csv")
+if os.path.exists(spurious_path):
+    sp = list(csv.DictReader(open(spurious_path)))
+    scenes = list(dict.fromkeys(r["scene"] for r in sp))
+    runs = list(dict.fromkeys((r["integrator"], r["setting"]) for r in sp))
+    colours = {"same equilibrium": "tab:green", "another minimum": "tab:blue",
+               "spurious (energy above the reference)": "tab:red", "saddle": "tab:purple"}
+    fig, ax = plt.subplots(figsize=(2.2 + 2.3 * len(scenes), 0.6 + 0.27 * len(runs)))
+    # A state above the reference run's total energy (once the pins stopped) that knitsim still
+    # called an equilibrium: unreachable by the dynamics, not flagged (orange).
+    e_dyn = {r["scene"]: float(r["energy_reference"]) for r in sp if r["setting"] == "reference"}
+    for r in sp:
+        x, y = scenes.index(r["scene"]), runs.index((r["integrator"], r["setting"]))
+        c = colours.get(r["outcome"], "tab:gray")
+        if r["status"] == "equilibrium" and float(r["energy"]) > e_dyn[r["scene"]]:
+            c, r["outcome"] = "tab:orange", "above the dynamics' energy, not flagged"
+        ax.add_patch(plt.Rectangle((x - 0.45, y - 0.4), 0.9, 0.8, color=c, alpha=0.75))
+        d = float(r["distance_m"])
+        ax.text(x, y, "%s, %s m" % (r["outcome"].split(" (")[0], "%.2g" % d if math.isfinite(d)
+                                    else "?"), ha="center", va="center", fontsize=6)
+    ax.set_xlim(-0.5, len(scenes) - 0.5)
+    ax.set_ylim(len(runs) - 0.5, -0.5)
+    ax.set_xticks(range(len(scenes)))
+    ax.set_xticklabels(scenes, fontsize=8)
+    ax.set_yticks(range(len(runs)))
+    ax.set_yticklabels(["%s %s" % r for r in runs], fontsize=7)
+    ax.set_title("End states against the dynamics' equilibrium (cvode-bdf rtol 1e-8); grey: no "
+                 "equilibrium (t_max, failure, wall cap)", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "spurious.png"), dpi=110)
 
 # The tables of the README (summary.md) from the same CSV files.
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))

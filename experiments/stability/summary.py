@@ -153,9 +153,56 @@ def build(out):
         "No damping, c = 0 (undamped.csv)",
         md_table(["integrator", "options", "status", "t_final (s)", "steps", "dt (s)", "residual",
                   "error-test failures", "CPU (s)"], rows)))
+    sections.append(("Where each method ends: spurious equilibria at the extremes (spurious.csv)",
+                     spurious_table(read_rows(out, "spurious.csv"))))
     sections.append(("Provenance", provenance(manifest)))
     return ("stability: tables",
-            ["limits.csv", "map.csv", "bdf.csv", "undamped.csv", "manifest.json"], sections)
+            ["limits.csv", "map.csv", "bdf.csv", "undamped.csv", "spurious.csv",
+             "manifest.json"], sections)
+
+
+def spurious_table(rows):
+    """Per scene the runs of spurious.csv; '' without the file."""
+    if not rows:
+        return ""
+    text = ("Whole sheets. Reference: the state the damped dynamics reach from rest, cvode-bdf at "
+            "rtol 1e-8, atol 1e-11 (first row of each scene). Outcome: *same equilibrium* "
+            "(status equilibrium, within 1e-6 m of the reference), *another minimum* (status "
+            "equilibrium, certified, farther), *spurious* (status spurious_equilibrium: energy "
+            "above the total energy the run had once the pins stopped), *saddle* (certificate "
+            "not_minimum), *no equilibrium* (another status). Energy: the end state's potential "
+            "energy; energy reference: the run's own `energy_reference` (its total energy once the "
+            "pins stopped; 0 where the stop was never passed). *Above the dynamics' energy "
+            "reference*: the end energy exceeds the reference run's `energy_reference`, so the "
+            "damped dynamics cannot reach the state; **yes** in bold where knitsim still called it "
+            "an equilibrium (the run's own reference was higher).\n\n")
+    counts = {}
+    for r in rows:
+        counts.setdefault(r["scene"], {}).setdefault(r["outcome"].split(" (")[0], 0)
+        counts[r["scene"]][r["outcome"].split(" (")[0]] += 1
+    for scene in dict.fromkeys(r["scene"] for r in rows):
+        table = []
+        # The total energy the dynamics (the reference run) had once the pins stopped: a state
+        # above it cannot be reached from rest, whatever the run's own energy_reference says.
+        e_dyn = [float(r["energy_reference"]) for r in rows
+                 if r["scene"] == scene and r["setting"] == "reference"][0]
+        for r in rows:
+            if r["scene"] != scene:
+                continue
+            above = r["status"] in ("equilibrium", "spurious_equilibrium") and \
+                float(r["energy"]) > e_dyn
+            table.append([r["integrator"], r["setting"], r["status"], r["certificate"] or "—",
+                          r["outcome"], num(r["distance_m"], 2), num(r["energy"], 4),
+                          num(r["energy_reference"], 4),
+                          ("**yes**" if r["status"] == "equilibrium" else "yes") if above else "no",
+                          r["steps"], num(r["cpu_seconds"])])
+        text += ("**%s** (outcomes: %s)\n\n" % (scene, ", ".join(
+            "%s %d" % kv for kv in sorted(counts[scene].items())))
+                 + md_table(["integrator", "setting", "status", "certificate", "outcome",
+                             "distance (m)", "energy (J)", "energy reference (J)",
+                             "above the dynamics' energy reference", "steps", "CPU (s)"], table)
+                 + "\n")
+    return text
 
 
 def main(argv=None):
