@@ -96,6 +96,14 @@ TEST_CASE("knitsim knit: a small tuck chart settles and its outputs agree with t
   CHECK(summary["residual"].get<double>() <= 1e-8);
   CHECK(summary["frames"].size() == 3);
   CHECK(summary["frames"][0]["t"] == 0.0);
+  // The yarn measures: the minimum over the run is no larger than the rest and end values,
+  // and the designed crossings are counted.
+  const auto& yarn = summary["yarn"];
+  CHECK(yarn["clearance_min_over_r"].get<double>() <= yarn["clearance_end_over_r"].get<double>());
+  CHECK(yarn["clearance_min_over_r"].get<double>() <= yarn["clearance_rest_over_r"].get<double>());
+  CHECK(yarn["clearance_measured_states"].get<int>() >= 2);
+  CHECK(yarn["crossings_designed"].get<int>() > 0);
+  CHECK(yarn["crossings_changed"].get<int>() >= 0);
   // One header line plus one row per particle; T0..T8 per knit loop, 7 per tuck loop.
   CHECK(count_lines(slurp(out / "points.csv")) == 1 + static_cast<int>(m.points.size()));
   CHECK(count_lines(slurp(out / "typevalue.csv")) == 1 + 9 * 14 + 7 * 1);

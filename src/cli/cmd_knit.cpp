@@ -21,7 +21,12 @@
 //   frames/centerlines_NNN.vtk, frames/frame_NNN.png   the captured frames (below)
 //   before.png, after.png   front views at rest and at the end (yarns as z-buffered tubes,
 //                    render_strokes_png; interlacing points as dots); --no-pictures skips every PNG
-//   summary.json, manifest.json
+//   summary.json, manifest.json   summary.json's "yarn" block: the clearance between yarn
+//                    centrelines (src/measure/yarn_measures.hpp) at rest, at the end and its
+//                    minimum over the run (where and when), in r, and how many of the designed
+//                    crossings changed over/under order at the end; stdout shows the same, and a
+//                    run whose clearance fell below kClearanceWarning r or whose crossings
+//                    changed prints one `warning:` line
 //   state.json       x, v at t_final and what was integrated, for --continue (write_run_state;
 //                    omitted if not finite)
 //   steps.csv        with --step-history: step,t,h,order,residual (src/io/step_log.hpp)
@@ -68,6 +73,7 @@
 #include "src/io/progress.hpp"
 #include "src/io/run_state.hpp"
 #include "src/io/step_log.hpp"
+#include "src/measure/yarn_measures.hpp"
 #include "src/render/render.hpp"
 #include "src/scene/scene.hpp"
 
@@ -78,6 +84,8 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr double kStabilisedVelocityAtol = 1e-3;  // m/s, see the file comment
+// A run whose yarns came closer than this (in r) warns (issue 31's target: >= 0.9 r).
+constexpr double kClearanceWarning = 0.9;
 
 struct KnitArgs {
   std::string chart;
@@ -299,10 +307,33 @@ nlohmann::json params_json(const KnitParams& p) {
           {"areal_density", p.areal_density},       {"stabiliser_ratio", p.stabiliser_ratio}};
 }
 
+// The yarn measures of a run (src/measure/yarn_measures.hpp), in units of r.
+struct KnitMeasures {
+  double rest_clearance = 0.0;  // at rest (t = 0 of the chart, whatever --continue gave)
+  double end_clearance = 0.0;
+  YarnClearance min_clearance;  // over the measured states of the run, start and end included
+  double t_min_clearance = 0.0;
+  int measured_states = 0;
+  CrossingCheck crossings;  // at the end against the rest state
+};
+
+nlohmann::json measures_json(const KnitMeasures& k) {
+  const YarnClearance& c = k.min_clearance;
+  return {{"clearance_min_over_r", c.over_r},
+          {"clearance_min_t", k.t_min_clearance},
+          {"clearance_min_courses", {c.a.course, c.b.course}},
+          {"clearance_min_where", {c.where.x, c.where.y, c.where.z}},
+          {"clearance_end_over_r", k.end_clearance},
+          {"clearance_rest_over_r", k.rest_clearance},
+          {"clearance_measured_states", k.measured_states},
+          {"crossings_designed", k.crossings.designed},
+          {"crossings_changed", k.crossings.changed}};
+}
+
 void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m,
                    const IntegratorOptions& opt, const RunStats& stats,
                    const std::vector<double>& x, const std::vector<FrameRecorder::Frame>& frames,
-                   double t_start) {
+                   double t_start, const KnitMeasures& measures) {
   const std::string name = fs::path(args.chart).stem().string();
   const std::vector<Vec3> pos = all_points(m, stats.t_final, x);
   const std::vector<Vec3> rest = m.rest_positions();
@@ -405,6 +436,7 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
       {"springs_by_kind", springs},
       {"dof", m.network.dof()},
       {"max_displacement_over_r", max_displacement_over_r(m, pos)},
+      {"yarn", measures_json(measures)},
       {"frames", frame_list},
       {"params", params_json(m.params)},
       {"options", options},
@@ -415,6 +447,13 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
                                 "(with gravity: or the mean point weight, "
                                 "the smaller)"},
                                {"max_displacement_over_r", "1: largest displacement / loop radius"},
+                               {"yarn",
+                                "clearance_*_over_r 1: smallest segment-to-segment distance "
+                                "between yarn centreline pieces of different courses (or one "
+                                "course, >= pi r apart along it) / loop radius, 2 = at least 2; "
+                                "clearance_min_t s; clearance_min_where m; crossings: designed "
+                                "front-view crossings at rest and how many changed over/under "
+                                "order at the end"},
                                {"params",
                                 "loop_radius m; wale_stiffness, "
                                 "course_stiffness N/m; damping N s/m; "
@@ -429,7 +468,8 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
 
 void run(const KnitArgs& args) {
   const KnitChart chart = read_chart(args.chart);
-  const std::string integrator = args.integrator.empty() ? default_knit_integrator() : args.integrator;
+  const std::string integrator =
+      args.integrator.empty() ? default_knit_integrator() : args.integrator;
   std::unique_ptr<Integrator> integ;
   try {
     integ = make_integrator(integrator);
@@ -474,17 +514,37 @@ void run(const KnitArgs& args) {
   opt.interrupt = interrupt.flag();
   RunStats stats;
   std::vector<FrameRecorder::Frame> frames;
+  KnitMeasures measures;
+  const YarnPolylines rest_lines = yarn_polylines(model, model.rest_positions());
+  const std::vector<YarnCrossing> crossings = designed_crossings(model, rest_lines);
+  measures.rest_clearance = yarn_clearance(model, rest_lines).over_r;
   {
     ProgressLine progress(name + " " + integrator, opt.equilibrium_tol, !args.quiet);
     FrameRecorder recorder(args.frames, &progress);
     recorder.set_dof(model.network.dof());
     recorder.record(t0, x.data(), model.network.dof(), model.network.static_residual(t0, x.data()));
     StepLog steps(&recorder);
-    RunObserver* observer = args.step_history ? static_cast<RunObserver*>(&steps) : &recorder;
+    ClearanceOverRun clearance(model,
+                               args.step_history ? static_cast<RunObserver*>(&steps) : &recorder);
+    clearance.observe(t0, x.data(), true);
     try {
-      stats = run_to_equilibrium(model.network, *integ, opt, x, v, observer, t0);
+      stats = run_to_equilibrium(model.network, *integ, opt, x, v, &clearance, t0);
     } catch (const std::invalid_argument& e) {  // an option the model refuses at the start
       refuse_at_run_start(e, dir, created);
+    }
+    clearance.observe(stats.t_final, x.data(), true);
+    measures.min_clearance = clearance.minimum();
+    measures.t_min_clearance = clearance.t_of_minimum();
+    measures.measured_states = clearance.measured_states();
+    const std::vector<Vec3> end = all_points(model, stats.t_final, x);
+    if (std::all_of(end.begin(), end.end(), is_finite)) {
+      const YarnPolylines end_lines = yarn_polylines(model, end);
+      measures.end_clearance = yarn_clearance(model, end_lines).over_r;
+      measures.crossings = check_crossings(crossings, end_lines);
+    } else {
+      measures.end_clearance = std::nan("");
+      measures.crossings.designed = static_cast<int>(crossings.size());
+      measures.crossings.changed = -1;  // unknown: the end state is not finite
     }
     frames = recorder.frames();
     if (args.step_history)
@@ -492,7 +552,15 @@ void run(const KnitArgs& args) {
     else
       remove_stale_output(dir / "steps.csv");
   }
-  write_outputs(dir, args, model, opt, stats, x, frames, t0);
+  write_outputs(dir, args, model, opt, stats, x, frames, t0, measures);
+  if (measures.crossings.changed > 0 || measures.min_clearance.over_r < kClearanceWarning)
+    warn("yarns overlap: clearance down to " + format_number(measures.min_clearance.over_r, 3) +
+         " r (courses " + std::to_string(measures.min_clearance.a.course) + " and " +
+         std::to_string(measures.min_clearance.b.course) +
+         ", at t = " + format_number(measures.t_min_clearance, 3) + " s), " +
+         std::to_string(measures.crossings.changed) + " of " +
+         std::to_string(measures.crossings.designed) +
+         " designed crossings changed over/under order");
   write_run_state(
       dir,
       {"knit", {stats.t_final, x, v}, stats.integrator, stats.dt, knit_model_keys(chart, params)});
@@ -516,6 +584,12 @@ void run(const KnitArgs& args) {
          {"max displacement",
           format_number(max_displacement_over_r(model, all_points(model, stats.t_final, x)), 4) +
               " r"},
+         {"clearance", "min " + format_number(measures.min_clearance.over_r, 3) +
+                           " r over the run (" + std::to_string(measures.measured_states) +
+                           " states), end " + format_number(measures.end_clearance, 3) +
+                           " r, rest " + format_number(measures.rest_clearance, 3) + " r"},
+         {"crossings", std::to_string(measures.crossings.designed) + " designed, " +
+                           std::to_string(measures.crossings.changed) + " changed over/under"},
          {"wall", format_number(1e3 * stats.wall_seconds, 4) + " ms"},
          {"outputs", dir.string() + "/"}});
     std::cout << t.text() << std::flush;
