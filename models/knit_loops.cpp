@@ -233,6 +233,17 @@ void KnitParams::validate() const {
   if (max_points < 1) bad("max_points", static_cast<double>(max_points), "must be >= 1");
 }
 
+const char* to_string(KnitNetwork network) {
+  return network == KnitNetwork::Paper ? "paper" : "stabilised";
+}
+
+KnitNetwork parse_knit_network(const std::string& name) {
+  if (name == "stabilised") return KnitNetwork::Stabilised;
+  if (name == "paper") return KnitNetwork::Paper;
+  throw std::invalid_argument("knit.network = " + name +
+                              ": must be stabilised (the default) or paper (paper 2's network)");
+}
+
 const char* to_string(KnitSpringKind kind) {
   switch (kind) {
     case KnitSpringKind::Wale:
@@ -326,7 +337,7 @@ KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
     }
   }
 
-  if (p.stabiliser_ratio > 0.0) {
+  if (!p.mechanism()) {
     const double s = p.stabiliser_ratio;
     auto link = [&](int a, int b, double k, KnitSpringKind kind) {
       add(a, b, norm(points[b].rest - points[a].rest), k, kind);

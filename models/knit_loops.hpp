@@ -50,17 +50,33 @@
 //   path error (implicit-euler converges to Verlet's state as dt -> 0). Large charts with
 //   many tucks or misses creep slowly towards it (soft modes), and implicit-euler's large
 //   steps wander along the zero-energy modes.
-// Stabiliser (opt-in, KnitParams::stabiliser_ratio = s > 0; a departure from paper 2 Sec. 2.2,
-//   which has no such springs; s = 0, the default, is the paper's model exactly): it removes
-//   the mechanism by adding, between existing interlacing points,
+// Networks (KnitParams::network; `knit --set knit.network=stabilised|paper`):
+//   stabilised (the default; a departure from paper 2 Sec. 2.2, which has no such springs)
+//            paper 2's springs plus a stabiliser that removes the in-plane mechanism, with
+//            s = KnitParams::stabiliser_ratio (default 0.1), between existing interlacing points:
 //   shear    both diagonals of every quad (i,L) (i+1,L) (i,L+1) (i+1,L+1) whose four corners
 //            exist, stiffness s (k_w + k_c)/2;
 //   bending  (i,L) - (i,L+2) along a wale, stiffness s k_w, and (i,L) - (i+2,L) along a level,
 //            stiffness s k_c, where the point between them exists too (no bending spring
 //            spans a held loop or a float: those keep the paper's pull).
-//   Rest lengths are the rest distances, so a plain chart stays exactly at rest. With it the
-//   steady state is unique and a tuck's displacement decays with distance (tests/test_knit.cpp,
-//   paper_repro/knit/README.md); the pull a tuck exerts is then shared with these springs.
+//            Rest lengths are the rest distances, so a plain chart stays exactly at rest. With it
+//            the in-plane steady state is unique and a tuck's displacement decays with distance
+//            (tests/test_knit.cpp, paper_repro/knit/README.md); the pull a tuck exerts is then
+//            shared with these springs.
+//            Basis of s (docs/knit.md): the yarn's bending rigidity B. A loop's leg of length h
+//            held at both interlacing points resists a sideways (shearing) displacement with the
+//            guided-beam stiffness 12 B / h^3; s = 12 B / (k h^3). B of a yarn of diameter d = r
+//            whose fibres slip freely (the lower bound of a yarn's rigidity): n_f fibres,
+//            n_f = phi (d / d_f)^2, each E_f pi d_f^4 / 64; cotton E_f ~ 7 GPa, d_f ~ 12 um,
+//            packing phi ~ 0.5 give n_f ~ 28 and B ~ 2.0e-10 N m^2, hence s ~ 0.10 at the default
+//            r and k = 100 N/m. An estimate to a factor of a few (fibre modulus and packing
+//            vary): s is a key, knit.stabiliser in [0, 1].
+//            Out of the plane: every spring of a flat chart lies in z = 0, so at rest no spring
+//            resists a z displacement to first order (the stiffness's z block is zero; tension
+//            stiffens it once the fabric is strained). The stabiliser does not change that.
+//   paper    paper 2's network exactly (wale, course, tuck and float springs; s is ignored):
+//            a mechanism, see above. knit.stabiliser = 0 gives the same network. `knitsim knit`
+//            prints one warning line for it.
 // State layout: that of SpringNetwork (3 dof per free point, in point-id order); point ids
 //   are level-major: all points of level 0 by wale, then level 1, ...
 //
@@ -101,8 +117,8 @@
 #include <vector>
 
 #include "models/spring_network.hpp"
-#include "src/geometry/nurbs.hpp"
 #include "src/core/vec3.hpp"
+#include "src/geometry/nurbs.hpp"
 
 namespace knitsim {
 
@@ -123,6 +139,12 @@ KnitChart parse_knit_chart(const std::string& text);
 
 enum class KnitPins { None, Bottom, Top, BottomAndTop };  // which edge levels are held fixed
 
+// The spring network (see above): knit.network = stabilised (default) | paper.
+enum class KnitNetwork { Stabilised, Paper };
+const char* to_string(KnitNetwork network);
+// "stabilised" or "paper"; throws std::invalid_argument naming knit.network and the names.
+KnitNetwork parse_knit_network(const std::string& name);
+
 struct KnitParams {
   // r, m: 14 wales/cm -> w = 8r = 1/14 cm -> r = 1/1120 cm ~ 8.93e-5 m.
   double loop_radius = 1e-2 / 14.0 / 8.0;
@@ -140,15 +162,20 @@ struct KnitParams {
   double areal_density = 41.65;  // rho_A, g/m^2 (paper 1 Table 2, sample 1)
   bool gravity = false;          // paper 2 ignores external forces; on: g = 9.81 m/s^2 along -y
   KnitPins pins = KnitPins::None;
+  // Which network (see above): the stabilised default, or paper 2's bare network.
+  KnitNetwork network = KnitNetwork::Stabilised;
   // s, dimensionless, in [0, 1]: stiffness of the stabiliser's shear and bending springs
-  // relative to k_w, k_c (see above); 0 = off, paper 2's network.
-  double stabiliser_ratio = 0.0;
+  // relative to k_w, k_c (see above; 0.1 from the yarn's bending rigidity); 0 = off, which is
+  // paper 2's network whatever `network` says. Ignored for KnitNetwork::Paper.
+  double stabiliser_ratio = 0.1;
   long max_points = 4'000'000;  // refuse larger charts before allocating
 
   // Throws std::invalid_argument naming the field by its `knit --set` key (knit.loop_radius,
   // knit.wale_stiffness, knit.course_stiffness, knit.damping, knit.areal_density,
   // knit.stabiliser; max_points has none) and the accepted range with units.
   void validate() const;
+  // True when the network has no stabiliser (paper 2's mechanism): network Paper or s = 0.
+  bool mechanism() const { return network == KnitNetwork::Paper || stabiliser_ratio == 0.0; }
   double wale_spacing() const { return 8.0 * loop_radius; }    // w, m
   double course_spacing() const { return 7.0 * loop_radius; }  // h, m
 };

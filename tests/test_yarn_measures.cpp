@@ -129,7 +129,9 @@ TEST_CASE("a held loop's clearance: its elongated legs at rest, and over a run")
   // The single tuck with paper 2's network: the clearance over the run dips below both its
   // start and its end value (measured: 0.216 r at rest, ~0.105 r on the way, ~0.127 r at the
   // end), so an end-only measure would miss the worst state.
-  const KnitModel t = build_knit(parse_knit_chart(chart_file("single_tuck.chart")), KnitParams{});
+  KnitParams paper;
+  paper.network = KnitNetwork::Paper;
+  const KnitModel t = build_knit(parse_knit_chart(chart_file("single_tuck.chart")), paper);
   ClearanceOverRun over(t, nullptr);
   std::vector<double> x, v;
   IntegratorOptions opt;

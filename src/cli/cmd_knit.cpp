@@ -41,14 +41,18 @@
 // whatever the number of checks. summary.json lists each frame's t, residual and largest
 // displacement.
 //
-// Velocity tolerance. With the stabiliser on (knit.stabiliser > 0) and no --velocity-atol, the
+// Network: the stabilised default or, by knit.network = paper (or knit.stabiliser = 0), paper 2's
+// bare network, which prints one warning line (a mechanism: its steady state depends on the
+// path). models/knit_loops.hpp, docs/knit.md.
+//
+// Velocity tolerance. With the stabiliser on (the default network) and no --velocity-atol, the
 // run uses velocity_atol = kStabilisedVelocityAtol (1e-3 m/s, ~ atol 1e-9 m x 1e6 rad/s, above
 // the network's fastest modes, omega ~ 2e5 rad/s): the stabilised steady state is unique, so
 // the ringing of the stiff modes need not be followed (IntegratorOptions::velocity_atol). On
 // tucks40.chart cvode-bdf then takes 4x fewer steps (425) with the same shape (< 1e-5 r;
-// experiments/benchmark/README.md, "Knit case"). Paper 2's network (stabiliser 0) is a mechanism
-// whose end state depends on the path, so it keeps atol on the velocities too: a velocity_atol
-// of 2e-4 m/s moves several_tucks' end state by 1.6e-3 r, 400x its tolerance error.
+// experiments/benchmark/README.md, "Knit case"). Paper 2's network (knit.network = paper) is a
+// mechanism whose end state depends on the path, so it keeps atol on the velocities too: a
+// velocity_atol of 2e-4 m/s moves several_tucks' end state by 1.6e-3 r, 400x its tolerance error.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
@@ -118,18 +122,30 @@ std::vector<SetKey> set_keys(KnitParams& p, IntegratorOptions& o) {
           {"run.equilibrium_tol", &o.equilibrium_tol}};
 }
 
+// The one --set key whose value is a name: knit.network = stabilised | paper.
+constexpr const char* kNetworkKey = "knit.network";
+
 // Applies "key=value" overrides; throws std::invalid_argument naming the bad --set.
+// knit.network = paper with an explicit knit.stabiliser > 0 is refused (the paper's network has
+// no stabiliser).
 void apply_sets(const std::vector<std::string>& sets, KnitParams& p, IntegratorOptions& o) {
   const std::vector<SetKey> keys = set_keys(p, o);
+  bool stabiliser_given = false;
   for (const std::string& s : sets) {
     const size_t eq = s.find('=');
     const std::string key = s.substr(0, eq);
+    if (key == kNetworkKey) {
+      p.network = parse_knit_network(eq == std::string::npos ? "" : s.substr(eq + 1));
+      continue;
+    }
+    stabiliser_given = stabiliser_given || key == "knit.stabiliser";
     const SetKey* found = nullptr;
     for (const SetKey& k : keys)
       if (key == k.name) found = &k;
     if (found == nullptr) {
       std::vector<std::string> names;
       for (const SetKey& k : keys) names.push_back(k.name);
+      names.push_back(kNetworkKey);
       throw std::invalid_argument(unknown_key_message(key, names));
     }
     const std::string value = eq == std::string::npos ? "" : s.substr(eq + 1);
@@ -144,6 +160,10 @@ void apply_sets(const std::vector<std::string>& sets, KnitParams& p, IntegratorO
       throw std::invalid_argument("--set " + s + ": expected " + key + "=<number>");
     *found->field = v;
   }
+  if (p.network == KnitNetwork::Paper && stabiliser_given && p.stabiliser_ratio > 0.0)
+    throw std::invalid_argument(
+        "--set knit.stabiliser with knit.network = paper: paper 2's network has no stabiliser "
+        "(drop one of them)");
 }
 
 // What a knit run integrates, as SavedRun::model (--continue): the chart, one string of stitch
@@ -157,6 +177,7 @@ nlohmann::json knit_model_keys(const KnitChart& chart, KnitParams params) {
     courses.push_back(row);
   }
   keys["chart"] = courses;
+  keys[kNetworkKey] = to_string(params.network);
   IntegratorOptions unused;
   for (const SetKey& k : set_keys(params, unused))
     if (std::string(k.name).rfind("knit.", 0) == 0) keys[k.name] = *k.field;
@@ -274,6 +295,12 @@ std::string centerlines_vtk(const std::string& title, const std::vector<CurveSam
   return os;
 }
 
+// "stabilised network (s 0.1)" or "paper 2's network (a mechanism)".
+std::string network_label(const KnitParams& p) {
+  return p.mechanism() ? "paper 2's network (a mechanism)"
+                       : "stabilised network (s " + format_number(p.stabiliser_ratio, 3) + ")";
+}
+
 // Front view of the centrelines, courses in alternating colours, interlacing points as dots.
 void render_front(const fs::path& path, const KnitModel& m, const std::vector<Vec3>& pos,
                   const std::vector<CurveSamples>& lines, const std::string& title) {
@@ -289,8 +316,8 @@ void render_front(const fs::path& path, const KnitModel& m, const std::vector<Ve
   view.front_xy = true;
   view.title = title;
   view.caption = {std::to_string(m.chart.wales) + " wales x " + std::to_string(m.chart.courses) +
-                  " courses, r = " + format_number(1e3 * m.params.loop_radius, 3) +
-                  " mm, stabiliser " + format_number(m.params.stabiliser_ratio, 3)};
+                  " courses, r = " + format_number(1e3 * m.params.loop_radius, 3) + " mm, " +
+                  network_label(m.params)};
   write_file_atomic_with(
       path, [&](const std::string& tmp) { render_strokes_png(tmp, strokes, pos, view); });
 }
@@ -302,9 +329,13 @@ double max_displacement_over_r(const KnitModel& m, const std::vector<Vec3>& pos)
 }
 
 nlohmann::json params_json(const KnitParams& p) {
-  return {{"loop_radius", p.loop_radius},           {"wale_stiffness", p.wale_stiffness},
-          {"course_stiffness", p.course_stiffness}, {"damping", p.damping},
-          {"areal_density", p.areal_density},       {"stabiliser_ratio", p.stabiliser_ratio}};
+  return {{"loop_radius", p.loop_radius},
+          {"wale_stiffness", p.wale_stiffness},
+          {"course_stiffness", p.course_stiffness},
+          {"damping", p.damping},
+          {"areal_density", p.areal_density},
+          {"stabiliser_ratio", p.stabiliser_ratio},
+          {"network", p.mechanism() ? "paper" : "stabilised"}};
 }
 
 // The yarn measures of a run (src/measure/yarn_measures.hpp), in units of r.
@@ -483,7 +514,7 @@ void run(const KnitArgs& args) {
   // The stabilised default is an error-control setting: the fixed-step methods have none, so
   // their summaries keep the (unused) value given, not 1e-3.
   const bool stabilised_default =
-      !args.velocity_atol_given && params.stabiliser_ratio > 0.0 && integ->info().adaptive;
+      !args.velocity_atol_given && !params.mechanism() && integ->info().adaptive;
   if (stabilised_default) opt.velocity_atol = kStabilisedVelocityAtol;
   try {
     opt.validate();
@@ -510,6 +541,11 @@ void run(const KnitArgs& args) {
   bool created = false;
   const fs::path dir = make_output_dir(args.out, "knit-" + name, &created);
   warn_about_run("knit.damping", params.damping, integ->info(), args.options, opt.t_max);
+  if (params.mechanism())
+    warn(std::string(params.network == KnitNetwork::Paper ? "knit.network = paper"
+                                                          : "knit.stabiliser = 0") +
+         ": paper 2's bare network is a mechanism (blocks of fabric shear and swing at no "
+         "energy); its steady state depends on the path (integrator, step, tolerances)");
   const InterruptScope interrupt;
   opt.interrupt = interrupt.flag();
   RunStats stats;
@@ -608,16 +644,17 @@ void register_knit_command(CLI::App& app) {
       "state.json and manifest.json into --out");
   cmd->add_option("--chart", args->chart, "Stitch chart file (K knit, T tuck, M miss)")->required();
   cmd->add_option("--set", args->sets,
-                  "Override a parameter, e.g. knit.stabiliser=0.1 (repeatable); keys "
-                  "knit.loop_radius, knit.wale_stiffness, knit.course_stiffness, knit.damping, "
-                  "knit.areal_density, knit.stabiliser, run.t_max, run.equilibrium_tol")
+                  "Override a parameter, e.g. knit.network=paper (repeatable); keys "
+                  "knit.network (stabilised | paper), knit.loop_radius, knit.wale_stiffness, "
+                  "knit.course_stiffness, knit.damping, knit.areal_density, knit.stabiliser, "
+                  "run.t_max, run.equilibrium_tol")
       ->allow_extra_args(false)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_option("--integrator", args->integrator,
                   "Integrator (knitsim list integrators); default cvode-bdf");
   CLI::Option* velocity_atol = add_run_options(cmd, args->options);
   velocity_atol->description(velocity_atol->get_description() +
-                             "; not given: 0, or 0.001 with knit.stabiliser > 0");
+                             "; not given: 0.001 (stabilised network), or 0 (paper network)");
   cmd->add_option("--frames", args->frames,
                   "Captured frames (the start to the last residual check), >= 1")
       ->capture_default_str();
