@@ -101,11 +101,23 @@
 // so the head of loop (i,j-1) passes behind the legs of loop (i,j) near its feet, and its
 // upper legs in front of that loop's sinker arcs: the new loop passes through the old one,
 // the courses intermesh. A tuck loop is the open arc T0 T2 T3 T4 T5 T6 T8 (no feet) with
-// its head T3..T5 pushed back by 2r behind the head of the held loop it shares the needle
-// with (SPEC 2.9 leaves the two coincident; on the face the tuck hides behind it). A float
-// passes behind each missed wale at F_i = B_i - r e_y - r n. Each course's yarn is one C^2
-// cubic NURBS through its points in wale order (T8 of a loop = T0 of the next), chord-length
-// parameters (src/geometry/nurbs.hpp).
+// its head T3..T5 pushed back by 3r behind the head of the held loop it shares the needle
+// with (SPEC 2.9 leaves the two coincident; on the face the tuck hides behind it), 2r more for
+// each tuck stacked below it on the same needle, and its legs T2, T6 forward by r (not 2r) of
+// the midpoints. A float passes behind each missed wale at F_i = B_i - r e_y - r n. Each
+// course's yarn is one C^2 cubic NURBS through its points in wale order (T8 of a loop = T0 of
+// the next), centripetal parameters (src/geometry/nurbs.hpp).
+// Tuck and held-loop geometry (issue 31; measured by src/measure/yarn_measures.hpp, clearance
+// at rest in units of r): with SPEC 2.9's relations as first written (tuck head 2r back, legs
+// 2r forward, chord-length parameters) the rest state already had yarns of different courses
+// within 0.216 r (a tuck's leg against the next course's sinker arc), stacked tucks' heads
+// coincident (0) and a loop held over two courses crossing its own legs (4e-6: the chord-length
+// cubic swings each long leg across the loop after the short sinker-to-foot interval).
+// Centripetal parameters (which damp that overshoot at uneven intervals), the tuck head 3r back
+// and its legs r forward give 1.212 r on plain jersey (1.206 r before), 1.212 r on
+// single_tuck and tucks40, 0.999 r on several_misses (the held loop's legs); stacked tucks
+// (several_tucks) still come within ~0.1 r of each other's legs where they cross: a lever
+// left (docs/knit.md).
 //
 // Failure modes: a bad chart or parameters throw std::invalid_argument at set-up (chart
 // messages name row and column). Geometry functions expect positions of every point
@@ -233,7 +245,10 @@ std::vector<LoopTypeValues> type_value_points(const KnitModel& model,
 std::vector<std::vector<Vec3>> course_yarn_points(const KnitModel& model,
                                                   const std::vector<Vec3>& positions);
 
-// Per course, the C^2 cubic NURBS through course_yarn_points (chord-length parameters).
+// The yarn's interpolation parameters (see "Tuck and held-loop geometry" above).
+constexpr Parametrization kYarnParametrization = Parametrization::Centripetal;
+
+// Per course, the C^2 cubic NURBS through course_yarn_points (centripetal parameters).
 std::vector<NurbsCurve> course_curves(const KnitModel& model, const std::vector<Vec3>& positions);
 
 // Per course, its centreline sampled uniformly in arc length with samples_per_point samples

@@ -348,7 +348,7 @@ TEST_CASE("centrelines interpolate the yarn points and follow the deformed point
   const auto yarns = course_yarn_points(m, pos);
   const auto curves = course_curves(m, pos);
   for (size_t j = 0; j < yarns.size(); ++j) {
-    const auto ubar = interpolation_parameters(yarns[j], Parametrization::ChordLength);
+    const auto ubar = interpolation_parameters(yarns[j], kYarnParametrization);
     double worst = 0.0;
     for (size_t k = 0; k < yarns[j].size(); ++k)
       worst = std::max(worst, norm(evaluate(curves[j], ubar[k]).point - yarns[j][k]));

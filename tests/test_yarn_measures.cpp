@@ -66,7 +66,7 @@ TEST_CASE("segment distance: closed forms and a brute-force search") {
   }
 }
 
-TEST_CASE("plain jersey at rest: clearance 1.206 r, crossings invariant under rigid motions") {
+TEST_CASE("plain jersey at rest: clearance 1.212 r, crossings invariant under rigid motions") {
   const KnitModel m = build_knit(parse_knit_chart(chart_file("plain_jersey.chart")), KnitParams{});
   const double r = m.params.loop_radius;
   const std::vector<Vec3> rest = m.rest_positions();
@@ -75,7 +75,7 @@ TEST_CASE("plain jersey at rest: clearance 1.206 r, crossings invariant under ri
   const YarnClearance c = yarn_clearance(m, lines);
   // The closest pieces belong to neighbouring courses (the head of a loop behind the feet of
   // the loop above), not one yarn with itself.
-  CHECK(c.over_r == Approx(1.206).epsilon(1e-3));
+  CHECK(c.over_r == Approx(1.2116).epsilon(1e-4));
   CHECK(c.b.course == c.a.course + 1);
   const std::vector<YarnCrossing> crossings = designed_crossings(m, lines);
   // 8 wales x 6 courses (measured; about 3.3 per loop, fewer along the edges).
@@ -115,20 +115,23 @@ TEST_CASE("plain jersey at rest: clearance 1.206 r, crossings invariant under ri
   }
 }
 
-TEST_CASE("a held loop's clearance: its elongated legs at rest, and over a run") {
-  // The two-course miss of several_misses.chart holds loop (8, 3) over three levels: the
-  // cubic through its feet and legs swings each leg across the loop's centre line, so at
-  // rest the two legs of one yarn touch (the rest geometry's defect, issue 31).
-  const KnitModel m =
+TEST_CASE("rest clearance of the committed charts, and the clearance over a run") {
+  // The tuck and held-loop rest geometry (models/knit_loops.hpp): a single tuck's yarns keep
+  // plain jersey's clearance; the loop held over two courses by several_misses' floats keeps
+  // its legs one diameter apart (0.999 r, from 4e-6 r with chord-length parameters). Stacked
+  // tucks (several_tucks) still come within ~0.1 r at rest: not asserted here (docs/knit.md).
+  for (const char* name : {"plain_jersey.chart", "single_tuck.chart", "tucks40.chart"}) {
+    CAPTURE(name);
+    const KnitModel m = build_knit(parse_knit_chart(chart_file(name)), KnitParams{});
+    CHECK(yarn_clearance(m, yarn_polylines(m, m.rest_positions())).over_r >= 1.2);
+  }
+  const KnitModel misses =
       build_knit(parse_knit_chart(chart_file("several_misses.chart")), KnitParams{});
-  const YarnClearance c = yarn_clearance(m, yarn_polylines(m, m.rest_positions()));
-  CHECK(c.over_r < 1e-3);
-  CHECK(c.a.course == 3);
-  CHECK(c.b.course == 3);
+  CHECK(yarn_clearance(misses, yarn_polylines(misses, misses.rest_positions())).over_r >= 0.99);
 
-  // The single tuck with paper 2's network: the clearance over the run dips below both its
-  // start and its end value (measured: 0.216 r at rest, ~0.105 r on the way, ~0.127 r at the
-  // end), so an end-only measure would miss the worst state.
+  // The single tuck with paper 2's network: the clearance over the run dips below its end
+  // value, so an end-only measure would miss the worst state (the yarns overlap: contact is
+  // not in the model yet).
   KnitParams paper;
   paper.network = KnitNetwork::Paper;
   const KnitModel t = build_knit(parse_knit_chart(chart_file("single_tuck.chart")), paper);
@@ -146,7 +149,8 @@ TEST_CASE("a held loop's clearance: its elongated legs at rest, and over a run")
   const double at_end = yarn_clearance(t, yarn_polylines(t, end)).over_r;
   CHECK(over.measured_states() > 10);
   CHECK(over.minimum().over_r < at_end - 0.01);
-  CHECK(over.minimum().over_r < 0.216 - 0.05);
+  // Measured: 1.212 r at rest, 0.165 r at t = 2.3e-4 s, 0.188 r at the end.
+  CHECK(over.minimum().over_r < 0.5);
   CHECK(over.t_of_minimum() > 0.0);
   CHECK(over.t_of_minimum() < s.t_final);
 }

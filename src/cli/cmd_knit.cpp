@@ -90,6 +90,9 @@ namespace fs = std::filesystem;
 constexpr double kStabilisedVelocityAtol = 1e-3;  // m/s, see the file comment
 // A run whose yarns came closer than this (in r) warns (issue 31's target: >= 0.9 r).
 constexpr double kClearanceWarning = 0.9;
+// The clearance over the run is measured when a point has moved by max(0.25 r, c/2) since the
+// last measured state (src/measure/yarn_measures.hpp, ClearanceOverRun).
+constexpr double kClearanceResample = 0.25, kClearanceResampleFraction = 0.5;
 
 struct KnitArgs {
   std::string chart;

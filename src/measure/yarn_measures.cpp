@@ -97,9 +97,6 @@ void for_each_near_pair(const YarnPolylines& lines, const std::vector<FlatSegmen
   }
 }
 
-// A state is measured when some point has moved by this fraction of the last clearance.
-constexpr double kResampleFraction = 0.25;
-
 int triple_sign(const FlatSegment& a, const FlatSegment& b, const SegmentClosest& c) {
   const double v = dot(c.a - c.b, cross(a.p1 - a.p0, b.p1 - b.p0));
   return v > 0.0 ? 1 : v < 0.0 ? -1 : 0;
@@ -167,8 +164,8 @@ YarnPolylines yarn_polylines(const KnitModel& m, const std::vector<Vec3>& positi
   YarnPolylines out;
   out.samples_per_interval = samples_per_interval;
   for (const std::vector<Vec3>& yarn : course_yarn_points(m, positions)) {
-    const NurbsCurve curve = interpolate_cubic(yarn, Parametrization::ChordLength);
-    const std::vector<double> ubar = interpolation_parameters(yarn, Parametrization::ChordLength);
+    const NurbsCurve curve = interpolate_cubic(yarn, kYarnParametrization);
+    const std::vector<double> ubar = interpolation_parameters(yarn, kYarnParametrization);
     std::vector<Vec3> v;
     v.reserve(samples_per_interval * (yarn.size() - 1) + 1);
     for (size_t k = 0; k + 1 < yarn.size(); ++k)
@@ -244,15 +241,19 @@ CrossingCheck check_crossings(const std::vector<YarnCrossing>& crossings,
   return out;
 }
 
-ClearanceOverRun::ClearanceOverRun(const KnitModel& m, RunObserver* next, double resample_over_r)
-    : m_(m), next_(next), resample_(resample_over_r * m.params.loop_radius) {}
+ClearanceOverRun::ClearanceOverRun(const KnitModel& m, RunObserver* next, double resample_over_r,
+                                   double resample_fraction)
+    : m_(m),
+      next_(next),
+      resample_(resample_over_r * m.params.loop_radius),
+      fraction_(resample_fraction) {}
 
 void ClearanceOverRun::observe(double t, const double* x, bool force) {
   m_.network.all_positions(t, x, pos_);
   if (!force && !last_.empty()) {
     double moved = 0.0;
     for (size_t k = 0; k < pos_.size(); ++k) moved = std::max(moved, norm(pos_[k] - last_[k]));
-    if (moved < std::max(resample_, kResampleFraction * last_clearance_)) return;
+    if (moved < std::max(resample_, fraction_ * last_clearance_)) return;
   }
   last_ = pos_;
   ++measured_;

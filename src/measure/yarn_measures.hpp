@@ -96,16 +96,17 @@ CrossingCheck check_crossings(const std::vector<YarnCrossing>& crossings,
 
 // The clearance over a run (issue 31: its minimum over the whole run, not only at the end):
 // a RunObserver that measures the state at a residual check when some interlacing point has
-// moved since the last measured state by at least max(resample_over_r r, c / 4), c the last
-// measured clearance (dense sampling where yarns are close, sparse where they are far apart:
-// a clearance c cannot close unless the yarn moves by ~c/2), and always the first state it sees
-// and a state given to observe(..., true) (the end of the run). A heuristic, not a bound:
+// moved since the last measured state by at least max(resample_over_r r, resample_fraction c),
+// c the last measured clearance (dense sampling where yarns are close, sparse where they are
+// far apart: a clearance c cannot close unless the yarn moves by ~c/2), and always the first state
+// it sees and a state given to observe(..., true) (the end of the run). A heuristic, not a bound:
 // between two measured states the clearance could dip by a few times the interlacing points'
 // motion (the type-value points and the NURBS amplify it). Forwards every
 // RunObserver call to `next` (may be nullptr).
 class ClearanceOverRun final : public RunObserver {
  public:
-  ClearanceOverRun(const KnitModel& m, RunObserver* next, double resample_over_r = 0.05);
+  ClearanceOverRun(const KnitModel& m, RunObserver* next, double resample_over_r = 0.05,
+                   double resample_fraction = 0.25);
   void observe(double t, const double* x, bool force);  // x: free dofs, as integrators hold them
   void on_step(double t, double h, int order) override;
   void on_check(double t, const double* x, const double* v, double residual) override;
@@ -116,7 +117,8 @@ class ClearanceOverRun final : public RunObserver {
  private:
   const KnitModel& m_;
   RunObserver* next_;
-  double resample_;              // m
+  double resample_;  // m
+  double fraction_;
   double last_clearance_ = 0.0;  // m
   std::vector<Vec3> last_, pos_;
   YarnClearance min_;
