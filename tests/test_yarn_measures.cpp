@@ -153,4 +153,15 @@ TEST_CASE("rest clearance of the committed charts, and the clearance over a run"
   CHECK(over.minimum().over_r < 0.5);
   CHECK(over.t_of_minimum() > 0.0);
   CHECK(over.t_of_minimum() < s.t_final);
+  // The guarantee (yarn_measures.hpp): a missed dip is shallower than 2 A 0.05 r; measured A ~1.6.
+  CHECK(over.amplification() >= 1.0);
+  CHECK(over.resolution_over_r() < 0.3);
+  // A hint only narrows the search: the same clearance as without it, from any counted pair.
+  const YarnPolylines end_lines = yarn_polylines(t, end);
+  const YarnClearance plain = yarn_clearance(t, end_lines);
+  YarnClearance far = plain;
+  far.a = {0, 0};
+  far.b = {t.chart.courses - 1, 5};
+  for (const YarnClearance* hint : std::vector<const YarnClearance*>{&plain, &far, &over.minimum()})
+    CHECK(yarn_clearance(t, end_lines, 2.0, hint).over_r == plain.over_r);
 }

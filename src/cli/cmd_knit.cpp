@@ -90,9 +90,10 @@ namespace fs = std::filesystem;
 constexpr double kStabilisedVelocityAtol = 1e-3;  // m/s, see the file comment
 // A run whose yarns came closer than this (in r) warns (issue 31's target: >= 0.9 r).
 constexpr double kClearanceWarning = 0.9;
-// The clearance over the run is measured when a point has moved by max(0.25 r, c/2) since the
-// last measured state (src/measure/yarn_measures.hpp, ClearanceOverRun).
-constexpr double kClearanceResample = 0.25, kClearanceResampleFraction = 0.5;
+// The clearance over the run is measured when an interlacing point has moved by 0.05 r since
+// the last measured state (src/measure/yarn_measures.hpp, ClearanceOverRun: a dip shallower than
+// 2 A 0.05 r can be missed, A the measured amplification, reported: tucks40 0.12 r).
+constexpr double kClearanceResample = 0.05;
 
 struct KnitArgs {
   std::string chart;
@@ -348,7 +349,8 @@ struct KnitMeasures {
   YarnClearance min_clearance;  // over the measured states of the run, start and end included
   double t_min_clearance = 0.0;
   int measured_states = 0;
-  CrossingCheck crossings;  // at the end against the rest state
+  double min_resolution = 0.0;  // 2 A tau: a deeper dip between measured states would be seen
+  CrossingCheck crossings;      // at the end against the rest state
 };
 
 nlohmann::json measures_json(const KnitMeasures& k) {
@@ -360,6 +362,7 @@ nlohmann::json measures_json(const KnitMeasures& k) {
           {"clearance_end_over_r", k.end_clearance},
           {"clearance_rest_over_r", k.rest_clearance},
           {"clearance_measured_states", k.measured_states},
+          {"clearance_min_resolution_over_r", k.min_resolution},
           {"crossings_designed", k.crossings.designed},
           {"crossings_changed", k.crossings.changed}};
 }
@@ -485,7 +488,9 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
                                 "clearance_*_over_r 1: smallest segment-to-segment distance "
                                 "between yarn centreline pieces of different courses (or one "
                                 "course, >= pi r apart along it) / loop radius, 2 = at least 2; "
-                                "clearance_min_t s; clearance_min_where m; crossings: designed "
+                                "clearance_min_t s; clearance_min_where m; "
+                                "clearance_min_resolution_over_r 1: a dip between measured "
+                                "states shallower than this can be missed; crossings: designed "
                                 "front-view crossings at rest and how many changed over/under "
                                 "order at the end"},
                                {"params",
@@ -563,12 +568,9 @@ void run(const KnitArgs& args) {
     recorder.set_dof(model.network.dof());
     recorder.record(t0, x.data(), model.network.dof(), model.network.static_residual(t0, x.data()));
     StepLog steps(&recorder);
-    // Sparser than the class default (0.05 r, c/4): each measured state of tucks40 costs
-    // ~0.1-0.2 s; this still catches the pass-throughs of several_tucks and several_misses but
-    // can miss a shallow dip (single_tuck, paper network: 0.188 r against 0.165 r densely).
     ClearanceOverRun clearance(model,
                                args.step_history ? static_cast<RunObserver*>(&steps) : &recorder,
-                               kClearanceResample, kClearanceResampleFraction);
+                               kClearanceResample);
     clearance.observe(t0, x.data(), true);
     try {
       stats = run_to_equilibrium(model.network, *integ, opt, x, v, &clearance, t0);
@@ -579,6 +581,7 @@ void run(const KnitArgs& args) {
     measures.min_clearance = clearance.minimum();
     measures.t_min_clearance = clearance.t_of_minimum();
     measures.measured_states = clearance.measured_states();
+    measures.min_resolution = clearance.resolution_over_r();
     const std::vector<Vec3> end = all_points(model, stats.t_final, x);
     if (std::all_of(end.begin(), end.end(), is_finite)) {
       const YarnPolylines end_lines = yarn_polylines(model, end);
@@ -629,8 +632,9 @@ void run(const KnitArgs& args) {
               " r"},
          {"clearance", "min " + format_number(measures.min_clearance.over_r, 3) +
                            " r over the run (" + std::to_string(measures.measured_states) +
-                           " states), end " + format_number(measures.end_clearance, 3) +
-                           " r, rest " + format_number(measures.rest_clearance, 3) + " r"},
+                           " states, to " + format_number(measures.min_resolution, 2) +
+                           " r), end " + format_number(measures.end_clearance, 3) + " r, rest " +
+                           format_number(measures.rest_clearance, 3) + " r"},
          {"crossings", std::to_string(measures.crossings.designed) + " designed, " +
                            std::to_string(measures.crossings.changed) + " changed over/under"},
          {"wall", format_number(1e3 * stats.wall_seconds, 4) + " ms"},

@@ -39,62 +39,58 @@ bool counted(const YarnPolylines& lines, const FlatSegment& a, const FlatSegment
 }
 
 // Calls f(a, b) for every counted pair of segments whose midpoints lie in neighbouring cells of
-// a grid of cell size radius + longest segment: every pair closer than `radius` is among them.
+// a grid in the front view (x, y) of cell size >= radius + longest segment: every pair closer
+// than `radius` is among them. The fabric is a few r thick, so z is not binned. Cells are a dense
+// array filled by a counting sort, the segments copied in cell order (each cell contiguous).
 template <class F>
 void for_each_near_pair(const YarnPolylines& lines, const std::vector<FlatSegment>& segs,
                         double radius, double gap, F&& f) {
   if (segs.empty()) return;
-  double longest = 0.0;
-  Vec3 lo{1e300, 1e300, 1e300};
+  double longest = 0.0, x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
   for (const FlatSegment& s : segs) {
     longest = std::max(longest, norm(s.p1 - s.p0));
     const Vec3 c = 0.5 * (s.p0 + s.p1);
-    lo = {std::min(lo.x, c.x), std::min(lo.y, c.y), std::min(lo.z, c.z)};
+    x0 = std::min(x0, c.x), y0 = std::min(y0, c.y), x1 = std::max(x1, c.x), y1 = std::max(y1, c.y);
   }
-  const double cell = radius + longest;
-  if (!(cell > 0.0) || !std::isfinite(cell)) return;
-  auto coord = [&](double v, double v0) { return static_cast<int64_t>((v - v0) / cell); };
-  constexpr int64_t kBits = 21, kMask = (int64_t{1} << kBits) - 1;
-  auto key = [&](int64_t ix, int64_t iy, int64_t iz) {
-    return ((ix & kMask) << (2 * kBits)) | ((iy & kMask) << kBits) | (iz & kMask);
+  double cell = radius + longest;
+  if (!(cell > 0.0) || !std::isfinite(cell) || !std::isfinite(x1 - x0) || !std::isfinite(y1 - y0))
+    return;
+  // At most ~4 cells per segment (a coarser grid is still complete, only slower).
+  cell = std::max(cell, std::sqrt((x1 - x0) * (y1 - y0) / (4.0 * segs.size())));
+  const int64_t nx = static_cast<int64_t>((x1 - x0) / cell) + 1;
+  const int64_t ny = static_cast<int64_t>((y1 - y0) / cell) + 1;
+  auto cell_of = [&](const FlatSegment& s) {
+    const Vec3 c = 0.5 * (s.p0 + s.p1);
+    const int64_t ix = std::min(nx - 1, static_cast<int64_t>((c.x - x0) / cell));
+    const int64_t iy = std::min(ny - 1, static_cast<int64_t>((c.y - y0) / cell));
+    return ix * ny + iy;
   };
-  // Segments sorted by cell key; the occupied cells with their ranges in that order. Keys are
-  // lexicographic in (ix, iy, iz) >= 0, so each pair of neighbouring cells is visited once, from
-  // the cell with the smaller key.
-  std::vector<std::pair<int64_t, int>> sorted(segs.size());
-  for (size_t n = 0; n < segs.size(); ++n) {
-    const Vec3 c = 0.5 * (segs[n].p0 + segs[n].p1);
-    sorted[n] = {key(coord(c.x, lo.x), coord(c.y, lo.y), coord(c.z, lo.z)), static_cast<int>(n)};
+  std::vector<size_t> begin(static_cast<size_t>(nx * ny) + 1, 0);
+  for (const FlatSegment& s : segs) ++begin[cell_of(s) + 1];
+  for (size_t c = 1; c < begin.size(); ++c) begin[c] += begin[c - 1];
+  std::vector<FlatSegment> sorted(segs.size());
+  {
+    std::vector<size_t> next(begin.begin(), begin.end() - 1);
+    for (const FlatSegment& s : segs) sorted[next[cell_of(s)]++] = s;
   }
-  std::sort(sorted.begin(), sorted.end());
-  std::vector<int64_t> cell_key;
-  std::vector<size_t> cell_begin;
-  for (size_t n = 0; n < sorted.size(); ++n)
-    if (n == 0 || sorted[n].first != sorted[n - 1].first) {
-      cell_key.push_back(sorted[n].first);
-      cell_begin.push_back(n);
+  // Each unordered pair of neighbouring cells once: the cell itself and its four neighbours
+  // (ix + 1, iy - 1..iy + 1), (ix, iy + 1).
+  constexpr int kNeighbours[4][2] = {{1, -1}, {1, 0}, {1, 1}, {0, 1}};
+  for (int64_t ix = 0; ix < nx; ++ix)
+    for (int64_t iy = 0; iy < ny; ++iy) {
+      const size_t c = static_cast<size_t>(ix * ny + iy);
+      for (size_t p = begin[c]; p < begin[c + 1]; ++p)
+        for (size_t q = p + 1; q < begin[c + 1]; ++q)
+          if (counted(lines, sorted[p], sorted[q], gap)) f(sorted[p], sorted[q]);
+      for (const auto& d : kNeighbours) {
+        const int64_t jx = ix + d[0], jy = iy + d[1];
+        if (jx >= nx || jy < 0 || jy >= ny) continue;
+        const size_t o = static_cast<size_t>(jx * ny + jy);
+        for (size_t p = begin[c]; p < begin[c + 1]; ++p)
+          for (size_t q = begin[o]; q < begin[o + 1]; ++q)
+            if (counted(lines, sorted[p], sorted[q], gap)) f(sorted[p], sorted[q]);
+      }
     }
-  cell_begin.push_back(sorted.size());
-  for (size_t c = 0; c < cell_key.size(); ++c) {
-    const int64_t ix = cell_key[c] >> (2 * kBits), iy = (cell_key[c] >> kBits) & kMask,
-                  iz = cell_key[c] & kMask;
-    for (int dx = -1; dx <= 1; ++dx)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dz = -1; dz <= 1; ++dz) {
-          if (ix + dx < 0 || iy + dy < 0 || iz + dz < 0) continue;
-          const int64_t k = key(ix + dx, iy + dy, iz + dz);
-          if (k < cell_key[c]) continue;
-          const auto it = std::lower_bound(cell_key.begin(), cell_key.end(), k);
-          if (it == cell_key.end() || *it != k) continue;
-          const size_t o = static_cast<size_t>(it - cell_key.begin());
-          for (size_t p = cell_begin[c]; p < cell_begin[c + 1]; ++p)
-            for (size_t q = o == c ? p + 1 : cell_begin[o]; q < cell_begin[o + 1]; ++q) {
-              const FlatSegment& a = segs[sorted[p].second];
-              const FlatSegment& b = segs[sorted[q].second];
-              if (counted(lines, a, b, gap)) f(a, b);
-            }
-        }
-  }
 }
 
 int triple_sign(const FlatSegment& a, const FlatSegment& b, const SegmentClosest& c) {
@@ -155,6 +151,25 @@ int crossing_sign(const YarnPolylines& lines, YarnSegment a, YarnSegment b) {
   return triple_sign(segment_of(lines, a.course, i), segment_of(lines, b.course, k), best);
 }
 
+// C(u) of an interpolated (non-rational: weights 1) curve by de Boor's algorithm on the stack:
+// the measure samples ~100k points per state of a 40 x 40 chart, and evaluate() also forms
+// two derivatives. Equal to evaluate(curve, u).point to round-off.
+Vec3 point_on(const NurbsCurve& c, double u) {
+  const int p = c.degree;
+  u = std::min(std::max(u, c.u_min()), c.u_max());
+  const int s = find_span(static_cast<int>(c.control.size()), p, c.knots, u);
+  Vec3 d[kMaxNurbsDegree + 1];
+  for (int j = 0; j <= p; ++j) d[j] = c.control[s - p + j];
+  for (int r = 1; r <= p; ++r)
+    for (int j = p; j >= r; --j) {
+      const int i = s - p + j;
+      const double span = c.knots[i + p - r + 1] - c.knots[i];
+      const double alpha = span == 0.0 ? 0.0 : (u - c.knots[i]) / span;
+      d[j] = (1.0 - alpha) * d[j - 1] + alpha * d[j];
+    }
+  return d[p];
+}
+
 }  // namespace
 
 YarnPolylines yarn_polylines(const KnitModel& m, const std::vector<Vec3>& positions,
@@ -170,9 +185,8 @@ YarnPolylines yarn_polylines(const KnitModel& m, const std::vector<Vec3>& positi
     v.reserve(samples_per_interval * (yarn.size() - 1) + 1);
     for (size_t k = 0; k + 1 < yarn.size(); ++k)
       for (int s = 0; s < samples_per_interval; ++s)
-        v.push_back(
-            evaluate(curve, ubar[k] + (ubar[k + 1] - ubar[k]) * s / samples_per_interval).point);
-    v.push_back(evaluate(curve, ubar.back()).point);
+        v.push_back(point_on(curve, ubar[k] + (ubar[k + 1] - ubar[k]) * s / samples_per_interval));
+    v.push_back(point_on(curve, ubar.back()));
     std::vector<double> arc(v.size(), 0.0);
     for (size_t k = 1; k < v.size(); ++k) arc[k] = arc[k - 1] + norm(v[k] - v[k - 1]);
     out.vertices.push_back(std::move(v));
@@ -182,7 +196,7 @@ YarnPolylines yarn_polylines(const KnitModel& m, const std::vector<Vec3>& positi
 }
 
 YarnClearance yarn_clearance(const KnitModel& m, const YarnPolylines& lines,
-                             double search_radius_over_r) {
+                             double search_radius_over_r, const YarnClearance* hint) {
   const double r = m.params.loop_radius;
   YarnClearance best;
   best.over_r = search_radius_over_r;
@@ -191,22 +205,49 @@ YarnClearance yarn_clearance(const KnitModel& m, const YarnPolylines& lines,
       best.over_r = std::nan("");
       return best;
     }
-  const std::vector<FlatSegment> segs = flatten(lines);
   double d_best = search_radius_over_r * r;
-  for_each_near_pair(lines, segs, search_radius_over_r * r, kSameYarnGap * r,
-                     [&](const FlatSegment& a, const FlatSegment& b) {
-                       // Lower bound: midpoint distance less the half lengths.
-                       const double bound = norm(0.5 * (a.p0 + a.p1 - b.p0 - b.p1)) -
-                                            0.5 * (norm(a.p1 - a.p0) + norm(b.p1 - b.p0));
-                       if (bound >= d_best) return;
-                       const SegmentClosest c = closest_points(a.p0, a.p1, b.p0, b.p1);
-                       if (c.distance < d_best) {
-                         d_best = c.distance;
-                         best.a = {a.course, a.segment};
-                         best.b = {b.course, b.segment};
-                         best.where = 0.5 * (c.a + c.b);
-                       }
-                     });
+  const double gap = kSameYarnGap * r;
+  auto valid = [&](YarnSegment s) {
+    return s.course >= 0 && s.course < static_cast<int>(lines.vertices.size()) && s.segment >= 0 &&
+           s.segment + 1 < static_cast<int>(lines.vertices[s.course].size());
+  };
+  // The hinted pair's distance in these lines is an upper bound of the clearance: only pairs
+  // closer than it need the grid (a smaller search radius, fewer cells and pairs). Exact.
+  if (hint != nullptr && valid(hint->a) && valid(hint->b)) {
+    const FlatSegment a = segment_of(lines, hint->a.course, hint->a.segment);
+    const FlatSegment b = segment_of(lines, hint->b.course, hint->b.segment);
+    if (counted(lines, a, b, gap)) {
+      const SegmentClosest c = closest_points(a.p0, a.p1, b.p0, b.p1);
+      if (c.distance < d_best) {
+        d_best = c.distance;
+        best.a = hint->a;
+        best.b = hint->b;
+        best.where = 0.5 * (c.a + c.b);
+      }
+    }
+  }
+  const std::vector<FlatSegment> segs = flatten(lines);
+  for_each_near_pair(lines, segs, d_best, gap, [&](const FlatSegment& a, const FlatSegment& b) {
+    // Lower bounds: the gap between the bounding boxes along each axis, then the midpoint
+    // distance less the half lengths.
+    auto apart = [&](double a0, double a1, double b0, double b1) {
+      return std::min(b0, b1) - std::max(a0, a1) >= d_best ||
+             std::min(a0, a1) - std::max(b0, b1) >= d_best;
+    };
+    if (apart(a.p0.x, a.p1.x, b.p0.x, b.p1.x) || apart(a.p0.y, a.p1.y, b.p0.y, b.p1.y) ||
+        apart(a.p0.z, a.p1.z, b.p0.z, b.p1.z))
+      return;
+    const double bound =
+        norm(0.5 * (a.p0 + a.p1 - b.p0 - b.p1)) - 0.5 * (norm(a.p1 - a.p0) + norm(b.p1 - b.p0));
+    if (bound >= d_best) return;
+    const SegmentClosest c = closest_points(a.p0, a.p1, b.p0, b.p1);
+    if (c.distance < d_best) {
+      d_best = c.distance;
+      best.a = {a.course, a.segment};
+      best.b = {b.course, b.segment};
+      best.where = 0.5 * (c.a + c.b);
+    }
+  });
   best.over_r = d_best / r;
   return best;
 }
@@ -241,28 +282,36 @@ CrossingCheck check_crossings(const std::vector<YarnCrossing>& crossings,
   return out;
 }
 
-ClearanceOverRun::ClearanceOverRun(const KnitModel& m, RunObserver* next, double resample_over_r,
-                                   double resample_fraction)
-    : m_(m),
-      next_(next),
-      resample_(resample_over_r * m.params.loop_radius),
-      fraction_(resample_fraction) {}
+ClearanceOverRun::ClearanceOverRun(const KnitModel& m, RunObserver* next, double resample_over_r)
+    : m_(m), next_(next), tau_(resample_over_r) {}
 
 void ClearanceOverRun::observe(double t, const double* x, bool force) {
+  const double r = m_.params.loop_radius;
   m_.network.all_positions(t, x, pos_);
-  if (!force && !last_.empty()) {
-    double moved = 0.0;
+  double moved = 0.0;  // interlacing points, since the last measured state, m
+  if (!last_.empty()) {
     for (size_t k = 0; k < pos_.size(); ++k) moved = std::max(moved, norm(pos_[k] - last_[k]));
-    if (moved < std::max(resample_, fraction_ * last_clearance_)) return;
+    if (!force && moved < tau_ * r) return;
   }
-  last_ = pos_;
   ++measured_;
   YarnClearance c;
-  if (std::all_of(pos_.begin(), pos_.end(), is_finite))
-    c = yarn_clearance(m_, yarn_polylines(m_, pos_));
-  else
+  if (std::all_of(pos_.begin(), pos_.end(), is_finite)) {
+    YarnPolylines lines = yarn_polylines(m_, pos_);
+    c = yarn_clearance(m_, lines, 2.0, last_clearance_.a.course >= 0 ? &last_clearance_ : nullptr);
+    if (moved > 0.0 && !last_lines_.vertices.empty()) {
+      double vertex_moved = 0.0;
+      for (size_t j = 0; j < lines.vertices.size(); ++j)
+        for (size_t k = 0; k < lines.vertices[j].size(); ++k)
+          vertex_moved =
+              std::max(vertex_moved, norm(lines.vertices[j][k] - last_lines_.vertices[j][k]));
+      amplification_ = std::max(amplification_, vertex_moved / moved);
+    }
+    last_lines_ = std::move(lines);
+    last_clearance_ = c;
+  } else {
     c.over_r = std::nan("");
-  last_clearance_ = std::isfinite(c.over_r) ? c.over_r * m_.params.loop_radius : 0.0;
+  }
+  last_ = pos_;
   if (measured_ > 1 && std::isnan(min_.over_r)) return;  // a non-finite state stays the verdict
   if (measured_ == 1 || std::isnan(c.over_r) || c.over_r < min_.over_r) {
     min_ = c;
