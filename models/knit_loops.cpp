@@ -9,8 +9,13 @@ namespace knitsim {
 
 namespace {
 
-// A tuck's head lies this many loop radii behind the head of the held loop (header).
-constexpr double kTuckHeadDepth = 2.0;
+// A tuck's head lies this many loop radii behind the head of the held loop, each further tuck
+// stacked on the same needle kStackedTuckStep more; its legs come forward by kTuckLegForward r
+// (a knit loop's by 2 r). Header: "Tuck and held-loop geometry".
+constexpr double kTuckHeadDepth = 3.0;
+constexpr double kStackedTuckStep = 2.0;
+constexpr double kTuckLegForward = 1.0;
+constexpr double kKnitLegForward = 2.0;
 
 const char* const kAcceptedLetters = "accepted letters: K knit, T tuck, M miss";
 
@@ -120,13 +125,19 @@ LoopTypeValues loop_type_values(const KnitModel& m, const CourseGeometry& g,
   const double r = m.params.loop_radius;
   const Frame& f = g.frames[loop.wale];
   const Vec3 P = x[loop.upper];
-  const double back = loop.kind == Stitch::Tuck ? kTuckHeadDepth * r : 0.0;
+  int stacked = 0;  // tucks of this wale's stack below this one
+  if (loop.kind == Stitch::Tuck)
+    for (int c = loop.course - 1; c >= 0 && m.chart.at(loop.wale, c) == Stitch::Tuck; --c)
+      ++stacked;
+  const double back =
+      loop.kind == Stitch::Tuck ? (kTuckHeadDepth + kStackedTuckStep * stacked) * r : 0.0;
+  const double forward = loop.kind == Stitch::Tuck ? kTuckLegForward : kKnitLegForward;
   const Vec3 T0 = g.sinkers[loop.wale], T8 = g.sinkers[loop.wale + 1];
   const Vec3 T3 = P - 3.0 * r * f.ex - back * f.n;
   const Vec3 T4 = P + r * f.ey - (r + back) * f.n;
   const Vec3 T5 = P + 3.0 * r * f.ex - back * f.n;
-  const Vec3 T2 = 0.5 * (T0 + T4) + 2.0 * r * f.n;
-  const Vec3 T6 = 0.5 * (T4 + T8) + 2.0 * r * f.n;
+  const Vec3 T2 = 0.5 * (T0 + T4) + forward * r * f.n;
+  const Vec3 T6 = 0.5 * (T4 + T8) + forward * r * f.n;
   if (loop.kind == Stitch::Tuck) return {{0, 2, 3, 4, 5, 6, 8}, {T0, T2, T3, T4, T5, T6, T8}};
   const Vec3 T1 = f.B - r * f.ex, T7 = f.B + r * f.ex;
   return {{0, 1, 2, 3, 4, 5, 6, 7, 8}, {T0, T1, T2, T3, T4, T5, T6, T7, T8}};
@@ -233,6 +244,17 @@ void KnitParams::validate() const {
   if (max_points < 1) bad("max_points", static_cast<double>(max_points), "must be >= 1");
 }
 
+const char* to_string(KnitNetwork network) {
+  return network == KnitNetwork::Paper ? "paper" : "stabilised";
+}
+
+KnitNetwork parse_knit_network(const std::string& name) {
+  if (name == "stabilised") return KnitNetwork::Stabilised;
+  if (name == "paper") return KnitNetwork::Paper;
+  throw std::invalid_argument("knit.network = " + name +
+                              ": must be stabilised (the default) or paper (paper 2's network)");
+}
+
 const char* to_string(KnitSpringKind kind) {
   switch (kind) {
     case KnitSpringKind::Wale:
@@ -326,7 +348,7 @@ KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
     }
   }
 
-  if (p.stabiliser_ratio > 0.0) {
+  if (!p.mechanism()) {
     const double s = p.stabiliser_ratio;
     auto link = [&](int a, int b, double k, KnitSpringKind kind) {
       add(a, b, norm(points[b].rest - points[a].rest), k, kind);
@@ -423,7 +445,7 @@ std::vector<std::vector<Vec3>> course_yarn_points(const KnitModel& m,
 std::vector<NurbsCurve> course_curves(const KnitModel& m, const std::vector<Vec3>& positions) {
   std::vector<NurbsCurve> curves;
   for (const auto& yarn : course_yarn_points(m, positions))
-    curves.push_back(interpolate_cubic(yarn, Parametrization::ChordLength));
+    curves.push_back(interpolate_cubic(yarn, kYarnParametrization));
   return curves;
 }
 

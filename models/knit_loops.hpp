@@ -50,17 +50,33 @@
 //   path error (implicit-euler converges to Verlet's state as dt -> 0). Large charts with
 //   many tucks or misses creep slowly towards it (soft modes), and implicit-euler's large
 //   steps wander along the zero-energy modes.
-// Stabiliser (opt-in, KnitParams::stabiliser_ratio = s > 0; a departure from paper 2 Sec. 2.2,
-//   which has no such springs; s = 0, the default, is the paper's model exactly): it removes
-//   the mechanism by adding, between existing interlacing points,
+// Networks (KnitParams::network; `knit --set knit.network=stabilised|paper`):
+//   stabilised (the default; a departure from paper 2 Sec. 2.2, which has no such springs)
+//            paper 2's springs plus a stabiliser that removes the in-plane mechanism, with
+//            s = KnitParams::stabiliser_ratio (default 0.1), between existing interlacing points:
 //   shear    both diagonals of every quad (i,L) (i+1,L) (i,L+1) (i+1,L+1) whose four corners
 //            exist, stiffness s (k_w + k_c)/2;
 //   bending  (i,L) - (i,L+2) along a wale, stiffness s k_w, and (i,L) - (i+2,L) along a level,
 //            stiffness s k_c, where the point between them exists too (no bending spring
 //            spans a held loop or a float: those keep the paper's pull).
-//   Rest lengths are the rest distances, so a plain chart stays exactly at rest. With it the
-//   steady state is unique and a tuck's displacement decays with distance (tests/test_knit.cpp,
-//   paper_repro/knit/README.md); the pull a tuck exerts is then shared with these springs.
+//            Rest lengths are the rest distances, so a plain chart stays exactly at rest. With it
+//            the in-plane steady state is unique and a tuck's displacement decays with distance
+//            (tests/test_knit.cpp, paper_repro/knit/README.md); the pull a tuck exerts is then
+//            shared with these springs.
+//            Basis of s (docs/knit.md): the yarn's bending rigidity B. A loop's leg of length h
+//            held at both interlacing points resists a sideways (shearing) displacement with the
+//            guided-beam stiffness 12 B / h^3; s = 12 B / (k h^3). B of a yarn of diameter d = r
+//            whose fibres slip freely (the lower bound of a yarn's rigidity): n_f fibres,
+//            n_f = phi (d / d_f)^2, each E_f pi d_f^4 / 64; cotton E_f ~ 7 GPa, d_f ~ 12 um,
+//            packing phi ~ 0.5 give n_f ~ 28 and B ~ 2.0e-10 N m^2, hence s ~ 0.10 at the default
+//            r and k = 100 N/m. An estimate to a factor of a few (fibre modulus and packing
+//            vary): s is a key, knit.stabiliser in [0, 1].
+//            Out of the plane: every spring of a flat chart lies in z = 0, so at rest no spring
+//            resists a z displacement to first order (the stiffness's z block is zero; tension
+//            stiffens it once the fabric is strained). The stabiliser does not change that.
+//   paper    paper 2's network exactly (wale, course, tuck and float springs; s is ignored):
+//            a mechanism, see above. knit.stabiliser = 0 gives the same network. `knitsim knit`
+//            prints one warning line for it.
 // State layout: that of SpringNetwork (3 dof per free point, in point-id order); point ids
 //   are level-major: all points of level 0 by wale, then level 1, ...
 //
@@ -85,11 +101,23 @@
 // so the head of loop (i,j-1) passes behind the legs of loop (i,j) near its feet, and its
 // upper legs in front of that loop's sinker arcs: the new loop passes through the old one,
 // the courses intermesh. A tuck loop is the open arc T0 T2 T3 T4 T5 T6 T8 (no feet) with
-// its head T3..T5 pushed back by 2r behind the head of the held loop it shares the needle
-// with (SPEC 2.9 leaves the two coincident; on the face the tuck hides behind it). A float
-// passes behind each missed wale at F_i = B_i - r e_y - r n. Each course's yarn is one C^2
-// cubic NURBS through its points in wale order (T8 of a loop = T0 of the next), chord-length
-// parameters (src/geometry/nurbs.hpp).
+// its head T3..T5 pushed back by 3r behind the head of the held loop it shares the needle
+// with (SPEC 2.9 leaves the two coincident; on the face the tuck hides behind it), 2r more for
+// each tuck stacked below it on the same needle, and its legs T2, T6 forward by r (not 2r) of
+// the midpoints. A float passes behind each missed wale at F_i = B_i - r e_y - r n. Each
+// course's yarn is one C^2 cubic NURBS through its points in wale order (T8 of a loop = T0 of
+// the next), centripetal parameters (src/geometry/nurbs.hpp).
+// Tuck and held-loop geometry (issue 31; measured by src/measure/yarn_measures.hpp, clearance
+// at rest in units of r): with SPEC 2.9's relations as first written (tuck head 2r back, legs
+// 2r forward, chord-length parameters) the rest state already had yarns of different courses
+// within 0.216 r (a tuck's leg against the next course's sinker arc), stacked tucks' heads
+// coincident (0) and a loop held over two courses crossing its own legs (4e-6: the chord-length
+// cubic swings each long leg across the loop after the short sinker-to-foot interval).
+// Centripetal parameters (which damp that overshoot at uneven intervals), the tuck head 3r back
+// and its legs r forward give 1.212 r on plain jersey (1.206 r before), 1.212 r on
+// single_tuck and tucks40, 0.999 r on several_misses (the held loop's legs); stacked tucks
+// (several_tucks) still come within ~0.1 r of each other's legs where they cross: a lever
+// left (docs/knit.md).
 //
 // Failure modes: a bad chart or parameters throw std::invalid_argument at set-up (chart
 // messages name row and column). Geometry functions expect positions of every point
@@ -101,8 +129,8 @@
 #include <vector>
 
 #include "models/spring_network.hpp"
-#include "src/geometry/nurbs.hpp"
 #include "src/core/vec3.hpp"
+#include "src/geometry/nurbs.hpp"
 
 namespace knitsim {
 
@@ -123,6 +151,12 @@ KnitChart parse_knit_chart(const std::string& text);
 
 enum class KnitPins { None, Bottom, Top, BottomAndTop };  // which edge levels are held fixed
 
+// The spring network (see above): knit.network = stabilised (default) | paper.
+enum class KnitNetwork { Stabilised, Paper };
+const char* to_string(KnitNetwork network);
+// "stabilised" or "paper"; throws std::invalid_argument naming knit.network and the names.
+KnitNetwork parse_knit_network(const std::string& name);
+
 struct KnitParams {
   // r, m: 14 wales/cm -> w = 8r = 1/14 cm -> r = 1/1120 cm ~ 8.93e-5 m.
   double loop_radius = 1e-2 / 14.0 / 8.0;
@@ -140,15 +174,20 @@ struct KnitParams {
   double areal_density = 41.65;  // rho_A, g/m^2 (paper 1 Table 2, sample 1)
   bool gravity = false;          // paper 2 ignores external forces; on: g = 9.81 m/s^2 along -y
   KnitPins pins = KnitPins::None;
+  // Which network (see above): the stabilised default, or paper 2's bare network.
+  KnitNetwork network = KnitNetwork::Stabilised;
   // s, dimensionless, in [0, 1]: stiffness of the stabiliser's shear and bending springs
-  // relative to k_w, k_c (see above); 0 = off, paper 2's network.
-  double stabiliser_ratio = 0.0;
+  // relative to k_w, k_c (see above; 0.1 from the yarn's bending rigidity); 0 = off, which is
+  // paper 2's network whatever `network` says. Ignored for KnitNetwork::Paper.
+  double stabiliser_ratio = 0.1;
   long max_points = 4'000'000;  // refuse larger charts before allocating
 
   // Throws std::invalid_argument naming the field by its `knit --set` key (knit.loop_radius,
   // knit.wale_stiffness, knit.course_stiffness, knit.damping, knit.areal_density,
   // knit.stabiliser; max_points has none) and the accepted range with units.
   void validate() const;
+  // True when the network has no stabiliser (paper 2's mechanism): network Paper or s = 0.
+  bool mechanism() const { return network == KnitNetwork::Paper || stabiliser_ratio == 0.0; }
   double wale_spacing() const { return 8.0 * loop_radius; }    // w, m
   double course_spacing() const { return 7.0 * loop_radius; }  // h, m
 };
@@ -206,7 +245,10 @@ std::vector<LoopTypeValues> type_value_points(const KnitModel& model,
 std::vector<std::vector<Vec3>> course_yarn_points(const KnitModel& model,
                                                   const std::vector<Vec3>& positions);
 
-// Per course, the C^2 cubic NURBS through course_yarn_points (chord-length parameters).
+// The yarn's interpolation parameters (see "Tuck and held-loop geometry" above).
+constexpr Parametrization kYarnParametrization = Parametrization::Centripetal;
+
+// Per course, the C^2 cubic NURBS through course_yarn_points (centripetal parameters).
 std::vector<NurbsCurve> course_curves(const KnitModel& model, const std::vector<Vec3>& positions);
 
 // Per course, its centreline sampled uniformly in arc length with samples_per_point samples

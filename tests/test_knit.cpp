@@ -26,7 +26,15 @@ std::string chart_file(const std::string& name) {
   return s.str();
 }
 
-KnitModel model_of(const std::string& text, KnitParams p = {}) {
+// Paper 2's bare network (knit.network = paper): the tests of the paper's mechanics pin it;
+// the stabilised default is named where a test is about it.
+KnitParams paper_network() {
+  KnitParams p;
+  p.network = KnitNetwork::Paper;
+  return p;
+}
+
+KnitModel model_of(const std::string& text, KnitParams p = paper_network()) {
   return build_knit(parse_knit_chart(text), p);
 }
 
@@ -340,7 +348,7 @@ TEST_CASE("centrelines interpolate the yarn points and follow the deformed point
   const auto yarns = course_yarn_points(m, pos);
   const auto curves = course_curves(m, pos);
   for (size_t j = 0; j < yarns.size(); ++j) {
-    const auto ubar = interpolation_parameters(yarns[j], Parametrization::ChordLength);
+    const auto ubar = interpolation_parameters(yarns[j], kYarnParametrization);
     double worst = 0.0;
     for (size_t k = 0; k < yarns[j].size(); ++k)
       worst = std::max(worst, norm(evaluate(curves[j], ubar[k]).point - yarns[j][k]));
@@ -420,7 +428,7 @@ TEST_CASE("verlet and implicit-euler reach the same steady state as implicit-eul
   // (first order) converges to it: the difference falls with dt, to below 1 % of r. Heavier
   // damping than the default (2e-3 instead of 5e-4 N s/m) keeps the paths smooth: with
   // lighter damping the ringing mechanism amplifies path errors (3 % of r at dt 2.5e-5).
-  KnitParams p;
+  KnitParams p = paper_network();
   p.damping = 2e-3;
   const KnitModel m = model_of(chart_file("single_tuck.chart"), p);
   const double r = m.params.loop_radius;
@@ -499,6 +507,24 @@ TEST_CASE("stabiliser: a plain chart stays at rest; shear and bending springs ha
   }
   p.stabiliser_ratio = 1.5;
   CHECK_THROWS_WITH(p.validate(), "knit.stabiliser = 1.5: must be in [0, 1]");
+
+  // The default is the stabilised network at s = 0.1; knit.network = paper and s = 0 are both
+  // paper 2's network, spring for spring.
+  CHECK(KnitParams{}.network == KnitNetwork::Stabilised);
+  CHECK(KnitParams{}.stabiliser_ratio == 0.1);
+  CHECK(!KnitParams{}.mechanism());
+  const KnitModel by_default = build_knit(parse_knit_chart(chart_file("single_tuck.chart")), {});
+  CHECK(by_default.network.spec().springs.size() == on.network.spec().springs.size());
+  KnitParams zero;
+  zero.stabiliser_ratio = 0.0;
+  CHECK(zero.mechanism());
+  CHECK(model_of(chart_file("single_tuck.chart"), zero).network.spec().springs.size() ==
+        off.network.spec().springs.size());
+  CHECK(parse_knit_network("paper") == KnitNetwork::Paper);
+  CHECK(parse_knit_network("stabilised") == KnitNetwork::Stabilised);
+  CHECK_THROWS_WITH(parse_knit_network("bare"),
+                    "knit.network = bare: must be stabilised (the default) or paper (paper 2's "
+                    "network)");
 }
 
 TEST_CASE("stabiliser: a tuck's displacement decays with distance and the state is unique") {

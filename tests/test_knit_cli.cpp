@@ -96,6 +96,14 @@ TEST_CASE("knitsim knit: a small tuck chart settles and its outputs agree with t
   CHECK(summary["residual"].get<double>() <= 1e-8);
   CHECK(summary["frames"].size() == 3);
   CHECK(summary["frames"][0]["t"] == 0.0);
+  // The yarn measures: the minimum over the run is no larger than the rest and end values,
+  // and the designed crossings are counted.
+  const auto& yarn = summary["yarn"];
+  CHECK(yarn["clearance_min_over_r"].get<double>() <= yarn["clearance_end_over_r"].get<double>());
+  CHECK(yarn["clearance_min_over_r"].get<double>() <= yarn["clearance_rest_over_r"].get<double>());
+  CHECK(yarn["clearance_measured_states"].get<int>() >= 2);
+  CHECK(yarn["crossings_designed"].get<int>() > 0);
+  CHECK(yarn["crossings_changed"].get<int>() >= 0);
   // One header line plus one row per particle; T0..T8 per knit loop, 7 per tuck loop.
   CHECK(count_lines(slurp(out / "points.csv")) == 1 + static_cast<int>(m.points.size()));
   CHECK(count_lines(slurp(out / "typevalue.csv")) == 1 + 9 * 14 + 7 * 1);
@@ -120,6 +128,28 @@ TEST_CASE("knitsim knit: the stabilised velocity_atol default is for adaptive me
   CHECK(summary["options"]["velocity_atol"] == 0.0);
 }
 
+TEST_CASE("knitsim knit: paper 2's network by name warns once that it is a mechanism") {
+  const TempDir tmp("knit-paper");
+  std::string err;
+  REQUIRE(run_small_chart(tmp, "--no-pictures", err) == 0);
+  CHECK(err.find("mechanism") == std::string::npos);  // the stabilised default
+  auto summary = nlohmann::json::parse(slurp(tmp.path / "out" / "summary.json"));
+  CHECK(summary["params"]["network"] == "stabilised");
+  CHECK(summary["params"]["stabiliser_ratio"] == 0.1);
+  for (const char* set : {"knit.network=paper", "knit.stabiliser=0"}) {
+    CAPTURE(set);
+    REQUIRE(run_small_chart(tmp, std::string("--no-pictures --set ") + set, err) == 0);
+    const size_t at = err.find("warning: ");
+    REQUIRE(at != std::string::npos);
+    CHECK(err.find("is a mechanism") != std::string::npos);
+    CHECK(err.find("depends on the path") != std::string::npos);
+    CHECK(err.find("mechanism", err.find("mechanism") + 40) == std::string::npos);  // one line
+    summary = nlohmann::json::parse(slurp(tmp.path / "out" / "summary.json"));
+    CHECK(summary["params"]["network"] == "paper");
+    CHECK(summary["springs_by_kind"]["shear"] == 0);
+  }
+}
+
 TEST_CASE("knitsim knit: a run that ends in a non-finite state still writes its outputs") {
   // Springs of 1e299 N/m overflow the forces in a few steps: the run ends `diverged` (exit 3)
   // and summary.json and points.csv are written; the non-finite state has no centrelines (they
@@ -128,7 +158,10 @@ TEST_CASE("knitsim knit: a run that ends in a non-finite state still writes its 
   const TempDir tmp("knit-diverged");
   std::string err;
   const int status =
-      run_small_chart(tmp, "--set knit.wale_stiffness=1e299 --max-steps 3 --no-pictures", err);
+      run_small_chart(tmp,
+                      "--set knit.network=paper --set knit.wale_stiffness=1e299 --max-steps 3 "
+                      "--no-pictures",
+                      err);
   INFO(err);
   CHECK(status == 3);
   CHECK(err.find("NURBS") == std::string::npos);
@@ -157,6 +190,11 @@ TEST_CASE("knitsim knit: bad input exits 2 with one line and writes nothing") {
        "valid keys: knit.loop_radius"},
       {"--chart '" + (tmp / "good.chart").string() + "' --set knit.stabiliser=2",
        "knit.stabiliser = 2: must be in [0, 1]"},
+      {"--chart '" + (tmp / "good.chart").string() + "' --set knit.network=bare",
+       "knit.network = bare: must be stabilised (the default) or paper"},
+      {"--chart '" + (tmp / "good.chart").string() +
+           "' --set knit.network=paper --set knit.stabiliser=0.1",
+       "paper 2's network has no stabiliser"},
       {"--chart '" + (tmp / "good.chart").string() + "' --integrator nope", "--integrator = nope"},
       {"--chart '" + (tmp / "good.chart").string() + "' --newton-solver lu",
        "--newton-solver: lu not in {klu,ldl,cg-ldl}"},

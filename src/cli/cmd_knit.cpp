@@ -21,7 +21,12 @@
 //   frames/centerlines_NNN.vtk, frames/frame_NNN.png   the captured frames (below)
 //   before.png, after.png   front views at rest and at the end (yarns as z-buffered tubes,
 //                    render_strokes_png; interlacing points as dots); --no-pictures skips every PNG
-//   summary.json, manifest.json
+//   summary.json, manifest.json   summary.json's "yarn" block: the clearance between yarn
+//                    centrelines (src/measure/yarn_measures.hpp) at rest, at the end and its
+//                    minimum over the run (where and when), in r, and how many of the designed
+//                    crossings changed over/under order at the end; stdout shows the same, and a
+//                    run whose clearance fell below kClearanceWarning r or whose crossings
+//                    changed prints one `warning:` line
 //   state.json       x, v at t_final and what was integrated, for --continue (write_run_state;
 //                    omitted if not finite)
 //   steps.csv        with --step-history: step,t,h,order,residual (src/io/step_log.hpp)
@@ -36,14 +41,18 @@
 // whatever the number of checks. summary.json lists each frame's t, residual and largest
 // displacement.
 //
-// Velocity tolerance. With the stabiliser on (knit.stabiliser > 0) and no --velocity-atol, the
+// Network: the stabilised default or, by knit.network = paper (or knit.stabiliser = 0), paper 2's
+// bare network, which prints one warning line (a mechanism: its steady state depends on the
+// path). models/knit_loops.hpp, docs/knit.md.
+//
+// Velocity tolerance. With the stabiliser on (the default network) and no --velocity-atol, the
 // run uses velocity_atol = kStabilisedVelocityAtol (1e-3 m/s, ~ atol 1e-9 m x 1e6 rad/s, above
 // the network's fastest modes, omega ~ 2e5 rad/s): the stabilised steady state is unique, so
 // the ringing of the stiff modes need not be followed (IntegratorOptions::velocity_atol). On
 // tucks40.chart cvode-bdf then takes 4x fewer steps (425) with the same shape (< 1e-5 r;
-// experiments/benchmark/README.md, "Knit case"). Paper 2's network (stabiliser 0) is a mechanism
-// whose end state depends on the path, so it keeps atol on the velocities too: a velocity_atol
-// of 2e-4 m/s moves several_tucks' end state by 1.6e-3 r, 400x its tolerance error.
+// experiments/benchmark/README.md, "Knit case"). Paper 2's network (knit.network = paper) is a
+// mechanism whose end state depends on the path, so it keeps atol on the velocities too: a
+// velocity_atol of 2e-4 m/s moves several_tucks' end state by 1.6e-3 r, 400x its tolerance error.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
@@ -68,6 +77,7 @@
 #include "src/io/progress.hpp"
 #include "src/io/run_state.hpp"
 #include "src/io/step_log.hpp"
+#include "src/measure/yarn_measures.hpp"
 #include "src/render/render.hpp"
 #include "src/scene/scene.hpp"
 
@@ -78,6 +88,12 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr double kStabilisedVelocityAtol = 1e-3;  // m/s, see the file comment
+// A run whose yarns came closer than this (in r) warns (issue 31's target: >= 0.9 r).
+constexpr double kClearanceWarning = 0.9;
+// The clearance over the run is measured when an interlacing point has moved by 0.05 r since
+// the last measured state (src/measure/yarn_measures.hpp, ClearanceOverRun: a dip shallower than
+// 2 A 0.05 r can be missed, A the measured amplification, reported: tucks40 0.12 r).
+constexpr double kClearanceResample = 0.05;
 
 struct KnitArgs {
   std::string chart;
@@ -110,18 +126,30 @@ std::vector<SetKey> set_keys(KnitParams& p, IntegratorOptions& o) {
           {"run.equilibrium_tol", &o.equilibrium_tol}};
 }
 
+// The one --set key whose value is a name: knit.network = stabilised | paper.
+constexpr const char* kNetworkKey = "knit.network";
+
 // Applies "key=value" overrides; throws std::invalid_argument naming the bad --set.
+// knit.network = paper with an explicit knit.stabiliser > 0 is refused (the paper's network has
+// no stabiliser).
 void apply_sets(const std::vector<std::string>& sets, KnitParams& p, IntegratorOptions& o) {
   const std::vector<SetKey> keys = set_keys(p, o);
+  bool stabiliser_given = false;
   for (const std::string& s : sets) {
     const size_t eq = s.find('=');
     const std::string key = s.substr(0, eq);
+    if (key == kNetworkKey) {
+      p.network = parse_knit_network(eq == std::string::npos ? "" : s.substr(eq + 1));
+      continue;
+    }
+    stabiliser_given = stabiliser_given || key == "knit.stabiliser";
     const SetKey* found = nullptr;
     for (const SetKey& k : keys)
       if (key == k.name) found = &k;
     if (found == nullptr) {
       std::vector<std::string> names;
       for (const SetKey& k : keys) names.push_back(k.name);
+      names.push_back(kNetworkKey);
       throw std::invalid_argument(unknown_key_message(key, names));
     }
     const std::string value = eq == std::string::npos ? "" : s.substr(eq + 1);
@@ -136,6 +164,10 @@ void apply_sets(const std::vector<std::string>& sets, KnitParams& p, IntegratorO
       throw std::invalid_argument("--set " + s + ": expected " + key + "=<number>");
     *found->field = v;
   }
+  if (p.network == KnitNetwork::Paper && stabiliser_given && p.stabiliser_ratio > 0.0)
+    throw std::invalid_argument(
+        "--set knit.stabiliser with knit.network = paper: paper 2's network has no stabiliser "
+        "(drop one of them)");
 }
 
 // What a knit run integrates, as SavedRun::model (--continue): the chart, one string of stitch
@@ -149,6 +181,7 @@ nlohmann::json knit_model_keys(const KnitChart& chart, KnitParams params) {
     courses.push_back(row);
   }
   keys["chart"] = courses;
+  keys[kNetworkKey] = to_string(params.network);
   IntegratorOptions unused;
   for (const SetKey& k : set_keys(params, unused))
     if (std::string(k.name).rfind("knit.", 0) == 0) keys[k.name] = *k.field;
@@ -266,6 +299,12 @@ std::string centerlines_vtk(const std::string& title, const std::vector<CurveSam
   return os;
 }
 
+// "stabilised network (s 0.1)" or "paper 2's network (a mechanism)".
+std::string network_label(const KnitParams& p) {
+  return p.mechanism() ? "paper 2's network (a mechanism)"
+                       : "stabilised network (s " + format_number(p.stabiliser_ratio, 3) + ")";
+}
+
 // Front view of the centrelines, courses in alternating colours, interlacing points as dots.
 void render_front(const fs::path& path, const KnitModel& m, const std::vector<Vec3>& pos,
                   const std::vector<CurveSamples>& lines, const std::string& title) {
@@ -281,8 +320,8 @@ void render_front(const fs::path& path, const KnitModel& m, const std::vector<Ve
   view.front_xy = true;
   view.title = title;
   view.caption = {std::to_string(m.chart.wales) + " wales x " + std::to_string(m.chart.courses) +
-                  " courses, r = " + format_number(1e3 * m.params.loop_radius, 3) +
-                  " mm, stabiliser " + format_number(m.params.stabiliser_ratio, 3)};
+                  " courses, r = " + format_number(1e3 * m.params.loop_radius, 3) + " mm, " +
+                  network_label(m.params)};
   write_file_atomic_with(
       path, [&](const std::string& tmp) { render_strokes_png(tmp, strokes, pos, view); });
 }
@@ -294,15 +333,44 @@ double max_displacement_over_r(const KnitModel& m, const std::vector<Vec3>& pos)
 }
 
 nlohmann::json params_json(const KnitParams& p) {
-  return {{"loop_radius", p.loop_radius},           {"wale_stiffness", p.wale_stiffness},
-          {"course_stiffness", p.course_stiffness}, {"damping", p.damping},
-          {"areal_density", p.areal_density},       {"stabiliser_ratio", p.stabiliser_ratio}};
+  return {{"loop_radius", p.loop_radius},
+          {"wale_stiffness", p.wale_stiffness},
+          {"course_stiffness", p.course_stiffness},
+          {"damping", p.damping},
+          {"areal_density", p.areal_density},
+          {"stabiliser_ratio", p.stabiliser_ratio},
+          {"network", p.mechanism() ? "paper" : "stabilised"}};
+}
+
+// The yarn measures of a run (src/measure/yarn_measures.hpp), in units of r.
+struct KnitMeasures {
+  double rest_clearance = 0.0;  // at rest (t = 0 of the chart, whatever --continue gave)
+  double end_clearance = 0.0;
+  YarnClearance min_clearance;  // over the measured states of the run, start and end included
+  double t_min_clearance = 0.0;
+  int measured_states = 0;
+  double min_resolution = 0.0;  // 2 A tau: a deeper dip between measured states would be seen
+  CrossingCheck crossings;      // at the end against the rest state
+};
+
+nlohmann::json measures_json(const KnitMeasures& k) {
+  const YarnClearance& c = k.min_clearance;
+  return {{"clearance_min_over_r", c.over_r},
+          {"clearance_min_t", k.t_min_clearance},
+          {"clearance_min_courses", {c.a.course, c.b.course}},
+          {"clearance_min_where", {c.where.x, c.where.y, c.where.z}},
+          {"clearance_end_over_r", k.end_clearance},
+          {"clearance_rest_over_r", k.rest_clearance},
+          {"clearance_measured_states", k.measured_states},
+          {"clearance_min_resolution_over_r", k.min_resolution},
+          {"crossings_designed", k.crossings.designed},
+          {"crossings_changed", k.crossings.changed}};
 }
 
 void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m,
                    const IntegratorOptions& opt, const RunStats& stats,
                    const std::vector<double>& x, const std::vector<FrameRecorder::Frame>& frames,
-                   double t_start) {
+                   double t_start, const KnitMeasures& measures) {
   const std::string name = fs::path(args.chart).stem().string();
   const std::vector<Vec3> pos = all_points(m, stats.t_final, x);
   const std::vector<Vec3> rest = m.rest_positions();
@@ -405,6 +473,7 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
       {"springs_by_kind", springs},
       {"dof", m.network.dof()},
       {"max_displacement_over_r", max_displacement_over_r(m, pos)},
+      {"yarn", measures_json(measures)},
       {"frames", frame_list},
       {"params", params_json(m.params)},
       {"options", options},
@@ -415,6 +484,15 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
                                 "(with gravity: or the mean point weight, "
                                 "the smaller)"},
                                {"max_displacement_over_r", "1: largest displacement / loop radius"},
+                               {"yarn",
+                                "clearance_*_over_r 1: smallest segment-to-segment distance "
+                                "between yarn centreline pieces of different courses (or one "
+                                "course, >= pi r apart along it) / loop radius, 2 = at least 2; "
+                                "clearance_min_t s; clearance_min_where m; "
+                                "clearance_min_resolution_over_r 1: a dip between measured "
+                                "states shallower than this can be missed; crossings: designed "
+                                "front-view crossings at rest and how many changed over/under "
+                                "order at the end"},
                                {"params",
                                 "loop_radius m; wale_stiffness, "
                                 "course_stiffness N/m; damping N s/m; "
@@ -429,7 +507,8 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
 
 void run(const KnitArgs& args) {
   const KnitChart chart = read_chart(args.chart);
-  const std::string integrator = args.integrator.empty() ? default_knit_integrator() : args.integrator;
+  const std::string integrator =
+      args.integrator.empty() ? default_knit_integrator() : args.integrator;
   std::unique_ptr<Integrator> integ;
   try {
     integ = make_integrator(integrator);
@@ -443,7 +522,7 @@ void run(const KnitArgs& args) {
   // The stabilised default is an error-control setting: the fixed-step methods have none, so
   // their summaries keep the (unused) value given, not 1e-3.
   const bool stabilised_default =
-      !args.velocity_atol_given && params.stabiliser_ratio > 0.0 && integ->info().adaptive;
+      !args.velocity_atol_given && !params.mechanism() && integ->info().adaptive;
   if (stabilised_default) opt.velocity_atol = kStabilisedVelocityAtol;
   try {
     opt.validate();
@@ -470,21 +549,48 @@ void run(const KnitArgs& args) {
   bool created = false;
   const fs::path dir = make_output_dir(args.out, "knit-" + name, &created);
   warn_about_run("knit.damping", params.damping, integ->info(), args.options, opt.t_max);
+  if (params.mechanism())
+    warn(std::string(params.network == KnitNetwork::Paper ? "knit.network = paper"
+                                                          : "knit.stabiliser = 0") +
+         ": paper 2's bare network is a mechanism (blocks of fabric shear and swing at no "
+         "energy); its steady state depends on the path (integrator, step, tolerances)");
   const InterruptScope interrupt;
   opt.interrupt = interrupt.flag();
   RunStats stats;
   std::vector<FrameRecorder::Frame> frames;
+  KnitMeasures measures;
+  const YarnPolylines rest_lines = yarn_polylines(model, model.rest_positions());
+  const std::vector<YarnCrossing> crossings = designed_crossings(model, rest_lines);
+  measures.rest_clearance = yarn_clearance(model, rest_lines).over_r;
   {
     ProgressLine progress(name + " " + integrator, opt.equilibrium_tol, !args.quiet);
     FrameRecorder recorder(args.frames, &progress);
     recorder.set_dof(model.network.dof());
     recorder.record(t0, x.data(), model.network.dof(), model.network.static_residual(t0, x.data()));
     StepLog steps(&recorder);
-    RunObserver* observer = args.step_history ? static_cast<RunObserver*>(&steps) : &recorder;
+    ClearanceOverRun clearance(model,
+                               args.step_history ? static_cast<RunObserver*>(&steps) : &recorder,
+                               kClearanceResample);
+    clearance.observe(t0, x.data(), true);
     try {
-      stats = run_to_equilibrium(model.network, *integ, opt, x, v, observer, t0);
+      stats = run_to_equilibrium(model.network, *integ, opt, x, v, &clearance, t0);
     } catch (const std::invalid_argument& e) {  // an option the model refuses at the start
       refuse_at_run_start(e, dir, created);
+    }
+    clearance.observe(stats.t_final, x.data(), true);
+    measures.min_clearance = clearance.minimum();
+    measures.t_min_clearance = clearance.t_of_minimum();
+    measures.measured_states = clearance.measured_states();
+    measures.min_resolution = clearance.resolution_over_r();
+    const std::vector<Vec3> end = all_points(model, stats.t_final, x);
+    if (std::all_of(end.begin(), end.end(), is_finite)) {
+      const YarnPolylines end_lines = yarn_polylines(model, end);
+      measures.end_clearance = yarn_clearance(model, end_lines).over_r;
+      measures.crossings = check_crossings(crossings, end_lines);
+    } else {
+      measures.end_clearance = std::nan("");
+      measures.crossings.designed = static_cast<int>(crossings.size());
+      measures.crossings.changed = -1;  // unknown: the end state is not finite
     }
     frames = recorder.frames();
     if (args.step_history)
@@ -492,7 +598,15 @@ void run(const KnitArgs& args) {
     else
       remove_stale_output(dir / "steps.csv");
   }
-  write_outputs(dir, args, model, opt, stats, x, frames, t0);
+  write_outputs(dir, args, model, opt, stats, x, frames, t0, measures);
+  if (measures.crossings.changed > 0 || measures.min_clearance.over_r < kClearanceWarning)
+    warn("yarns overlap: clearance down to " + format_number(measures.min_clearance.over_r, 3) +
+         " r (courses " + std::to_string(measures.min_clearance.a.course) + " and " +
+         std::to_string(measures.min_clearance.b.course) +
+         ", at t = " + format_number(measures.t_min_clearance, 3) + " s), " +
+         std::to_string(measures.crossings.changed) + " of " +
+         std::to_string(measures.crossings.designed) +
+         " designed crossings changed over/under order");
   write_run_state(
       dir,
       {"knit", {stats.t_final, x, v}, stats.integrator, stats.dt, knit_model_keys(chart, params)});
@@ -516,6 +630,13 @@ void run(const KnitArgs& args) {
          {"max displacement",
           format_number(max_displacement_over_r(model, all_points(model, stats.t_final, x)), 4) +
               " r"},
+         {"clearance", "min " + format_number(measures.min_clearance.over_r, 3) +
+                           " r over the run (" + std::to_string(measures.measured_states) +
+                           " states, to " + format_number(measures.min_resolution, 2) +
+                           " r), end " + format_number(measures.end_clearance, 3) + " r, rest " +
+                           format_number(measures.rest_clearance, 3) + " r"},
+         {"crossings", std::to_string(measures.crossings.designed) + " designed, " +
+                           std::to_string(measures.crossings.changed) + " changed over/under"},
          {"wall", format_number(1e3 * stats.wall_seconds, 4) + " ms"},
          {"outputs", dir.string() + "/"}});
     std::cout << t.text() << std::flush;
@@ -534,16 +655,17 @@ void register_knit_command(CLI::App& app) {
       "state.json and manifest.json into --out");
   cmd->add_option("--chart", args->chart, "Stitch chart file (K knit, T tuck, M miss)")->required();
   cmd->add_option("--set", args->sets,
-                  "Override a parameter, e.g. knit.stabiliser=0.1 (repeatable); keys "
-                  "knit.loop_radius, knit.wale_stiffness, knit.course_stiffness, knit.damping, "
-                  "knit.areal_density, knit.stabiliser, run.t_max, run.equilibrium_tol")
+                  "Override a parameter, e.g. knit.network=paper (repeatable); keys "
+                  "knit.network (stabilised | paper), knit.loop_radius, knit.wale_stiffness, "
+                  "knit.course_stiffness, knit.damping, knit.areal_density, knit.stabiliser, "
+                  "run.t_max, run.equilibrium_tol")
       ->allow_extra_args(false)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_option("--integrator", args->integrator,
                   "Integrator (knitsim list integrators); default cvode-bdf");
   CLI::Option* velocity_atol = add_run_options(cmd, args->options);
   velocity_atol->description(velocity_atol->get_description() +
-                             "; not given: 0, or 0.001 with knit.stabiliser > 0");
+                             "; not given: 0.001 (stabilised network), or 0 (paper network)");
   cmd->add_option("--frames", args->frames,
                   "Captured frames (the start to the last residual check), >= 1")
       ->capture_default_str();

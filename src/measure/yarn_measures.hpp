@@ -1,0 +1,152 @@
+// Yarn measures of a knit state (SPEC 2.9, issue 31 item 3): the clearance between yarn
+// centrelines and the over/under order of the designed crossings. They are read off a state;
+// nothing here enters the dynamics.
+//
+// Measuring polyline. Each course's centreline (the C^2 cubic NURBS through its yarn points,
+// models/knit_loops.hpp) is sampled at S points per interpolation interval, uniformly in the
+// curve parameter between the interval's ends ubar_k, ubar_k+1 (the curve passes through yarn
+// point k at ubar_k): vertex k S + m is at ubar_k + (m / S)(ubar_k+1 - ubar_k). The label of a
+// vertex (course, k S + m) therefore names the same piece of yarn in every state, which is what
+// the crossing check needs; the chord-length parameter is close to arc length, so the pieces
+// are near-uniform in length. With S = 8 the polyline lies within ~0.035 r of the curve (the
+// same sampling density as centerlines.csv).
+//
+// Clearance: the smallest segment-to-segment distance (continuous, src/geometry/
+// segment_distance.hpp) between polyline segments of different courses, and between segments
+// of one course whose separation along the yarn (the polyline's arc length from the end of the
+// first to the start of the second) is at least kSameYarnGap r. Why pi r: a yarn of diameter
+// d = r bent round a circle of radius d/2 comes back to within d of itself only after an arc of
+// pi d/2; pi r = pi d is twice that, so neighbouring pieces of one bend are never counted while
+// a loop's two legs (~20 r apart along the yarn) and a float and the loops it passes are.
+// Reported in units of r; pairs further apart than the search radius are not examined, so a
+// clearance equal to the search radius means "at least that".
+// Broad phase: a dense front-view (x, y) grid of cell size >= search radius + longest segment on
+// the segments' midpoints (the fabric is a few r thick: z is not binned), pairs tested in the 9
+// neighbouring cells after a bounding-box test. Cost O(segments): ~15 ms for the 40 x 40 tucks40
+// chart (~100k segments) with a hint, ~8 ms more for the polylines (2 shared cores, loaded).
+//
+// Designed crossings: at rest (the start), every pair of segments whose front-view projections
+// (x, y) cross, between different courses or non-adjacent pieces of one course as above. Each
+// carries the sign of the triple product
+//     sigma = sign( (a - b) . (t_a x t_b) )
+// with a, b the closest points of the two segments and t_a, t_b their directions (vertex k to
+// k + 1). sigma says which yarn passes over the other and with which orientation; it is
+// invariant under rigid motions and changes only if the two pieces pass through each other
+// (a - b -> 0) or turn parallel. The check at a later state: for each designed crossing the
+// closest pair of segments within +-S segments (one interval) of each rest segment, and its
+// sigma; a crossing whose sigma differs from the rest state's has changed (the yarns swapped
+// over and under there).
+//
+// Failure modes: positions of the wrong length throw std::invalid_argument (as the model's
+// geometry functions); a non-finite state gives a non-finite clearance (NaN compares false:
+// callers test std::isfinite).
+#pragma once
+
+#include <limits>
+#include <vector>
+
+#include "models/knit_loops.hpp"
+#include "solvers/integrator.hpp"
+#include "src/core/vec3.hpp"
+
+namespace knitsim {
+
+constexpr double kSameYarnGap = 3.14159265358979323846;  // in r, see above
+constexpr int kYarnSamplesPerInterval = 8;               // S
+
+struct YarnPolylines {
+  int samples_per_interval = kYarnSamplesPerInterval;
+  std::vector<std::vector<Vec3>> vertices;  // per course (bottom first): segment k = k to k+1
+  std::vector<std::vector<double>> arc;     // per course: arc length at each vertex, m
+};
+
+YarnPolylines yarn_polylines(const KnitModel& m, const std::vector<Vec3>& positions,
+                             int samples_per_interval = kYarnSamplesPerInterval);
+
+struct YarnSegment {
+  int course = -1;
+  int segment = -1;
+};
+
+struct YarnClearance {
+  double over_r = std::numeric_limits<double>::infinity();  // smallest distance / r
+  YarnSegment a, b;  // the closest pair (a.course <= b.course); course -1 if none was examined
+  Vec3 where;        // midpoint of the closest points, m
+};
+
+// search_radius_over_r: pairs further apart are not examined (then over_r = the radius).
+// hint (optional): a pair (e.g. the closest of a nearby state) whose distance in `lines`, if
+// the pair is counted, bounds the search radius; the result is the same, found faster.
+YarnClearance yarn_clearance(const KnitModel& m, const YarnPolylines& lines,
+                             double search_radius_over_r = 2.0,
+                             const YarnClearance* hint = nullptr);
+
+struct YarnCrossing {
+  YarnSegment a, b;
+  int sign = 0;  // sigma at rest, +1 or -1
+};
+
+// The designed crossings of the rest state `rest` (see above).
+std::vector<YarnCrossing> designed_crossings(const KnitModel& m, const YarnPolylines& rest);
+
+struct CrossingCheck {
+  int designed = 0;
+  int changed = 0;
+  std::vector<int> changed_index;  // into the crossings, ascending
+};
+
+CrossingCheck check_crossings(const std::vector<YarnCrossing>& crossings,
+                              const YarnPolylines& lines);
+
+// The clearance over a run (issue 31: its minimum over the whole run, not only at the end):
+// a RunObserver that measures the first state it sees, every state given to observe(..., true)
+// (the end of the run) and every residual check at which some interlacing point has moved by at
+// least tau r (tau = resample_over_r) since the last measured state.
+// What that guarantees, over the states the observer is given (every residual check; for
+// cvode-bdf and implicit-euler every step):
+//   - The clearance of the polylines is 2-Lipschitz in their vertices: every point of a segment
+//     is a convex combination of its two vertices, so if no vertex moved by more than D, no
+//     segment-to-segment distance changed by more than 2 D.
+//   - A checked state that was not measured has its interlacing points within tau r of the last
+//     measured state's, and its vertices within A tau r, A the amplification of the map from
+//     interlacing points to polyline vertices (frames, type-value points, the interpolating
+//     cubic). So its clearance is above (last measured clearance) - 2 A tau r >= (reported
+//     minimum) - 2 A tau r: a dip between measured states shallower than 2 A tau r can be missed,
+//     no deeper one.
+//   - A is not bounded a priori (the frames' unit vectors and the centripetal parameters are
+//     nonlinear); it is measured: at each measured state the ratio of the vertices' largest
+//     displacement to the interlacing points' since the previous measured state, the largest
+//     ratio over the run as amplification(). Measured ~1.2 on tucks40 (default network) and
+//     single_tuck (paper network): 2 A tau ~0.12-0.16 r at tau = 0.05; but 38-55 on
+//     several_tucks and several_misses, whose yarns pass through each other and whose frames
+//     swing (resolution several r: no guarantee there). That A
+//     stands for the unmeasured states too assumes the map is smooth on the scale tau r.
+// The states between residual checks (Verlet and the other explicit integrators check every
+// 1000 steps) are not seen. Forwards every RunObserver call to `next` (may be nullptr).
+class ClearanceOverRun final : public RunObserver {
+ public:
+  ClearanceOverRun(const KnitModel& m, RunObserver* next, double resample_over_r = 0.05);
+  void observe(double t, const double* x, bool force);  // x: free dofs, as integrators hold them
+  void on_step(double t, double h, int order) override;
+  void on_check(double t, const double* x, const double* v, double residual) override;
+  const YarnClearance& minimum() const { return min_; }
+  double t_of_minimum() const { return t_min_; }
+  int measured_states() const { return measured_; }
+  double amplification() const { return amplification_; }  // A, see above; 0 before 2 states
+  // 2 A tau: a dip below minimum() deeper than this would have been measured (see above), in r.
+  double resolution_over_r() const { return 2.0 * amplification_ * tau_; }
+
+ private:
+  const KnitModel& m_;
+  RunObserver* next_;
+  double tau_;  // 1
+  std::vector<Vec3> last_, pos_;
+  YarnPolylines last_lines_;
+  YarnClearance last_clearance_;
+  YarnClearance min_;
+  double t_min_ = 0.0;
+  double amplification_ = 0.0;
+  int measured_ = 0;
+};
+
+}  // namespace knitsim

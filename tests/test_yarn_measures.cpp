@@ -1,0 +1,167 @@
+// Yarn measures (src/measure/yarn_measures.hpp, issue 31 item 3): the segment-to-segment
+// distance, the clearance of knit states, the designed crossings and their check, and the
+// clearance over a run.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include "models/knit_loops.hpp"
+#include "src/geometry/segment_distance.hpp"
+#include "src/measure/yarn_measures.hpp"
+
+using namespace knitsim;
+
+namespace {
+
+std::string chart_file(const std::string& name) {
+  std::ifstream in(std::string(KNITSIM_CHARTS) + "/" + name);
+  REQUIRE(in.good());
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// Rotation about a unit axis by angle a (Rodrigues), applied to p.
+Vec3 rotate(Vec3 p, Vec3 axis, double a) {
+  return std::cos(a) * p + std::sin(a) * cross(axis, p) + (1.0 - std::cos(a)) * dot(axis, p) * axis;
+}
+
+}  // namespace
+
+TEST_CASE("segment distance: closed forms and a brute-force search") {
+  // Perpendicular skew segments 2 apart, crossing at their middles.
+  SegmentClosest c = closest_points({-1, 0, 0}, {1, 0, 0}, {0, -1, 2}, {0, 1, 2});
+  CHECK(c.distance == Approx(2.0));
+  CHECK(c.s == Approx(0.5));
+  CHECK(c.t == Approx(0.5));
+  // Parallel, overlapping: distance 1 wherever the witnesses are.
+  c = closest_points({0, 0, 0}, {2, 0, 0}, {1, 1, 0}, {3, 1, 0});
+  CHECK(c.distance == Approx(1.0));
+  // End to end: (1,0,0) to (2,0,0).
+  c = closest_points({0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {3, 5, 0});
+  CHECK(c.distance == Approx(1.0));
+  CHECK(c.s == 1.0);
+  CHECK(c.t == 0.0);
+  // Degenerate: a point against a segment, two points.
+  CHECK(closest_points({0, 3, 0}, {0, 3, 0}, {-1, 0, 0}, {1, 0, 0}).distance == Approx(3.0));
+  CHECK(closest_points({0, 0, 0}, {0, 0, 0}, {0, 0, 4}, {0, 0, 4}).distance == Approx(4.0));
+
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  auto rnd = [&] { return Vec3{u(rng), u(rng), u(rng)}; };
+  for (int n = 0; n < 200; ++n) {
+    const Vec3 a0 = rnd(), a1 = rnd(), b0 = rnd(), b1 = rnd();
+    const SegmentClosest got = closest_points(a0, a1, b0, b1);
+    double brute = 1e300;
+    for (int i = 0; i <= 200; ++i)
+      for (int k = 0; k <= 200; ++k)
+        brute = std::min(brute, norm(a0 + (i / 200.0) * (a1 - a0) - b0 - (k / 200.0) * (b1 - b0)));
+    INFO("case " << n);
+    CHECK(got.distance <= brute + 1e-12);
+    // The grid's resolution: the true minimum lies within half a grid step of a grid point.
+    CHECK(got.distance >= brute - (norm(a1 - a0) + norm(b1 - b0)) / 400.0);
+    CHECK(norm(got.a - got.b) == Approx(got.distance));
+  }
+}
+
+TEST_CASE("plain jersey at rest: clearance 1.212 r, crossings invariant under rigid motions") {
+  const KnitModel m = build_knit(parse_knit_chart(chart_file("plain_jersey.chart")), KnitParams{});
+  const double r = m.params.loop_radius;
+  const std::vector<Vec3> rest = m.rest_positions();
+  const YarnPolylines lines = yarn_polylines(m, rest);
+  REQUIRE(lines.vertices.size() == static_cast<size_t>(m.chart.courses));
+  const YarnClearance c = yarn_clearance(m, lines);
+  // The closest pieces belong to neighbouring courses (the head of a loop behind the feet of
+  // the loop above), not one yarn with itself.
+  CHECK(c.over_r == Approx(1.2116).epsilon(1e-4));
+  CHECK(c.b.course == c.a.course + 1);
+  const std::vector<YarnCrossing> crossings = designed_crossings(m, lines);
+  // 8 wales x 6 courses (measured; about 3.3 per loop, fewer along the edges).
+  CHECK(crossings.size() == 160);
+  CHECK(check_crossings(crossings, lines).changed == 0);
+
+  // A rigid motion changes neither the clearance nor any crossing's sign.
+  std::vector<Vec3> moved = rest;
+  const Vec3 axis = (1.0 / std::sqrt(3.0)) * Vec3{1, 1, 1};
+  for (Vec3& p : moved) p = rotate(p, axis, 0.7) + Vec3{3e-3, -1e-3, 2e-3};
+  const YarnPolylines moved_lines = yarn_polylines(m, moved);
+  CHECK(yarn_clearance(m, moved_lines).over_r == Approx(c.over_r).epsilon(1e-9));
+  CHECK(check_crossings(crossings, moved_lines).changed == 0);
+
+  // A mirror image of the yarns (z -> -z) swaps over and under at every crossing.
+  YarnPolylines mirrored = lines;
+  for (auto& course : mirrored.vertices)
+    for (Vec3& p : course) p.z = -p.z;
+  CHECK(check_crossings(crossings, mirrored).changed == 160);
+
+  // Course 3's yarn pushed back through its neighbours in 20 steps of 0.15 r: the clearance
+  // over the steps falls to within half a step of 0, and the crossings with courses 2 and 4
+  // have changed at the end (the yarn now lies wholly behind them).
+  double smallest = 1e300;
+  YarnPolylines pushed = lines;
+  for (int step = 1; step <= 20; ++step) {
+    pushed = lines;
+    for (Vec3& p : pushed.vertices[3]) p.z -= 0.15 * r * step;
+    smallest = std::min(smallest, yarn_clearance(m, pushed).over_r);
+  }
+  CHECK(smallest < 0.08);
+  const CrossingCheck after = check_crossings(crossings, pushed);
+  CHECK(after.changed > 0);
+  for (int n : after.changed_index) {
+    const YarnCrossing& x = crossings[n];
+    CHECK((x.a.course == 3 || x.b.course == 3));
+  }
+}
+
+TEST_CASE("rest clearance of the committed charts, and the clearance over a run") {
+  // The tuck and held-loop rest geometry (models/knit_loops.hpp): a single tuck's yarns keep
+  // plain jersey's clearance; the loop held over two courses by several_misses' floats keeps
+  // its legs one diameter apart (0.999 r, from 4e-6 r with chord-length parameters). Stacked
+  // tucks (several_tucks) still come within ~0.1 r at rest: not asserted here (docs/knit.md).
+  for (const char* name : {"plain_jersey.chart", "single_tuck.chart", "tucks40.chart"}) {
+    CAPTURE(name);
+    const KnitModel m = build_knit(parse_knit_chart(chart_file(name)), KnitParams{});
+    CHECK(yarn_clearance(m, yarn_polylines(m, m.rest_positions())).over_r >= 1.2);
+  }
+  const KnitModel misses =
+      build_knit(parse_knit_chart(chart_file("several_misses.chart")), KnitParams{});
+  CHECK(yarn_clearance(misses, yarn_polylines(misses, misses.rest_positions())).over_r >= 0.99);
+
+  // The single tuck with paper 2's network: the clearance over the run dips below its end
+  // value, so an end-only measure would miss the worst state (the yarns overlap: contact is
+  // not in the model yet).
+  KnitParams paper;
+  paper.network = KnitNetwork::Paper;
+  const KnitModel t = build_knit(parse_knit_chart(chart_file("single_tuck.chart")), paper);
+  ClearanceOverRun over(t, nullptr);
+  std::vector<double> x, v;
+  IntegratorOptions opt;
+  x.resize(t.network.dof()), v.resize(t.network.dof());
+  t.network.initial_state(x.data(), v.data());
+  over.observe(0.0, x.data(), true);
+  const RunStats s = run_to_equilibrium(t.network, "cvode-bdf", opt, x, v, &over);
+  REQUIRE(s.status == RunStatus::Equilibrium);
+  over.observe(s.t_final, x.data(), true);
+  std::vector<Vec3> end;
+  t.network.all_positions(s.t_final, x.data(), end);
+  const double at_end = yarn_clearance(t, yarn_polylines(t, end)).over_r;
+  CHECK(over.measured_states() > 10);
+  CHECK(over.minimum().over_r < at_end - 0.01);
+  // Measured: 1.212 r at rest, 0.165 r at t = 2.3e-4 s, 0.188 r at the end.
+  CHECK(over.minimum().over_r < 0.5);
+  CHECK(over.t_of_minimum() > 0.0);
+  CHECK(over.t_of_minimum() < s.t_final);
+  // The guarantee (yarn_measures.hpp): a missed dip is shallower than 2 A 0.05 r; measured A ~1.6.
+  CHECK(over.amplification() >= 1.0);
+  CHECK(over.resolution_over_r() < 0.3);
+  // A hint only narrows the search: the same clearance as without it, from any counted pair.
+  const YarnPolylines end_lines = yarn_polylines(t, end);
+  const YarnClearance plain = yarn_clearance(t, end_lines);
+  YarnClearance far = plain;
+  far.a = {0, 0};
+  far.b = {t.chart.courses - 1, 5};
+  for (const YarnClearance* hint : std::vector<const YarnClearance*>{&plain, &far, &over.minimum()})
+    CHECK(yarn_clearance(t, end_lines, 2.0, hint).over_r == plain.over_r);
+}
