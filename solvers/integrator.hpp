@@ -25,101 +25,39 @@
 namespace knitsim {
 
 struct IntegratorOptions {
-  // Relative tolerance of adaptive methods. Known limitation: at 1e-6 the BDF corrector leaves
-  // a static-residual floor of ~4e-8 on some drapes (e.g. topology b, k 1200, c 10, L0 6 cm:
-  // t_max with residual 3.65e-8, see README); 1e-8 removes it (+5 % CPU on four_corner, +17 % on
-  // two_corner) but makes arkode-imex fail its error test unless atol <= 1e-11. `knitsim fit` uses
-  // 1e-8.
-  double rtol = 1e-6;
-  double atol = 1e-9;  // absolute tolerance (m for positions, m/s for velocities)
-  // Absolute tolerance of the velocities (m/s) of the adaptive SUNDIALS methods; 0 = atol
-  // (one scalar pair (rtol, atol) for all of y = [x; v], bit for bit the behaviour before this
-  // option existed). Positions (m) and velocities (m/s) have different units, so one number
-  // cannot suit both: a velocity error e_v moves the positions by ~ e_v / omega, so the natural
-  // scale is velocity_atol ~ atol x omega, omega (rad/s) the fastest motion one wants resolved.
-  // For an equilibrium the ringing of the stiff, lightly damped modes (omega up to ~2e5 rad/s
-  // on the knit network) need not be followed: with atol on the velocities too, BDF resolves
-  // that ringing until it has decayed below 1e-9 m/s (experiments/benchmark/README.md, "Knit
-  // case"). Used by cvode-* and arkode-* (CVodeSVtolerances, ARKStepSVtolerances,
-  // ERKStepSVtolerances); the fixed-step methods and static have no error control.
-  double velocity_atol = 0.0;
-  // Fixed step (s) of euler, verlet and implicit-euler. 0 = automatic: explicit methods take
-  // dt_safety x the predicted linear stability limit (predict_stable_dt); implicit-euler 1 s.
-  double dt = 0.0;
-  double dt_safety = 0.5;  // fraction of the predicted stability limit used when dt = 0
-  int max_order = 0;       // cap on the method order (CVODE BDF <= 5, Adams <= 12); 0 = default
-  long max_steps = 500'000'000;   // step cap per run
-  double t_max = 1e7;             // s, physical end time if no equilibrium is reached, [1e-9, 1e15]
-  // Static residual (dimensionless) below which a run tests the stop in positions, and the stop
-  // itself where the stiffness is singular (solvers/equilibrium_check.hpp).
-  double equilibrium_tol = 1e-8;
-  // m: the stop in positions. A run is at equilibrium when the Newton correction ||K^-1 F||_inf
-  // at a state where K is positive definite is below this (or below its round-off floor).
-  // 1e-10 m is 2.5e-10 to 5e-10 of the built-in sheets' 0.2-0.4 m: six decades below the
-  // edge measurement's resolution (0.1 mm photo noise, SPEC 2.8), where one more Newton step
-  // costs one solve.
-  double position_tol = 1e-10;
-  double max_wall_seconds = 0.0;  // wall-clock cap per run, s; 0 = none
-  // A request to stop from outside (e.g. the CLI's SIGINT/SIGTERM handler, src/cli/interrupt.hpp):
-  // when it reads true the run ends with status Interrupted and its state so far. Read at each
-  // residual check (every `check_every` steps), like the wall-clock cap. nullptr = none.
+  // Each field: meaning, units, default. Why a default is what it is: docs/numerics.md,
+  // "Options and why their defaults".
+  double rtol = 1e-6;           // relative tolerance of the adaptive methods (knitsim fit: 1e-8)
+  double atol = 1e-9;           // absolute tolerance: m for positions (and m/s for velocities)
+  double velocity_atol = 0.0;   // m/s, absolute tolerance of the velocities; 0 = atol
+  double dt = 0.0;              // s, fixed step of euler, verlet, implicit-euler; 0 = automatic
+  double dt_safety = 0.5;       // fraction of the predicted stability limit when dt = 0
+  int max_order = 0;            // cap on the method order (BDF <= 5, Adams <= 12); 0 = default
+  long max_steps = 500'000'000;  // steps per run at most
+  double t_max = 1e7;           // s, physical end time if no equilibrium first, [1e-9, 1e15]
+  double equilibrium_tol = 1e-8;  // static residual (1) that triggers the stop's test
+  double position_tol = 1e-10;  // m, the stop in positions: Newton correction ||K^-1 F||_inf
+  double max_wall_seconds = 0.0;  // s, wall-clock cap per run; 0 = none
+  // Set from outside (the CLI's signal handler) to end the run as Interrupted; read at each
+  // residual check. nullptr = none.
   const std::atomic<bool>* interrupt = nullptr;
-  // Residual check interval in steps; 0 = automatic: 1000 for the fixed-step explicit
-  // methods (a check costs about one RHS), 1 (every step) for all others.
-  long check_every = 0;
-  double runaway_position = 1e3;  // |x_i| above this (m) counts as a blow-up
-  // Restarts per run after a recoverable step failure (Integrator::Step::recoverable: CVODE's
-  // or ARKODE's repeated error-test or corrector failures): the method starts afresh from its
-  // last accepted state -- a new initial step, no step-size history (CVODE: order 1) -- instead
-  // of ending the run with solver_failure. 0 = never. Why: on two_corner, cvode-bdf-gmres at order
-  // 4, h ~ 130 s failed the error test seven times in a row (CVODE's limit) down to h ~ 2e-3 s at 4
-  // of 6 eps_lin values tried; those steps pass only below ~1e-6 s (a tenth of the velocity
-  // relaxation time m/c), and a restart gets there (README at 1e1ee2d, "Integrators", "Restarts").
-  int max_restarts = 10;
-  // cvode-bdf-gmres: Krylov dimension (0 = SUNDIALS' default, 5) and CVODE's linear-solver
-  // tolerance factor (CVodeSetEpsLin: GMRES stops at eps_lin x the Newton tolerance; SUNDIALS'
-  // default 0.05). The static residual a GMRES run can reach is proportional to eps_lin:
-  // four_corner 11 x 11, Krylov 30, ends at t_max on a floor of 2.9e-5 / 2.8e-6 / 3.8e-7 /
-  // 4.6e-8 at eps_lin 5e-2 / 5e-3 / 5e-4 / 5e-5, and settles (residual < 1e-8) at 5e-6 (230
-  // steps), 5e-7 (204), 1e-7 (226), 1e-8 (216). With Krylov 5 it fails the corrector at any
-  // eps_lin (2026-11-23, README at 1e1ee2d, "Integrators").
-  int krylov_dim = 30;
-  double krylov_eps_lin = 5e-7;
-  // Linear solver for the Newton systems of cvode-bdf, arkode-dirk and arkode-imex:
-  //   Klu        sparse LU of the 2n x 2n matrix I - gamma J (SUNDIALS' KLU);
-  //   SchurLdl   velocity block eliminated, symmetric 3n x 3n LDL^T (schur_ldl_solver.hpp);
-  //   SchurCgLdl the same, but a setup whose reduced matrix is provably well conditioned
-  //              (small steps; Gershgorin radius of its Jacobi-scaled form <= 0.8) is solved
-  //              by Jacobi-preconditioned CG to a relative error <= 1e-6, and factorised only
-  //              if CG does not get there in 40 iterations (schur_ldl_solver.hpp).
-  // All three solve the same Newton systems; KLU and SchurLdl take the same steps, SchurCgLdl
-  // the same on four_corner and within a few steps where step control is on a knife edge.
-  // SchurLdl measured 1.3x faster than KLU on both drape scenes, and SchurCgLdl ~2x faster than
-  // SchurLdl on the knit model's microsecond steps (README at 1e1ee2d, "Integrators"), hence the
-  // default.
+  long check_every = 0;          // steps between residual checks; 0 = 1000 explicit, else 1
+  double runaway_position = 1e3;  // m: |x_i| above it counts as a blow-up (Diverged)
+  int max_restarts = 10;         // fresh starts after a recoverable SUNDIALS step failure
+  int krylov_dim = 30;           // cvode-bdf-gmres: Krylov dimension (0 = SUNDIALS' 5)
+  double krylov_eps_lin = 5e-7;  // cvode-bdf-gmres: GMRES tolerance / Newton tolerance
+  // Newton systems of cvode-bdf, arkode-dirk, arkode-imex: Klu = sparse LU of I - gamma J;
+  // SchurLdl = velocities eliminated, symmetric LDL^T; SchurCgLdl = the same, by CG where the
+  // reduced matrix is provably well conditioned (solvers/schur_ldl_solver.hpp). Same systems.
   enum class NewtonSolver { Klu, SchurLdl, SchurCgLdl };
   NewtonSolver newton_solver = NewtonSolver::SchurCgLdl;  // names: to_string below
-  // Left preconditioner of cvode-bdf-gmres, P ~ I - gamma J at CVODE's preconditioner set-ups
-  // (the velocity block eliminated as in SchurLdl, so P^-1 needs S^-1 for
-  // S = M (I + gamma Gamma) - gamma^2 K):
-  //   None         no preconditioner;
-  //   BlockJacobi  per particle the 6 x 6 diagonal block of I - gamma J, inverted exactly;
-  //   SchurIc      S by Eigen's incomplete Cholesky (IncompleteCholesky, AMD ordering);
-  //   SchurLdl     S by sparse LDL^T, factorised at each preconditioner set-up and lagged
-  //                between them (GMRES corrects the lag, so the Newton systems are solved to
-  //                eps_lin with the current gamma and Jacobian).
-  // Measured in experiments/scaling and README at 1e1ee2d, "Integrators".
+  // cvode-bdf-gmres's left preconditioner of I - gamma J: none; per-particle 6 x 6 blocks
+  // inverted; the Schur matrix S by incomplete Cholesky; or S by LDL^T, lagged between set-ups.
   enum class GmresPreconditioner { None, BlockJacobi, SchurIc, SchurLdl };
   GmresPreconditioner gmres_preconditioner = GmresPreconditioner::SchurLdl;
-  // Sparse factorisation of the symmetric reduced matrix S (implicit-euler, the ldl / cg-ldl
-  // Newton solvers, the schur-ldl preconditioner; solvers/symmetric_factor.hpp):
-  //   Simplicial  Eigen's simplicial LDL^T, scalar by scalar;
-  //   Block       the same LDL^T in 3 x 3 node blocks (solvers/block_ldlt.hpp), where S is made
-  //               of them (spring networks; mirror-plane particles padded), else Simplicial;
-  //   Supernodal  CHOLMOD's supernodal LL^T, falling back to LDL^T (Block where it applies)
-  //               where S is not positive definite;
-  //   Automatic   Block (or Simplicial) below SymmetricFactor::supernodal_min_dof unknowns,
-  //               Supernodal from there (above the measured tie, README at 1e1ee2d, "Performance").
+  // Factorisation of the symmetric S (solvers/symmetric_factor.hpp): Eigen's simplicial LDL^T,
+  // the same in 3 x 3 node blocks (block_ldlt.hpp), CHOLMOD's supernodal LL^T, or Automatic:
+  // Block below SymmetricFactor::supernodal_min_dof unknowns, Supernodal from there.
   enum class Factorization { Automatic, Simplicial, Block, Supernodal };
   Factorization factorization = Factorization::Automatic;
 
