@@ -9,9 +9,10 @@ namespace knitsim {
 
 namespace {
 
-// A tuck's head lies this many loop radii behind the head of the held loop, each further tuck
-// stacked on the same needle kStackedTuckStep more; its legs come forward by kTuckLegForward r
-// (a knit loop's by 2 r). Header: "Tuck and held-loop geometry".
+// A tuck's head lies this many loop radii behind the head of the held loop, kStackedTuckStep
+// more for each tuck stacked above it on the same needle (the lowest tuck of a stack deepest);
+// its legs come forward by kTuckLegForward r (a knit loop's by 2 r). Header: "Tuck and
+// held-loop geometry".
 constexpr double kTuckHeadDepth = 3.0;
 constexpr double kStackedTuckStep = 2.0;
 constexpr double kTuckLegForward = 1.0;
@@ -125,12 +126,15 @@ LoopTypeValues loop_type_values(const KnitModel& m, const CourseGeometry& g,
   const double r = m.params.loop_radius;
   const Frame& f = g.frames[loop.wale];
   const Vec3 P = x[loop.upper];
-  int stacked = 0;  // tucks of this wale's stack below this one
+  // Tucks stacked above this one on its needle: those of the courses above it, up to the next
+  // knit, which hang from the same upper point (misses between them make no point).
+  int above = 0;
   if (loop.kind == Stitch::Tuck)
-    for (int c = loop.course - 1; c >= 0 && m.chart.at(loop.wale, c) == Stitch::Tuck; --c)
-      ++stacked;
+    for (int c = loop.course + 1; c < m.chart.courses && m.chart.at(loop.wale, c) != Stitch::Knit;
+         ++c)
+      if (m.chart.at(loop.wale, c) == Stitch::Tuck) ++above;
   const double back =
-      loop.kind == Stitch::Tuck ? (kTuckHeadDepth + kStackedTuckStep * stacked) * r : 0.0;
+      loop.kind == Stitch::Tuck ? (kTuckHeadDepth + kStackedTuckStep * above) * r : 0.0;
   const double forward = loop.kind == Stitch::Tuck ? kTuckLegForward : kKnitLegForward;
   const Vec3 T0 = g.sinkers[loop.wale], T8 = g.sinkers[loop.wale + 1];
   const Vec3 T3 = P - 3.0 * r * f.ex - back * f.n;

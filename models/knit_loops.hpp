@@ -103,7 +103,9 @@
 // the courses intermesh. A tuck loop is the open arc T0 T2 T3 T4 T5 T6 T8 (no feet) with
 // its head T3..T5 pushed back by 3r behind the head of the held loop it shares the needle
 // with (SPEC 2.9 leaves the two coincident; on the face the tuck hides behind it), 2r more for
-// each tuck stacked below it on the same needle, and its legs T2, T6 forward by r (not 2r) of
+// each tuck stacked above it on the same needle (tucks of the courses above it up to the next
+// knit in its wale, which hang from the same upper point: the lowest tuck of a stack is the
+// deepest, the newest the nearest the held loop), and its legs T2, T6 forward by r (not 2r) of
 // the midpoints. A float passes behind each missed wale at F_i = B_i - r e_y - r n. Each
 // course's yarn is one C^2 cubic NURBS through its points in wale order (T8 of a loop = T0 of
 // the next), centripetal parameters (src/geometry/nurbs.hpp).
@@ -115,9 +117,15 @@
 // cubic swings each long leg across the loop after the short sinker-to-foot interval).
 // Centripetal parameters (which damp that overshoot at uneven intervals), the tuck head 3r back
 // and its legs r forward give 1.212 r on plain jersey (1.206 r before), 1.212 r on
-// single_tuck and tucks40, 0.999 r on several_misses (the held loop's legs); stacked tucks
-// (several_tucks) still come within ~0.1 r of each other's legs where they cross: a lever
-// left (docs/knit.md).
+// single_tuck and tucks40, 0.999 r on several_misses (the held loop's legs). Stacked tucks: each
+// tuck's sinkers lie at depth r in its own course, so its legs run from there back to its head;
+// with the upper tuck's head the deeper (2r more for each tuck below it, as first written) the
+// upper tuck's legs start in front of the lower tuck's (at its sinkers) and end behind them, so
+// they crossed in depth: 0.101 r on several_tucks, 0.046 r on the corpus's stacked_tucks. With
+// the lower tuck the deeper, the upper tuck's legs stay in front of the lower's over their whole
+// common height: legs of stacked tucks >= 1.19 r apart, and the rest clearance of every valid
+// committed chart >= 0.92 r (several_tucks 0.999 r, the held loop's legs as several_misses;
+// stacked_tucks 0.922 r, its loops held over three courses: the long legs' swing near the feet).
 //
 // Failure modes: a bad chart or parameters throw std::invalid_argument at set-up (chart
 // messages name row and column). Geometry functions expect positions of every point

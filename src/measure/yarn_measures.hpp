@@ -117,7 +117,7 @@ CrossingCheck check_crossings(const std::vector<YarnCrossing>& crossings,
 //     nonlinear); it is measured: at each measured state the ratio of the vertices' largest
 //     displacement to the interlacing points' since the previous measured state, the largest
 //     ratio over the run as amplification(). Measured ~1.2 on tucks40 (default network) and
-//     single_tuck (paper network): 2 A tau ~0.12-0.16 r at tau = 0.05; but 38-55 on
+//     single_tuck (paper network): 2 A tau ~0.12-0.16 r at tau = 0.05; but 26-55 on
 //     several_tucks and several_misses, whose yarns pass through each other and whose frames
 //     swing (resolution several r: no guarantee there). That A
 //     stands for the unmeasured states too assumes the map is smooth on the scale tau r.
