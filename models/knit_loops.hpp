@@ -41,7 +41,7 @@
 // Static residual scale (SPEC 2.3): F_ref = k_w r, the force of a wale spring stretched by one
 //   loop radius (paper 2 has no external force, so the SpringNetwork default m g is
 //   meaningless); with gravity on, min(k_w r, mean point weight).
-// Mechanics of paper 2's network (measured, see tests/test_knit.cpp): with wale and course
+// Mechanics of paper 2's network (shown by tests/test_knit.cpp): with wale and course
 //   springs only, the square network is a mechanism (rows and columns shear and swing at no
 //   energy; z is free). A tuck or miss is taken up without strain: at the steady state every
 //   spring is at its rest length, and the misfit is absorbed by rigid motions of blocks of
@@ -109,23 +109,13 @@
 // the midpoints. A float passes behind each missed wale at F_i = B_i - r e_y - r n. Each
 // course's yarn is one C^2 cubic NURBS through its points in wale order (T8 of a loop = T0 of
 // the next), centripetal parameters (src/geometry/nurbs.hpp).
-// Tuck and held-loop geometry (issue 31; measured by src/measure/yarn_measures.hpp, clearance
-// at rest in units of r): with SPEC 2.9's relations as first written (tuck head 2r back, legs
-// 2r forward, chord-length parameters) the rest state already had yarns of different courses
-// within 0.216 r (a tuck's leg against the next course's sinker arc), stacked tucks' heads
-// coincident (0) and a loop held over two courses crossing its own legs (4e-6: the chord-length
-// cubic swings each long leg across the loop after the short sinker-to-foot interval).
-// Centripetal parameters (which damp that overshoot at uneven intervals), the tuck head 3r back
-// and its legs r forward give 1.212 r on plain jersey (1.206 r before), 1.212 r on
-// single_tuck and tucks40, 0.999 r on several_misses (the held loop's legs). Stacked tucks: each
-// tuck's sinkers lie at depth r in its own course, so its legs run from there back to its head;
-// with the upper tuck's head the deeper (2r more for each tuck below it, as first written) the
-// upper tuck's legs start in front of the lower tuck's (at its sinkers) and end behind them, so
-// they crossed in depth: 0.101 r on several_tucks, 0.046 r on the corpus's stacked_tucks. With
-// the lower tuck the deeper, the upper tuck's legs stay in front of the lower's over their whole
-// common height: legs of stacked tucks >= 1.19 r apart, and the rest clearance of every valid
-// committed chart >= 0.92 r (several_tucks 0.999 r, the held loop's legs as several_misses;
-// stacked_tucks 0.922 r, its loops held over three courses: the long legs' swing near the feet).
+// Tuck and held-loop geometry (issue 31): the tuck head 3r back, its legs r forward and the
+// centripetal parameters (which damp the chord-length cubic's overshoot at uneven intervals) keep
+// yarns of different courses apart at rest: clearance (src/measure/yarn_measures.hpp) 1.212 r
+// on plain jersey, single_tuck and tucks40, 0.999 r on several_misses and several_tucks. Stacked
+// tucks: a tuck's head goes 2r further back for each tuck stacked above it, so the lowest is the
+// deepest and the upper tucks' legs stay in front of the lower ones' (>= 1.19 r apart). Why these
+// values and not SPEC 2.9's as first written: docs/knit.md, "Rest geometry of tucks and misses".
 //
 // Failure modes: a bad chart or parameters throw std::invalid_argument at set-up (chart
 // messages name row and column). Geometry functions expect positions of every point

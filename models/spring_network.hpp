@@ -24,10 +24,8 @@
 // difference of two absolute positions, |delta L| <= eps (|x_a| + |x_b|) (eps = DBL_EPSILON),
 // so its force carries up to k eps (|x_a| + |x_b|); the floor is max_i sum over i's springs of
 // that, / F_ref: a bound, not a typical value. It matters only for stiff springs: 3.6e-9 at
-// the paper's k = 1000 N/m on four_corner, 3.6e-7 at k = 1e5 N/m, where the residual measured
-// at rest is ~2.5e-8 whatever the integrator (static included), so the bound is ~14x loose
-// there; stopping at it (t = 236 s) instead of integrating on to t_max moved the positions by
-// 8e-11 m (`knitsim drape --set model.stiffness=1e5`, README at 1e1ee2d, "Known limitations").
+// the paper's k = 1000 N/m on four_corner, 3.6e-7 at k = 1e5 N/m, ~14x the residual reached
+// at rest there (docs/numerics.md, "Round-off floor").
 //
 // Failure modes: bad specs (index out of range, non-positive mass or rest length, a spring
 // joining a particle to itself, NaN) throw std::invalid_argument at construction. Evaluation

@@ -11,8 +11,9 @@
 // scalars: an AMD ordering and an elimination tree of the node graph (one-ninth the size of the
 // scalar one), then row k of L by a sparse triangular solve along the tree. The arithmetic is
 // that of the scalar LDL^T, in 3 x 3 block products with one index per block instead of nine,
-// so the compiler unrolls it: on the 11 x 11 drape (351 dof) a factorisation costs ~0.12 ms
-// against ~0.33 ms for Eigen's scalar SimplicialLDLT with the same fill (symmetric_factor.hpp).
+// so the compiler unrolls it: a factorisation takes about half the time of Eigen's scalar
+// SimplicialLDLT with the same fill, or less on small grids (whole drapes:
+// experiments/scaling/README.md, "Factorisation back end, 3x3 block LDL^T").
 //
 // No pivoting, like the scalar LDL^T: each 3 x 3 pivot block D_k is factorised in turn as
 // l d l^T (the scalar LDL^T's arithmetic inside the block; an explicit cofactor inverse loses

@@ -27,24 +27,14 @@
 // largest order used is tracked with CVodeGetLastOrder after each step.
 //
 // BDF stability limit detection (CVodeSetStabLimDet) is on: BDF orders 3-5 are not A-stable,
-// and at tight tolerances the order-5 steps go unstable on two_corner (rtol 1e-8, atol 1e-10:
-// CV_ERR_FAILURE at t ~ 5e3 s, h ~ 2e-4 s; with detection: equilibrium in 3548 steps). At the
-// default tolerances it changes nothing measurable on four_corner or two_corner.
+// and at tight tolerances (rtol 1e-8, atol 1e-10) the order-5 steps go unstable on two_corner
+// without it (CV_ERR_FAILURE); at the default tolerances it changes nothing noticeable.
 //
 // The BDF Newton iteration is converged 10x tighter than CVODE's default (nonlinear
-// convergence coefficient kNewtonConvCoef = 0.01 instead of 0.1). The stop rule measures the
+// convergence coefficient kNewtonConvCoef = 0.01 instead of 0.1): the stop rule tests the
 // static residual, i.e. the stiff spring forces, which a loosely converged corrector leaves
-// noisy: at 0.1 the 6 x 6 four_corner drape stalls at residual 2e-8 until t_max (273 steps),
-// with 0.01 it settles in 253 steps; four_corner 11 x 11 needs 246 steps / 48 set-ups instead
-// of 347 / 61, two_corner 892 / 272 instead of 1773 / 364.
-// 0.001 was measured too (2026-11-22, random countries of the fit box, `knitsim drape`, count
-// of runs ending at t_max instead of equilibrium, 0.01 vs 0.001): rtol 1e-8 (the fits'):
-// four_corner 0 vs 0 of 150 (steps -21 %, CPU equal), two_corner 4 vs 1 of 60 (steps -28 %,
-// CPU equal), and the three Table 6 re-runs of the quick repro that end at t_max with 0.01
-// settle; rtol 1e-6 (the drape default): four_corner 5 vs 13 of 40 -- worse. It is not
-// adopted: a tolerance-dependent coefficient would change the committed targets byte for
-// byte (tests/test_synthetic_targets.cpp) and the repro numbers, and the robust answer to the
-// plateau at rtol 1e-6 is `static` (40 of 40 settle, same CPU) or rtol 1e-8.
+// noisy (at 0.1 small grids stall above equilibrium_tol until t_max, and the drapes take more
+// steps). Why 0.01 and not 0.001: docs/numerics.md, "Linear algebra".
 //
 // Restarts (Integrator::restart, used by the driver up to IntegratorOptions::max_restarts):
 // CV_ERR_FAILURE and CV_CONV_FAILURE are reported as recoverable; restart() re-initialises

@@ -11,7 +11,7 @@
 //     M (A_vv + gamma A_vx) x2 = M (b2 - A_vx b1),
 // where M (A_vv + gamma A_vx) = M (I + gamma Gamma) - gamma^2 K, K = M Ax = dF/dx symmetric.
 // This reduced matrix has the model's stiffness pattern; it is analysed once and factorised
-// numerically at each setup by a SymmetricFactor (symmetric_factor.hpp: Eigen's simplicial
+// numerically at each setup by a SymmetricFactor (symmetric_factor.hpp: a 3 x 3 block or scalar
 // LDL^T, or CHOLMOD's supernodal LL^T on large grids with LDL^T where S is not positive
 // definite -- K is indefinite when springs are compressed).
 //
@@ -26,16 +26,15 @@
 // breaks down or needs more than cg_max_iterations, S is factorised there and then, and LDL^T
 // serves this setup's remaining solves. Every solve is exact to cg_rel_tol = 1e-6 in that
 // norm; the Newton iteration it serves converges with far less (inexact Newton needs ~1e-2),
-// and 100 random two_corner drapes at rtol 1e-8 stop at equilibrium as often as with LDL^T
-// (92 vs 91, experiments/benchmark/stops.sh). A residual test alone is not enough: at large
-// steps S is stiffness-dominated and ill-conditioned, a small residual can hide a large error,
-// and with a plain 1e-8 residual test (and radius <= 4) the noisy corrections cost 6 more of
-// those 100 drapes their equilibrium (85). The steps taken match the LDL^T path's on
-// four_corner (tests/test_schur_ldl.cpp); where CVODE's step control sits on a knife edge
-// they can drift by a few steps (tests/test_knit.cpp).
-// Measured on the knit model's ringing phase, where CVODE takes hundreds of microsecond steps
-// (README at 1e1ee2d, "Knit model"). On drapes most steps are large, the radius test fails, and the
-// added cost is one pass over S per setup.
+// and random two_corner drapes at rtol 1e-8 stop at equilibrium as often as with LDL^T
+// (experiments/benchmark/stops.sh). The bound is on the error, not the residual: at large
+// steps S is stiffness-dominated and ill-conditioned, and a small residual can hide a large
+// error (experiments/benchmark/README.md, "Stops inside the fit box"). The steps taken match
+// the LDL^T path's on four_corner (tests/test_schur_ldl.cpp); where CVODE's step control sits
+// on a knife edge they can drift by a few steps (tests/test_knit.cpp).
+// It pays on the knit model's ringing phase, where CVODE takes hundreds of microsecond steps
+// (experiments/benchmark/README.md, "Newton solver `cg-ldl`"). On drapes most steps are large,
+// the radius test fails, and the added cost is one pass over S per setup.
 //
 // Requirements: A is the SUNMatrix that CVODE/ARKODE hold, a CSC sparse matrix with exactly
 // FirstOrderSystem::jacobian_pattern() (SUNMatScaleAddI keeps it since every diagonal entry is

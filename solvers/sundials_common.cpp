@@ -75,9 +75,8 @@ namespace {
 // own loop has one accumulator, so each element waits for the previous add (~4 cycles); the
 // integrators call it ~25 times per step (error test, Newton convergence, order selection,
 // stability-limit detection), 15 % of cvode-bdf's CPU on the 40 x 40 knit chart.
-// SUNDIALS' fused vector operations (N_VEnableFusedOps_Serial on these vectors) were measured
-// and not kept: four_corner cvode-bdf 47 ms instead of 32 ms CPU (same 246 steps; in-process
-// loop of 40 drapes, medians of 4 alternating runs, 2026-11-23).
+// SUNDIALS' fused vector operations (N_VEnableFusedOps_Serial) stay off: they made four_corner
+// cvode-bdf ~1.5x slower in CPU for the same steps.
 double wrms_norm(N_Vector x, N_Vector w) {
   const long n = N_VGetLength_Serial(x);
   const double* xd = N_VGetArrayPointer(x);

@@ -16,14 +16,11 @@ namespace {
 // re-entrant with one cholmod_common per instance, but the BLAS under it need not be: Debian's
 // libopenblas0-serial (which run.sh installs) is built without USE_LOCKING, and two threads
 // inside it at once can corrupt each other's work buffers (the case that OpenBLAS build option
-// exists for). Measured before this lock (test_symmetric_factor, "instances in concurrent
-// threads", 4 threads factorising and solving a 96-dof drape matrix): with 80 rounds each, 14
-// of 20 repetitions had threads off the one-thread result (22 of 80 thread results), by up to
-// 2.5e-5 against |x| <= 1.7e-3 -- silently wrong solves for `knitsim fit --jobs J` on grids
-// from supernodal_min_dof unknowns; with 400 rounds (the test now), 10 of 10. With the lock:
-// bit-identical (0 of 40); with Debian's reference BLAS instead of OpenBLAS, 0 of 15. The lock
-// serialises only the supernodal back end, which runs on grids large enough for a
-// factorisation to take ~0.1-1 s; the other back ends call no BLAS.
+// exists for): without this lock, test_symmetric_factor's "instances in concurrent threads"
+// gets solves off the one-thread result (silently wrong drapes under `knitsim fit --jobs J` on
+// grids from supernodal_min_dof unknowns); with it they are bit-identical. The lock serialises
+// only the supernodal back end, which runs on grids large enough for a factorisation to take
+// ~0.1-1 s; the other back ends call no BLAS.
 std::mutex& blas_mutex() {
   static std::mutex m;
   return m;

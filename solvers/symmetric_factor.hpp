@@ -18,23 +18,12 @@
 //               and a factorisation that finds it is not falls back to LDL^T (block where it
 //               applies) for that set-up (counted in ldl_fallbacks()).
 // `automatic` takes the supernodal back end from supernodal_min_dof unknowns on, below that
-// block (or simplicial where S is not blocked). Measured on the four_corner Schur matrix at
-// h = 100 s, OpenBLAS 0.3.21 serial, median of 7 (scratch harness, 2026-11-23; block measured
-// with its first version, which inverted the pivot blocks by cofactors: the l d l^T pivots of
-// commit 3164cb3 took 0.126 ms at 351 dof on a busier machine), one factorisation / one solve:
-//   dof     simplicial           block                supernodal
-//   351     0.32 ms / 0.020 ms   0.12 ms / 0.011 ms   0.90 ms / 0.013 ms
-//   5031    33 ms / 0.80 ms      15 ms / 0.47 ms      30 ms / 0.40 ms
-//   11151   124 ms / 3.2 ms      66 ms / 1.4 ms       75 ms / 1.2 ms
-//   19671   386 ms / 8.5 ms      211 ms / 5.1 ms      172 ms / 4.3 ms
-//   30591   653 ms / 13 ms       366 ms / 8.8 ms      267 ms / 6.8 ms
-// Whole drapes (README at 1e1ee2d, "Factorisation back end", CPU s): block and supernodal tie at
-// 19 671 dof
-// (27 s), block leads at 30 591 (48 vs 52 s) and trails at 59 631 (226 vs 121 s); the threshold
-// interpolates that crossover log-linearly. At 11 151 dof block takes 7.7 s against
-// supernodal's 10.7-12.1 s. With Debian's
-// reference BLAS (libblas3) the supernodal back end is no faster than simplicial (19 671 dof:
-// 389 ms per factorisation).
+// block (or simplicial where S is not blocked). Per factorisation, block takes about half the
+// time of simplicial at the same fill; supernodal overtakes block only on large grids, and the
+// threshold interpolates where whole four_corner drapes of the two cross over with Debian's
+// serial OpenBLAS (experiments/scaling/README.md, "Factorisation back end, 3x3 block LDL^T").
+// With the reference BLAS (libblas3) supernodal gains nothing over simplicial (same README,
+// "Factorisation back end, supernodal").
 #pragma once
 
 #include <Eigen/SparseCore>

@@ -23,10 +23,10 @@
 // Equilibrium (time, step or wall limit, solver failure, divergence) or whose edges cannot be
 // measured is a FAILED evaluation: its cost is NaN, which the ICA scores as
 // IcaOptions::failure_cost and counts in failed_evaluations; the fit carries on.
-// Measured (50 cm sheet, cvode-bdf, default rtol 1e-6): 7 of 54 random countries ended at
-// t_max with the static residual stuck near 3e-8 > equilibrium_tol 1e-8 (e.g. topology b,
-// k 1200, c 10, L0 6 cm); with rtol 1e-8 none failed, for ~10 % more CPU. Such false failures
-// rank last, so `knitsim fit` defaults to rtol 1e-8 (--rtol to change it).
+// At cvode-bdf's default rtol 1e-6 some drapes of the fit box end at t_max with the static
+// residual stuck just above equilibrium_tol; such false failures rank last, so `knitsim fit`
+// defaults to rtol 1e-8 (--rtol to change it; docs/numerics.md, "Known limitations";
+// experiments/fit_tolerance/README.md).
 //
 // Threads: every evaluation builds its own DrapeGrid and integrator (nothing is shared between
 // threads but the read-only base scene and target edges), so DrapeFitProblem::evaluate is

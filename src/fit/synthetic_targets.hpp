@@ -45,7 +45,7 @@
 // then the `photos` draws of d. Deterministic: same (sample, set, options) -> the same numbers,
 // bit for bit, with the same build (compiler, libm, SUNDIALS/KLU); on another platform the
 // drape itself may differ in the last digits (within rtol).
-// Cost (measured, see paper_repro/data/README.md): a twin target is ~1 s CPU, a cross target
+// Cost (paper_repro/data/README.md): a twin target is ~1 s CPU, a cross target
 // tens of seconds (9x the particles).
 #pragma once
 

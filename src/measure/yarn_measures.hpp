@@ -22,8 +22,8 @@
 // clearance equal to the search radius means "at least that".
 // Broad phase: a dense front-view (x, y) grid of cell size >= search radius + longest segment on
 // the segments' midpoints (the fabric is a few r thick: z is not binned), pairs tested in the 9
-// neighbouring cells after a bounding-box test. Cost O(segments): ~15 ms for the 40 x 40 tucks40
-// chart (~100k segments) with a hint, ~8 ms more for the polylines (2 shared cores, loaded).
+// neighbouring cells after a bounding-box test. Cost O(segments); figures for the 40 x 40
+// tucks40 chart in docs/knit.md, "Yarn measures".
 //
 // Designed crossings: at rest (the start), every pair of segments whose front-view projections
 // (x, y) cross, between different courses or non-adjacent pieces of one course as above. Each
@@ -116,11 +116,10 @@ CrossingCheck check_crossings(const std::vector<YarnCrossing>& crossings,
 //   - A is not bounded a priori (the frames' unit vectors and the centripetal parameters are
 //     nonlinear); it is measured: at each measured state the ratio of the vertices' largest
 //     displacement to the interlacing points' since the previous measured state, the largest
-//     ratio over the run as amplification(). Measured ~1.2 on tucks40 (default network) and
-//     single_tuck (paper network): 2 A tau ~0.12-0.16 r at tau = 0.05; but 26-55 on
-//     several_tucks and several_misses, whose yarns pass through each other and whose frames
-//     swing (resolution several r: no guarantee there). That A
-//     stands for the unmeasured states too assumes the map is smooth on the scale tau r.
+//     ratio over the run as amplification(). Small (~1-2) where the yarns stay apart, large
+//     where they pass through each other and the frames swing (no guarantee there; figures per
+//     chart in docs/knit.md, "Yarn measures"). That A stands for the unmeasured states too
+//     assumes the map is smooth on the scale tau r.
 // The states between residual checks (Verlet and the other explicit integrators check every
 // 1000 steps) are not seen. Forwards every RunObserver call to `next` (may be nullptr).
 class ClearanceOverRun final : public RunObserver {

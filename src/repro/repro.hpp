@@ -82,8 +82,8 @@ ReproOptimizer repro_optimizer_from_name(const std::string& name);
 // none | quarter | eighth (ReproOptions::four_corner_symmetry); else std::invalid_argument.
 DrapeSymmetry four_corner_symmetry_from_name(const std::string& name);
 
-// CPU seconds of one four_corner drape with the paper's explicit Euler at its stability limit
-// (experiments/benchmark/README.md, `run.sh --quick`, 2026-11-22: 1.23e8 steps x 4.94 us).
+// CPU seconds of one four_corner drape with the paper's explicit Euler at its stability limit:
+// 1.23e8 steps x 4.94 us (experiments/benchmark/README.md, "Drape scenes").
 constexpr double kEulerCpuSecondsPerFourCornerDrape = 607.0;
 
 struct ReproOptions {
@@ -112,11 +112,9 @@ struct ReproOptions {
   // model.symmetry of every four_corner fit and drape (none | quarter | eighth): the ICA and LM
   // fits are all on four_corner (Table 6 evaluates their parameters on two_corner, which stays
   // whole), and the eighth is the exact restriction of the full equations to the symmetric
-  // states the scene reaches (models/mirror_reduced.hpp). Default eighth: `repro all --preset
-  // quick` took 32.6 s CPU against 182 s on the whole sheet, with the same Table 4 in 17 of 18
-  // rows (to 1e-6) and Taguchi S/N; the 18th (twin 7) took another ICA path because 2 whole-
-  // sheet drapes ended at t_max (failed evaluations) where the eighth's settled (README,
-  // "Paper 1 reproduction").
+  // states the scene reaches (models/mirror_reduced.hpp). Default eighth: about a fifth of the
+  // whole sheet's CPU for the same fits up to the lottery of failed evaluations
+  // (paper_repro/README.md, "The eighth").
   DrapeSymmetry four_corner_symmetry = DrapeSymmetry::Eighth;
   double rtol = 1e-8;  // of every drape (as knitsim fit, src/fit/drape_fit.hpp)
   // Committed targets <dir>/<set>_sample<s>.csv; a missing file is generated in memory with
