@@ -66,25 +66,25 @@ MirrorReduced::MirrorReduced(const SpringNetwork& full, const MirrorPlanes& plan
   if (has_y) generators.push_back(2);
   if (diagonal) generators.push_back(4);
   for (int p = 0; p < np; ++p) {
-    const std::string who = "particle " + std::to_string(p);
+    auto who = [p] { return "particle " + std::to_string(p); };  // built only to throw
     auto valid = [np](int q) { return q >= 0 && q < np; };
-    if (!valid(ix[p]) || ix[ix[p]] != p) asymmetric(who + ": the x image map is not an involution");
+    if (!valid(ix[p]) || ix[ix[p]] != p) asymmetric(who() + ": the x image map is not an involution");
     if (has_y && (!valid(iy[p]) || iy[iy[p]] != p || ix[iy[p]] != iy[ix[p]]))
-      asymmetric(who + ": the image maps are not two commuting involutions");
+      asymmetric(who() + ": the image maps are not two commuting involutions");
     if (diagonal && (!valid(id[p]) || id[id[p]] != p || id[ix[p]] != iy[id[p]]))
-      asymmetric(who + ": the diagonal image map is not an involution with D X = Y D");
+      asymmetric(who() + ": the diagonal image map is not an involution with D X = Y D");
     for (int g : generators) {
       const int q = image(g, p);
-      const std::string plane_name = g == 1 ? "x plane" : g == 2 ? "y plane" : "diagonal";
+      const char* plane_name = g == 1 ? "x plane" : g == 2 ? "y plane" : "diagonal";
       if (!close(spec.positions[q], mirror(spec.positions[p], g), tol))
-        asymmetric(who + " and its image " + std::to_string(q) + " across the " + plane_name +
+        asymmetric(who() + " and its image " + std::to_string(q) + " across the " + plane_name +
                    " are not mirror positions");
       if (q != p && close(spec.positions[p], mirror(spec.positions[p], g), tol))
-        asymmetric(who + " lies on the " + plane_name + " but is not its own image");
+        asymmetric(who() + " lies on the " + plane_name + " but is not its own image");
       if (!same_value(spec.masses[p], spec.masses[q]))
-        asymmetric(who + " and its image " + std::to_string(q) + " have different masses");
+        asymmetric(who() + " and its image " + std::to_string(q) + " have different masses");
       if ((pin_slot[p] < 0) != (pin_slot[q] < 0))
-        asymmetric(who + " is pinned and its image " + std::to_string(q) +
+        asymmetric(who() + " is pinned and its image " + std::to_string(q) +
                    " is not (or vice versa)");
       if (pin_slot[p] >= 0) {
         const PinPath& a = spec.pin_paths[pin_slot[p]];

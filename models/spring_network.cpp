@@ -87,8 +87,9 @@ SpringNetwork::SpringNetwork(SpringNetworkSpec spec) : spec_(std::move(spec)) {
         "spring network: residual_force_scale must be > 0 N when there is no gravity");
   }
 
-  // Springs: validate, then the stiffness pattern (3x3 blocks per free end pair).
-  std::vector<std::pair<int, int>> entries;
+  // Springs: validate, then the stiffness pattern: 3x3 blocks over the pairs of free ends.
+  std::vector<std::pair<int, int>> pairs;
+  pairs.reserve(4 * spec_.springs.size());
   for (const Spring& s : spec_.springs) {
     if (s.a < 0 || s.a >= np || s.b < 0 || s.b >= np || s.a == s.b)
       throw std::invalid_argument("spring network: spring end out of range or self-loop");
@@ -99,11 +100,11 @@ SpringNetwork::SpringNetwork(SpringNetworkSpec spec) : spec_(std::move(spec)) {
     const int ends[2] = {free_index_[s.a], free_index_[s.b]};
     for (int r : ends)
       for (int c : ends)
-        if (r >= 0 && c >= 0)
-          for (int p = 0; p < 3; ++p)
-            for (int q = 0; q < 3; ++q) entries.emplace_back(3 * r + p, 3 * c + q);
+        if (r >= 0 && c >= 0) pairs.emplace_back(r, c);
   }
-  pattern_ = make_csc_pattern(n, n, std::move(entries), /*with_diagonal=*/true);
+  const CscPattern nodes =
+      make_csc_pattern(free_count_, free_count_, std::move(pairs), /*with_diagonal=*/true);
+  pattern_ = expand_node_pattern(nodes);
 
   slots_.assign(spec_.springs.size() * 36, -1);
   for (size_t si = 0; si < spec_.springs.size(); ++si) {
@@ -112,11 +113,10 @@ SpringNetwork::SpringNetwork(SpringNetworkSpec spec) : spec_(std::move(spec)) {
     for (int br = 0; br < 2; ++br)
       for (int bc = 0; bc < 2; ++bc) {
         if (ends[br] < 0 || ends[bc] < 0) continue;
-        // A block's three rows are adjacent in each of its columns (all three are entries).
-        for (int q = 0; q < 3; ++q) {
-          const int top = pattern_.find(3 * ends[br], 3 * ends[bc] + q);
-          for (int p = 0; p < 3; ++p) slots_[si * 36 + (2 * br + bc) * 9 + 3 * p + q] = top + p;
-        }
+        const int e = nodes.find(ends[br], ends[bc]);
+        for (int q = 0; q < 3; ++q)
+          for (int p = 0; p < 3; ++p)
+            slots_[si * 36 + (2 * br + bc) * 9 + 3 * p + q] = node_block_entry(nodes, e, ends[bc], p, q);
       }
   }
   pin_pos_.resize(spec_.pinned.size());

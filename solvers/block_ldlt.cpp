@@ -3,6 +3,9 @@
 #include <Eigen/OrderingMethods>
 #include <algorithm>
 #include <cmath>
+#include <deque>
+#include <memory>
+#include <mutex>
 #include <stdexcept>
 
 namespace knitsim::detail {
@@ -122,69 +125,160 @@ void BlockLdlt::analyze(const Eigen::SparseMatrix<double>& S) {
     throw std::invalid_argument("BlockLdlt: S is not made of dense, symmetric 3 x 3 blocks");
 }
 
-bool BlockLdlt::try_analyze(const Eigen::SparseMatrix<double>& S) {
+// The ordering and symbolic factorisation of a pattern: a pure function of it.
+struct BlockLdlt::Symbolic {
+  std::vector<int> outer, inner;  // the pattern analysed (the memo's key)
+  bool blocked = false;
+  int nb = 0;
+  std::vector<int> perm, first, size, ap, ai, parent, lp;
+  std::vector<std::array<int, 3>> at;
+  bool uniform = true;
+};
+
+namespace {
+
+using Symbolic = BlockLdlt::Symbolic;
+
+std::shared_ptr<const Symbolic> analyse_pattern(const Eigen::SparseMatrix<double>& S) {
+  auto sym = std::make_shared<Symbolic>();
+  sym->outer.assign(S.outerIndexPtr(), S.outerIndexPtr() + S.cols() + 1);
+  sym->inner.assign(S.innerIndexPtr(), S.innerIndexPtr() + S.nonZeros());
   const BlockPattern bp = block_pattern(S);
-  if (bp.empty()) return false;
+  if (bp.empty()) return sym;
+  sym->blocked = true;
   const std::vector<std::vector<int>>& rows = bp.rows;
-  nb_ = static_cast<int>(rows.size());
+  const int nb = sym->nb = static_cast<int>(rows.size());
 
   // AMD on the node graph; Eigen's ordering returns the node eliminated k-th at position k.
   std::vector<Eigen::Triplet<double>> entries;
-  for (int J = 0; J < nb_; ++J)
+  for (int J = 0; J < nb; ++J)
     for (int I : rows[J]) entries.emplace_back(I, J, 1.0);
-  Eigen::SparseMatrix<double> graph(nb_, nb_);
+  Eigen::SparseMatrix<double> graph(nb, nb);
   graph.setFromTriplets(entries.begin(), entries.end());
   Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> order;
   Eigen::AMDOrdering<int>()(graph, order);
-  perm_.assign(order.indices().data(), order.indices().data() + nb_);
-  std::vector<int> pinv(nb_);
-  for (int k = 0; k < nb_; ++k) pinv[perm_[k]] = k;
-  first_.resize(nb_);
-  size_.resize(nb_);
-  uniform_ = true;
-  for (int k = 0; k < nb_; ++k) {
-    first_[k] = bp.start[perm_[k]];
-    size_[k] = bp.start[perm_[k] + 1] - first_[k];
-    uniform_ = uniform_ && size_[k] == 3;
+  std::vector<int>& perm = sym->perm;
+  perm.assign(order.indices().data(), order.indices().data() + nb);
+  std::vector<int> pinv(nb);
+  for (int k = 0; k < nb; ++k) pinv[perm[k]] = k;
+  sym->first.resize(nb);
+  sym->size.resize(nb);
+  for (int k = 0; k < nb; ++k) {
+    sym->first[k] = bp.start[perm[k]];
+    sym->size[k] = bp.start[perm[k] + 1] - sym->first[k];
+    sym->uniform = sym->uniform && sym->size[k] == 3;
   }
 
   // Column k of P S P^T, rows i <= k, with where each block's columns start in S's values (-1
   // for a padded column).
   const int* cp = S.outerIndexPtr();
-  ap_.assign(nb_ + 1, 0);
-  ai_.clear();
-  at_.clear();
-  for (int k = 0; k < nb_; ++k) {
-    const int J = perm_[k];
+  sym->ap.assign(nb + 1, 0);
+  for (int k = 0; k < nb; ++k) {
+    const int J = perm[k];
     int offset = 0;  // rows of S above this block in group J's columns
     for (int I : rows[J]) {
       const int i = pinv[I];
       if (i <= k) {
-        ai_.push_back(i);
+        sym->ai.push_back(i);
         std::array<int, 3> where{-1, -1, -1};
-        for (int c = 0; c < size_[k]; ++c) where[c] = cp[bp.start[J] + c] + offset;
-        at_.push_back(where);
+        for (int c = 0; c < sym->size[k]; ++c) where[c] = cp[bp.start[J] + c] + offset;
+        sym->at.push_back(where);
       }
-      offset += size_[i];
+      offset += sym->size[i];
     }
-    ap_[k + 1] = static_cast<int>(ai_.size());
+    sym->ap[k + 1] = static_cast<int>(sym->ai.size());
   }
 
   // Elimination tree and column counts of L (ldl_symbolic).
-  parent_.assign(nb_, -1);
-  lnz_.assign(nb_, 0);
-  flag_.assign(nb_, -1);
-  for (int k = 0; k < nb_; ++k) {
-    flag_[k] = k;
-    for (int p = ap_[k]; p < ap_[k + 1]; ++p)
-      for (int i = ai_[p]; flag_[i] != k; i = parent_[i]) {
-        if (parent_[i] == -1) parent_[i] = k;
-        ++lnz_[i];
-        flag_[i] = k;
+  std::vector<int>& parent = sym->parent;
+  parent.assign(nb, -1);
+  std::vector<int> lnz(nb, 0), flag(nb, -1);
+  for (int k = 0; k < nb; ++k) {
+    flag[k] = k;
+    for (int p = sym->ap[k]; p < sym->ap[k + 1]; ++p)
+      for (int i = sym->ai[p]; flag[i] != k; i = parent[i]) {
+        if (parent[i] == -1) parent[i] = k;
+        ++lnz[i];
+        flag[i] = k;
       }
   }
-  lp_.assign(nb_ + 1, 0);
-  for (int k = 0; k < nb_; ++k) lp_[k + 1] = lp_[k] + lnz_[k];
+  sym->lp.assign(nb + 1, 0);
+  for (int k = 0; k < nb; ++k) sym->lp[k + 1] = sym->lp[k] + lnz[k];
+  return sym;
+}
+
+// The analyses of the latest patterns, memoised: a fit or a study builds the same few grids
+// (size x topology x reduction) for thousands of drapes, and on a fit's drape the analysis (AMD,
+// elimination tree) cost about as much as the reduced solve (perf of `knitsim fit`). The result
+// is a function of the pattern alone, so a hit factorises bit for bit as a fresh analysis, on
+// any thread. Bounded by the integers held; the oldest entry goes first.
+class SymbolicMemo {
+ public:
+  static SymbolicMemo& instance() {
+    static SymbolicMemo memo;
+    return memo;
+  }
+  std::shared_ptr<const Symbolic> find(const Eigen::SparseMatrix<double>& S) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    for (const auto& e : entries_)
+      if (e->outer.size() == static_cast<size_t>(S.cols() + 1) &&
+          e->inner.size() == static_cast<size_t>(S.nonZeros()) &&
+          std::equal(e->outer.begin(), e->outer.end(), S.outerIndexPtr()) &&
+          std::equal(e->inner.begin(), e->inner.end(), S.innerIndexPtr()))
+        return e;
+    return nullptr;
+  }
+  void insert(std::shared_ptr<const Symbolic> e) {
+    const size_t held = footprint(*e);
+    if (held > kMaxIntegers) return;
+    const std::lock_guard<std::mutex> lock(mutex_);
+    while (!entries_.empty() && held_ + held > kMaxIntegers) {
+      held_ -= footprint(*entries_.front());
+      entries_.pop_front();
+    }
+    held_ += held;
+    entries_.push_back(std::move(e));
+  }
+  void clear() {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    entries_.clear();
+    held_ = 0;
+  }
+
+ private:
+  static constexpr size_t kMaxIntegers = size_t{1} << 23;  // 32 MB
+  static size_t footprint(const Symbolic& e) {
+    return e.outer.size() + e.inner.size() + 4 * e.perm.size() + e.ai.size() * 5 + e.lp.size();
+  }
+  std::mutex mutex_;
+  std::deque<std::shared_ptr<const Symbolic>> entries_;
+  size_t held_ = 0;
+};
+
+}  // namespace
+
+void BlockLdlt::clear_symbolic_memo() { SymbolicMemo::instance().clear(); }
+
+bool BlockLdlt::try_analyze(const Eigen::SparseMatrix<double>& S) {
+  if (!S.isCompressed()) return false;
+  std::shared_ptr<const Symbolic> sym = SymbolicMemo::instance().find(S);
+  if (!sym) {
+    sym = analyse_pattern(S);
+    SymbolicMemo::instance().insert(sym);
+  }
+  if (!sym->blocked) return false;
+  nb_ = sym->nb;
+  perm_ = sym->perm;
+  first_ = sym->first;
+  size_ = sym->size;
+  uniform_ = sym->uniform;
+  ap_ = sym->ap;
+  ai_ = sym->ai;
+  at_ = sym->at;
+  parent_ = sym->parent;
+  lp_ = sym->lp;
+  lnz_.assign(nb_, 0);
+  flag_.assign(nb_, -1);
   li_.resize(lp_[nb_]);
   lx_.resize(9 * static_cast<std::size_t>(lp_[nb_]));
   pivot_.resize(6 * static_cast<std::size_t>(nb_));

@@ -38,8 +38,11 @@ class BlockLdlt {
   // Ordering and symbolic factorisation of S's pattern; throws std::invalid_argument if
   // !blocked(S). Every later S must have this pattern.
   void analyze(const Eigen::SparseMatrix<double>& S);
-  // The same, returning false (and analysing nothing) if !blocked(S).
+  // The same, returning false (and analysing nothing) if !blocked(S). Analyses are memoised by
+  // pattern, process-wide (block_ldlt.cpp, SymbolicMemo): a repeated pattern costs a copy.
   bool try_analyze(const Eigen::SparseMatrix<double>& S);
+  // Forgets the memoised analyses (tests: a fresh analysis against a remembered one).
+  static void clear_symbolic_memo();
   // Numeric factorisation; false if a pivot block is singular or not finite.
   bool factorize(const Eigen::SparseMatrix<double>& S);
   // x = S^-1 b for the latest successful factorisation; b and x must not overlap.
@@ -55,6 +58,8 @@ class BlockLdlt {
   // too.
   double scalar_nonzeros() const;
   double scalar_flops() const;
+
+  struct Symbolic;  // one pattern's analysis (block_ldlt.cpp)
 
  private:
   int nb_ = 0;                          // nodes (blocks per side)

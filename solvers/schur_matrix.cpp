@@ -1,18 +1,17 @@
 #include "solvers/schur_matrix.hpp"
 
-#include <vector>
+#include <algorithm>
 
 namespace knitsim::detail {
 
 Eigen::SparseMatrix<double> schur_matrix(const MechanicalSystem& sys) {
+  // The pattern's arrays are Eigen's compressed ColMajor storage as they are (rows sorted).
   const CscPattern& p = sys.stiffness_pattern();
-  std::vector<Eigen::Triplet<double>> entries;
-  entries.reserve(p.nnz());
-  for (int c = 0; c < p.cols; ++c)
-    for (int k = p.colptr[c]; k < p.colptr[c + 1]; ++k) entries.emplace_back(p.rowind[k], c, 0.0);
   Eigen::SparseMatrix<double> S(p.rows, p.cols);
-  S.setFromTriplets(entries.begin(), entries.end());
-  S.makeCompressed();
+  S.resizeNonZeros(p.nnz());
+  std::copy(p.colptr.begin(), p.colptr.end(), S.outerIndexPtr());
+  std::copy(p.rowind.begin(), p.rowind.end(), S.innerIndexPtr());
+  std::fill(S.valuePtr(), S.valuePtr() + p.nnz(), 0.0);
   return S;
 }
 

@@ -125,6 +125,35 @@ TEST_CASE("make_csc_pattern: sorted unique rows per column, against a set of pai
   CHECK_THROWS_AS(make_csc_pattern(2, 3, {}, true), std::logic_error);
 }
 
+TEST_CASE("expand_node_pattern: the 3x3 blocks of a node pattern, and where each entry lies") {
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 30; ++trial) {
+    const int nodes = 1 + static_cast<int>(rng() % 7);
+    std::vector<std::pair<int, int>> pairs, dofs;
+    const int count = static_cast<int>(rng() % 20);
+    for (int k = 0; k < count; ++k)
+      pairs.emplace_back(static_cast<int>(rng() % nodes), static_cast<int>(rng() % nodes));
+    for (const auto& [r, c] : pairs)
+      for (int p = 0; p < 3; ++p)
+        for (int q = 0; q < 3; ++q) dofs.emplace_back(3 * r + p, 3 * c + q);
+    for (int i = 0; i < nodes; ++i)
+      for (int p = 0; p < 3; ++p)
+        for (int q = 0; q < 3; ++q) dofs.emplace_back(3 * i + p, 3 * i + q);
+    const CscPattern np = make_csc_pattern(nodes, nodes, pairs, true);
+    const CscPattern got = expand_node_pattern(np);
+    const CscPattern expected = make_csc_pattern(3 * nodes, 3 * nodes, dofs, false);
+    CHECK(got.rows == expected.rows);
+    CHECK(got.cols == expected.cols);
+    CHECK(got.colptr == expected.colptr);
+    CHECK(got.rowind == expected.rowind);
+    for (int c = 0; c < nodes; ++c)
+      for (int e = np.colptr[c]; e < np.colptr[c + 1]; ++e)
+        for (int p = 0; p < 3; ++p)
+          for (int q = 0; q < 3; ++q)
+            CHECK(node_block_entry(np, e, c, p, q) == got.find(3 * np.rowind[e] + p, 3 * c + q));
+  }
+}
+
 TEST_CASE("every diagonal entry is in the stiffness pattern") {
   DrapeParams p;
   p.topology = 'c';

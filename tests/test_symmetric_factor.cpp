@@ -428,6 +428,48 @@ TEST_CASE("BlockLdlt: the mirror-reduced drapes are blocked and solve as the sca
   CHECK((xb - xs).cwiseAbs().maxCoeff() <= 1e-10 * xs.cwiseAbs().maxCoeff());
 }
 
+TEST_CASE("BlockLdlt: a remembered analysis factorises bit for bit as a fresh one, per pattern") {
+  // Two patterns of the same size and entry count, so only their rows tell them apart: dense
+  // 3 x 3 blocks on the chains of nodes 0-1-2-3-4 and 0-2-1-3-4 (the same column counts).
+  auto chain = [](const std::vector<int>& order) {
+    std::vector<Eigen::Triplet<double>> t;
+    auto block = [&](int I, int J, double diag, double off) {
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) t.emplace_back(3 * I + r, 3 * J + c, r == c ? diag : off);
+    };
+    for (int I = 0; I < 5; ++I) block(I, I, 10.0 + I, 0.5);
+    for (size_t k = 0; k + 1 < order.size(); ++k) {
+      block(order[k], order[k + 1], -1.0 - 0.1 * k, -0.2);
+      block(order[k + 1], order[k], -1.0 - 0.1 * k, -0.2);
+    }
+    Eigen::SparseMatrix<double> S(15, 15);
+    S.setFromTriplets(t.begin(), t.end());
+    S.makeCompressed();
+    return S;
+  };
+  const Eigen::SparseMatrix<double> Sa = chain({0, 1, 2, 3, 4}), Sb = chain({0, 2, 1, 3, 4});
+  REQUIRE(std::equal(Sa.outerIndexPtr(), Sa.outerIndexPtr() + 16, Sb.outerIndexPtr()));
+  REQUIRE_FALSE(std::equal(Sa.innerIndexPtr(), Sa.innerIndexPtr() + Sa.nonZeros(),
+                           Sb.innerIndexPtr()));
+  const int n = static_cast<int>(Sa.rows());
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(n, -1.0, 2.0);
+  auto solve = [&](const Eigen::SparseMatrix<double>& S) {
+    detail::BlockLdlt f;
+    f.analyze(S);
+    REQUIRE(f.factorize(S));
+    Eigen::VectorXd x(n);
+    f.solve(b.data(), x.data());
+    return x;
+  };
+  detail::BlockLdlt::clear_symbolic_memo();
+  const Eigen::VectorXd fresh_a = solve(Sa), fresh_b = solve(Sb);
+  const Eigen::VectorXd again_a = solve(Sa), again_b = solve(Sb);  // remembered analyses
+  CHECK(again_a == fresh_a);
+  CHECK(again_b == fresh_b);
+  CHECK(relative_error(Sa, b, again_a) < 1e-10);
+  CHECK(relative_error(Sb, b, again_b) < 1e-10);
+}
+
 TEST_CASE("SymmetricFactor: factor size and flops, the same count from every back end") {
   // A chain of m particles, each coupled to the next by a dense 3 x 3 block (positive definite:
   // diagonally dominant). No ordering fills a path in, so L has below the diagonal, per

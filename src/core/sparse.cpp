@@ -53,6 +53,22 @@ CscPattern make_csc_pattern(int rows, int cols, std::vector<std::pair<int, int>>
   return p;
 }
 
+CscPattern expand_node_pattern(const CscPattern& nodes) {
+  CscPattern p;
+  p.rows = 3 * nodes.rows;
+  p.cols = 3 * nodes.cols;
+  p.colptr.assign(p.cols + 1, 0);
+  p.rowind.resize(9 * static_cast<size_t>(nodes.nnz()));
+  for (int c = 0; c < nodes.cols; ++c)
+    for (int q = 0; q < 3; ++q) {
+      for (int e = nodes.colptr[c]; e < nodes.colptr[c + 1]; ++e)
+        for (int r = 0; r < 3; ++r)
+          p.rowind[node_block_entry(nodes, e, c, r, q)] = 3 * nodes.rowind[e] + r;
+      p.colptr[3 * c + q + 1] = node_block_entry(nodes, nodes.colptr[c + 1], c, 0, q);
+    }
+  return p;
+}
+
 void csc_multiply(const CscPattern& A, const double* values, const double* x, double* y) {
   std::fill(y, y + A.rows, 0.0);
   for (int j = 0; j < A.cols; ++j) {

@@ -30,6 +30,17 @@ struct CscPattern {
 CscPattern make_csc_pattern(int rows, int cols, std::vector<std::pair<int, int>> entries,
                             bool with_diagonal);
 
+// The pattern of 3x3 blocks over a pattern of nodes: node entry (r, c) becomes the 9 entries
+// (3r+p, 3c+q), p, q in 0..2. Built from the node pattern in O(nnz): a spring network's Jacobian
+// from its ends' pairs, 9 times fewer pairs to sort than its entries.
+CscPattern expand_node_pattern(const CscPattern& nodes);
+
+// Position in expand_node_pattern(nodes) of the entry (3r+p, 3c+q), where e = nodes.find(r, c).
+inline int node_block_entry(const CscPattern& nodes, int e, int c, int p, int q) {
+  const int first = nodes.colptr[c], count = nodes.colptr[c + 1] - first;
+  return 9 * first + 3 * q * count + 3 * (e - first) + p;
+}
+
 // y = A x for a CSC matrix (pattern + values).
 void csc_multiply(const CscPattern& A, const double* values, const double* x, double* y);
 

@@ -21,6 +21,7 @@
 #include <filesystem>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <utility>
@@ -375,16 +376,16 @@ std::string default_knit_integrator() { return "cvode-bdf"; }
 namespace {
 
 // The largest mirror group of the grid and its start: eighth, quarter, half, or none (a
-// perturbed start, two_corner for quarter and eighth, a topology without the diagonal mirror).
-DrapeSymmetry largest_symmetry(const DrapeGrid& grid) {
+// perturbed start, two_corner for quarter and eighth, a topology without the diagonal mirror),
+// with its reduced model (built once: a fit's drape spends a third of its set-up there).
+std::optional<MirrorReduced> largest_reduction(const DrapeGrid& grid) {
   for (DrapeSymmetry s : {DrapeSymmetry::Eighth, DrapeSymmetry::Quarter, DrapeSymmetry::Half}) {
     try {
-      (void)make_drape_reduced(grid, s);
-      return s;
+      return make_drape_reduced(grid, s);
     } catch (const std::invalid_argument&) {
     }
   }
-  return DrapeSymmetry::None;
+  return std::nullopt;
 }
 
 // model.symmetry = auto: the reduced model cannot see the antisymmetric modes, so its unfolded
@@ -439,18 +440,26 @@ DrapeResult run_drape(const Scene& scene, const std::string& integrator, RunObse
   };
   std::vector<double> x;
   r.symmetry = scene.params.symmetry;
-  if (r.symmetry == DrapeSymmetry::Auto)
-    r.symmetry = (from && static_cast<int>(from->x.size()) == net.dof())
-                     ? DrapeSymmetry::None  // continuing a whole-sheet state
-                     : largest_symmetry(r.grid);
-  if (r.symmetry != DrapeSymmetry::None) {
-    const MirrorReduced reduced = make_drape_reduced(r.grid, r.symmetry);
+  std::optional<MirrorReduced> reduced;
+  if (r.symmetry == DrapeSymmetry::Auto) {
+    if (!(from && static_cast<int>(from->x.size()) == net.dof()))  // not a whole-sheet state
+      reduced = largest_reduction(r.grid);
+    const int order = reduced ? reduced->group_order() : 1;
+    r.symmetry = order == 8   ? DrapeSymmetry::Eighth
+                 : order == 4 ? DrapeSymmetry::Quarter
+                 : order == 2 ? DrapeSymmetry::Half
+                              : DrapeSymmetry::None;
+  } else if (r.symmetry != DrapeSymmetry::None) {
+    reduced = make_drape_reduced(r.grid, r.symmetry);
+  }
+  if (reduced) {
     try {
-      run(reduced);
+      run(*reduced);
     } catch (const std::invalid_argument&) {
       // auto: an integrator option that needs the whole sheet (cvode-bdf-gmres's block-Jacobi
       // preconditioner) refuses the reduction at its start: run whole instead.
       if (scene.params.symmetry != DrapeSymmetry::Auto) throw;
+      reduced.reset();
       r.symmetry = DrapeSymmetry::None;
       if (from) {
         q = from->x, qv = from->v;
@@ -459,10 +468,9 @@ DrapeResult run_drape(const Scene& scene, const std::string& integrator, RunObse
       }
     }
   }
-  if (r.symmetry != DrapeSymmetry::None) {
-    const MirrorReduced reduced = make_drape_reduced(r.grid, r.symmetry);
+  if (reduced) {
     x.resize(net.dof());
-    reduced.unfold(q.data(), x.data());
+    reduced->unfold(q.data(), x.data());
     if (scene.params.symmetry == DrapeSymmetry::Auto && r.stats.status == RunStatus::Equilibrium)
       certify_whole_sheet(scene, net, *integ, observer, x, r);
   } else {
