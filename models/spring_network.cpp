@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <sstream>
 #include <stdexcept>
 
@@ -87,9 +88,7 @@ SpringNetwork::SpringNetwork(SpringNetworkSpec spec) : spec_(std::move(spec)) {
         "spring network: residual_force_scale must be > 0 N when there is no gravity");
   }
 
-  // Springs: validate, then the stiffness pattern: 3x3 blocks over the pairs of free ends.
-  std::vector<std::pair<int, int>> pairs;
-  pairs.reserve(4 * spec_.springs.size());
+  // Springs: validate; their stiffness pattern is built on first use (stiffness_structure).
   for (const Spring& s : spec_.springs) {
     if (s.a < 0 || s.a >= np || s.b < 0 || s.b >= np || s.a == s.b)
       throw std::invalid_argument("spring network: spring end out of range or self-loop");
@@ -97,30 +96,45 @@ SpringNetwork::SpringNetwork(SpringNetworkSpec spec) : spec_(std::move(spec)) {
       throw std::invalid_argument("spring network: spring rest length must be > 0 m");
     if (!(s.stiffness > 0.0) || !std::isfinite(s.stiffness))
       throw std::invalid_argument("spring network: spring stiffness must be > 0 N/m");
-    const int ends[2] = {free_index_[s.a], free_index_[s.b]};
-    for (int r : ends)
-      for (int c : ends)
-        if (r >= 0 && c >= 0) pairs.emplace_back(r, c);
   }
-  const CscPattern nodes =
-      make_csc_pattern(free_count_, free_count_, std::move(pairs), /*with_diagonal=*/true);
-  pattern_ = expand_node_pattern(nodes);
-
-  slots_.assign(spec_.springs.size() * 36, -1);
-  for (size_t si = 0; si < spec_.springs.size(); ++si) {
-    const Spring& s = spec_.springs[si];
-    const int ends[2] = {free_index_[s.a], free_index_[s.b]};
-    for (int br = 0; br < 2; ++br)
-      for (int bc = 0; bc < 2; ++bc) {
-        if (ends[br] < 0 || ends[bc] < 0) continue;
-        const int e = nodes.find(ends[br], ends[bc]);
-        for (int q = 0; q < 3; ++q)
-          for (int p = 0; p < 3; ++p)
-            slots_[si * 36 + (2 * br + bc) * 9 + 3 * p + q] = node_block_entry(nodes, e, ends[bc], p, q);
-      }
-  }
+  structure_ = std::make_shared<StiffnessStructure>();
   pin_pos_.resize(spec_.pinned.size());
   scratch_.resize(n);
+}
+
+const SpringNetwork::StiffnessStructure& SpringNetwork::stiffness_structure() const {
+  StiffnessStructure& st = *structure_;
+  std::call_once(st.once, [&] {
+    // 3x3 blocks over the pairs of free ends.
+    std::vector<std::pair<int, int>> pairs;
+    pairs.reserve(4 * spec_.springs.size());
+    for (const Spring& s : spec_.springs) {
+      const int ends[2] = {free_index_[s.a], free_index_[s.b]};
+      for (int r : ends)
+        for (int c : ends)
+          if (r >= 0 && c >= 0) pairs.emplace_back(r, c);
+    }
+    std::vector<int> pair_entry;
+    const CscPattern nodes = make_csc_pattern(free_count_, free_count_, std::move(pairs),
+                                              /*with_diagonal=*/true, &pair_entry);
+    st.pattern = expand_node_pattern(nodes);
+    st.slots.assign(spec_.springs.size() * 36, -1);
+    int next_pair = 0;  // the pairs in the order listed above
+    for (size_t si = 0; si < spec_.springs.size(); ++si) {
+      const Spring& s = spec_.springs[si];
+      const int ends[2] = {free_index_[s.a], free_index_[s.b]};
+      for (int br = 0; br < 2; ++br)
+        for (int bc = 0; bc < 2; ++bc) {
+          if (ends[br] < 0 || ends[bc] < 0) continue;
+          const int e = pair_entry[next_pair++];
+          for (int q = 0; q < 3; ++q)
+            for (int p = 0; p < 3; ++p)
+              st.slots[si * 36 + (2 * br + bc) * 9 + 3 * p + q] =
+                  node_block_entry(nodes, e, ends[bc], p, q);
+        }
+    }
+  });
+  return st;
 }
 
 void SpringNetwork::initial_state(double* x, double* v) const {
@@ -249,7 +263,8 @@ void SpringNetwork::constant_acceleration(double /*t*/, double* a) const {
 
 void SpringNetwork::stiffness_values(double t, const double* x, double* values) const {
   update_pins(t);
-  std::fill(values, values + pattern_.nnz(), 0.0);
+  const StiffnessStructure& st = stiffness_structure();
+  std::fill(values, values + st.pattern.nnz(), 0.0);
   for (size_t si = 0; si < spec_.springs.size(); ++si) {
     const Spring& s = spec_.springs[si];
     const int fa = free_index_[s.a], fb = free_index_[s.b];
@@ -264,7 +279,7 @@ void SpringNetwork::stiffness_values(double t, const double* x, double* values) 
     for (int p = 0; p < 3; ++p)
       for (int q = 0; q < 3; ++q) B[3 * p + q] = (df - fl) * u[p] * u[q] + (p == q ? fl : 0.0);
     // Blocks aa = -B, ab = +B, ba = +B, bb = -B; row r scaled by 1/m_r.
-    const int* slot = &slots_[si * 36];
+    const int* slot = &st.slots[si * 36];
     const int ends[2] = {fa, fb};
     for (int blk = 0; blk < 4; ++blk) {
       const int row_end = ends[blk / 2];
@@ -374,7 +389,7 @@ bool SpringNetwork::free_floating() const {
 std::string SpringNetwork::describe() const {
   std::ostringstream os;
   os << particle_count() << " particles (" << free_count_ << " free), " << spec_.springs.size()
-     << " springs, " << dof() << " dof, Jacobian nnz " << pattern_.nnz();
+     << " springs, " << dof() << " dof, Jacobian nnz " << stiffness_pattern().nnz();
   return os.str();
 }
 

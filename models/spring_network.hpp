@@ -32,6 +32,8 @@
 // never throws; a non-finite state produces non-finite output for the caller to detect.
 #pragma once
 
+#include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -93,7 +95,7 @@ class SpringNetwork final : public MechanicalSystem {
   void constant_acceleration(double t, double* a) const override;  // gravity
   const std::vector<double>& damping_rate() const override { return gamma_; }
   const std::vector<double>& mass() const override { return dof_mass_; }
-  const CscPattern& stiffness_pattern() const override { return pattern_; }
+  const CscPattern& stiffness_pattern() const override { return stiffness_structure().pattern; }
   void stiffness_values(double t, const double* x, double* values) const override;
   double static_residual(double t, const double* x) const override;
   double residual_roundoff(double t, const double* x) const override;
@@ -138,9 +140,15 @@ class SpringNetwork final : public MechanicalSystem {
   std::vector<double> gamma_, dof_mass_, inv_mass_;
   double residual_scale_ = 1.0;
   double pin_move_time_ = 0.0;
-  CscPattern pattern_;
-  std::vector<int>
-      slots_;  // per spring: 4 blocks (aa, ab, ba, bb) x 9 value positions, -1 if absent
+  // The stiffness pattern, built on first use: a drape run on its mirror reduction never needs
+  // the whole sheet's (a third of a fit drape's set-up). Shared by copies (same springs and pins).
+  struct StiffnessStructure {
+    std::once_flag once;
+    CscPattern pattern;
+    std::vector<int> slots;  // per spring: 4 blocks (aa, ab, ba, bb) x 9 value positions, or -1
+  };
+  const StiffnessStructure& stiffness_structure() const;
+  std::shared_ptr<StiffnessStructure> structure_;
   mutable std::vector<Vec3> pin_pos_;
   mutable std::vector<double> scratch_;
 };

@@ -97,7 +97,7 @@ TEST_CASE("Jacobian includes the elongation-limit spring when it is active") {
   CHECK(check_stiffness_jacobian(g.network, 0.0, x.data(), 1e-8).max_relative_error < 1e-4);
 }
 
-TEST_CASE("make_csc_pattern: sorted unique rows per column, against a set of pairs") {
+TEST_CASE("make_csc_pattern: sorted unique rows per column and where each pair lies, against a set") {
   std::mt19937 rng(7);
   for (int trial = 0; trial < 50; ++trial) {
     const int rows = 1 + static_cast<int>(rng() % 9), cols = 1 + static_cast<int>(rng() % 9);
@@ -111,7 +111,8 @@ TEST_CASE("make_csc_pattern: sorted unique rows per column, against a set of pai
     if (diagonal)
       for (int i = 0; i < rows; ++i) expected.insert({i, i});
 
-    const CscPattern p = make_csc_pattern(rows, cols, entries, diagonal);
+    std::vector<int> position;
+    const CscPattern p = make_csc_pattern(rows, cols, entries, diagonal, &position);
     REQUIRE(p.rows == rows);
     REQUIRE(p.cols == cols);
     REQUIRE(p.colptr.size() == static_cast<size_t>(cols + 1));
@@ -120,6 +121,9 @@ TEST_CASE("make_csc_pattern: sorted unique rows per column, against a set of pai
       for (int k = p.colptr[j]; k < p.colptr[j + 1]; ++k) got.emplace_back(j, p.rowind[k]);
     CHECK(got == std::vector<std::pair<int, int>>(expected.begin(), expected.end()));
     for (const auto& [c, r] : expected) CHECK(p.find(r, c) >= 0);
+    REQUIRE(position.size() == entries.size());  // one per pair given, not the diagonal added
+    for (size_t k = 0; k < entries.size(); ++k)
+      CHECK(position[k] == p.find(entries[k].first, entries[k].second));
   }
   CHECK_THROWS_AS(make_csc_pattern(2, 2, {{2, 0}}, false), std::logic_error);
   CHECK_THROWS_AS(make_csc_pattern(2, 3, {}, true), std::logic_error);

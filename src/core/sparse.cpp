@@ -14,7 +14,8 @@ int CscPattern::find(int row, int col) const {
 }
 
 CscPattern make_csc_pattern(int rows, int cols, std::vector<std::pair<int, int>> entries,
-                            bool with_diagonal) {
+                            bool with_diagonal, std::vector<int>* position) {
+  const size_t named = entries.size();  // the caller's pairs, before the diagonal
   if (with_diagonal) {
     if (rows != cols) throw std::logic_error("make_csc_pattern: diagonal needs a square matrix");
     for (int i = 0; i < rows; ++i) entries.emplace_back(i, i);
@@ -22,16 +23,16 @@ CscPattern make_csc_pattern(int rows, int cols, std::vector<std::pair<int, int>>
   for (const auto& [r, c] : entries)
     if (r < 0 || r >= rows || c < 0 || c >= cols)
       throw std::logic_error("make_csc_pattern: entry outside the matrix");
-  // Bucket the rows by column (counting sort), then keep each row once per column (a marker
+  // Bucket the pairs by column (counting sort), then keep each row once per column (a marker
   // per row) and sort the column's few distinct rows: O(entries + sum of k log k over columns),
   // where one comparison sort of all pairs cost ~20 % of a fit's CPU (perf, repro quick).
   std::vector<int> start(cols + 1, 0);
   for (const auto& e : entries) ++start[e.second + 1];
   for (int j = 0; j < cols; ++j) start[j + 1] += start[j];
-  std::vector<int> bucket(entries.size());
+  std::vector<int> bucket(entries.size());  // pair indices, by column
   {
     std::vector<int> next(start.begin(), start.end() - 1);
-    for (const auto& [r, c] : entries) bucket[next[c]++] = r;
+    for (size_t k = 0; k < entries.size(); ++k) bucket[next[entries[k].second]++] = static_cast<int>(k);
   }
 
   CscPattern p;
@@ -40,15 +41,21 @@ CscPattern make_csc_pattern(int rows, int cols, std::vector<std::pair<int, int>>
   p.colptr.assign(cols + 1, 0);
   p.rowind.reserve(entries.size());
   std::vector<int> seen_in(rows, -1);  // the last column that listed this row
+  std::vector<int> at(position ? rows : 0);  // a row's index in the column being built
+  if (position) position->assign(named, -1);
   for (int j = 0; j < cols; ++j) {
     for (int k = start[j]; k < start[j + 1]; ++k) {
-      const int r = bucket[k];
+      const int r = entries[bucket[k]].first;
       if (seen_in[r] == j) continue;
       seen_in[r] = j;
       p.rowind.push_back(r);
     }
     std::sort(p.rowind.begin() + p.colptr[j], p.rowind.end());
     p.colptr[j + 1] = static_cast<int>(p.rowind.size());
+    if (!position) continue;
+    for (int e = p.colptr[j]; e < p.colptr[j + 1]; ++e) at[p.rowind[e]] = e;
+    for (int k = start[j]; k < start[j + 1]; ++k)
+      if (static_cast<size_t>(bucket[k]) < named) (*position)[bucket[k]] = at[entries[bucket[k]].first];
   }
   return p;
 }

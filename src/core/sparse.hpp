@@ -26,9 +26,10 @@ struct CscPattern {
 
 // Builds a pattern from (row, col) pairs (duplicates merged). With `with_diagonal`, every
 // diagonal entry of a square pattern is present even if no pair names it: SUNDIALS 6.4
-// pays O(n^2) in I - gamma*J when a diagonal entry is missing.
+// pays O(n^2) in I - gamma*J when a diagonal entry is missing. With `position`, also where
+// each pair landed: (*position)[k] is pair k's index in the value array (what find() returns).
 CscPattern make_csc_pattern(int rows, int cols, std::vector<std::pair<int, int>> entries,
-                            bool with_diagonal);
+                            bool with_diagonal, std::vector<int>* position = nullptr);
 
 // The pattern of 3x3 blocks over a pattern of nodes: node entry (r, c) becomes the 9 entries
 // (3r+p, 3c+q), p, q in 0..2. Built from the node pattern in O(nnz): a spring network's Jacobian
