@@ -154,8 +154,8 @@ void register_repro_command(CLI::App& app) {
       "--out");
   cmd->add_option("task", args->task, "table4|table6|taguchi|fig13|all")->required();
   cmd->add_option("--preset", args->preset,
-                  "quick (reduced budget, ~20-30 s with 2 jobs) | paper (the paper's protocol; "
-                  "Tables 4 + 6: ~6 min with 2 jobs)")
+                  "quick (reduced budget, ~5 s with 2 jobs) | paper (the paper's protocol; "
+                  "Tables 4 + 6: ~1 min with 2 jobs)")
       ->capture_default_str();
   cmd->add_option("--jobs", args->jobs, "Threads per ICA fit (results do not depend on it)")
       ->capture_default_str();
