@@ -13,18 +13,12 @@
 #include "solvers/integrator.hpp"
 #include "src/base/text.hpp"
 #include "src/core/jacobian_check.hpp"
+#include "tests/test_files.hpp"
 
 using namespace knitsim;
+using knitsim::test::chart_file;
 
 namespace {
-
-std::string chart_file(const std::string& name) {
-  std::ifstream in(std::string(KNITSIM_CHARTS) + "/" + name);
-  REQUIRE(in.good());
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 // Paper 2's bare network (knit.network = paper): the tests of the paper's mechanics pin it;
 // the stabilised default is named where a test is about it.

@@ -12,18 +12,12 @@
 #include "models/knit_loops.hpp"
 #include "src/geometry/segment_distance.hpp"
 #include "src/measure/yarn_measures.hpp"
+#include "tests/test_files.hpp"
 
 using namespace knitsim;
+using knitsim::test::chart_file;
 
 namespace {
-
-std::string chart_file(const std::string& name) {
-  std::ifstream in(std::string(KNITSIM_CHARTS) + "/" + name);
-  REQUIRE(in.good());
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 // Rotation about a unit axis by angle a (Rodrigues), applied to p.
 Vec3 rotate(Vec3 p, Vec3 axis, double a) {
