@@ -305,11 +305,11 @@ class FailOnce final : public Integrator {
 
 TEST_CASE("a recoverable failure mid-run: the driver restarts CVODE, which settles as before") {
   // Whether a real run needs a restart is a knife edge (two_corner, cvode-bdf-gmres: CVODE's
-  // seventh error-test failure in a row, or not, depending on round-off; README at 1e1ee2d,
-  // "Integrators"),
-  // so the mechanism is tested with a failure injected half-way through a four_corner run, at
-  // high order and large steps: the driver must restart the real CVODE (fresh order 1), and the
-  // run must still settle on the same equilibrium within the stop criterion's bound.
+  // seventh error-test failure in a row, or not, depending on round-off; docs/numerics.md,
+  // "Restarts"), so the mechanism is tested with a failure injected half-way through a
+  // four_corner run, at high order and large steps: the driver must restart the real CVODE
+  // (fresh order 1), and the run must still settle on the same equilibrium within the stop
+  // criterion's bound.
   const SpringNetwork& net = four_corner().network;
   const Drape clean = drape(net, "cvode-bdf-gmres", IntegratorOptions{});
   REQUIRE(clean.stats.status == RunStatus::Equilibrium);
@@ -333,12 +333,10 @@ TEST_CASE("a recoverable failure mid-run: the driver restarts CVODE, which settl
 }
 
 TEST_CASE("with restarts allowed, cvode-bdf-gmres settles two_corner at eps_lin 5e-3 to 5e-6") {
-  // Measured (README at 1e1ee2d, "Integrators"): without restarts, schur-ldl GMRES failed CVODE's
-  // error
-  // test seven times in a row (order 4, h 130 s -> 2e-3 s) at these eps_lin; a restart from the
-  // last accepted state settled each (1 restart each, 2026-11-27). Whether a run needs the
-  // restart at all is a round-off knife edge, so only the outcome is asserted: every run
-  // settles on the reference equilibrium (the mechanism itself: the test above).
+  // Without restarts, schur-ldl GMRES failed CVODE's error test seven times in a row (order 4,
+  // h 130 s -> 2e-3 s) at these eps_lin; a restart from the last accepted state settled each.
+  // Whether a run needs the restart at all is a round-off knife edge, so only the outcome is
+  // asserted: every run settles on the reference equilibrium (the mechanism: the test above).
   DrapeParams p;
   p.layout = PinLayout::TwoCorner;
   const DrapeGrid grid = build_drape_grid(p);

@@ -198,7 +198,7 @@ TEST_CASE("the unfolded quarter and eighth equilibria are the full four_corner e
   // 3.6e-11 m (a) and 7.5e-11 m (c) -> bound 1e-9 m, 1e-7 of the 1.3 cm sag. The Eq. 5 edge
   // coefficients follow (measured <= 6e-9 of the largest) -> bound 1e-6 of the largest.
   // cvode-bdf runs at the fits' rtol 1e-8: at the default 1e-6 either run may end at t_max on
-  // the corrector's residual plateau (README at 1e1ee2d, "Known limitations"; the quarter with
+  // the corrector's residual plateau (docs/numerics.md, "Known limitations"; the quarter with
   // topology c
   // does), which is not what this test is about.
   // The eighth: the same bounds (its steps differ from the quarter's for the same reason).
@@ -224,7 +224,7 @@ TEST_CASE("the unfolded two_corner half equilibrium is the full two_corner equil
   // `static` (relaxation, then a Newton polish to round-off): 890 steps full, 869 half, the
   // two equilibria 1.8e-15 m apart -> bound 1e-11 m. Not cvode-bdf: whether its two_corner runs
   // stop at equilibrium or ring on the corrector's residual noise (2-3e-8) until t_max is a
-  // lottery on round-off at the defaults too (README at 1e1ee2d, "Known limitations"): the half
+  // lottery on round-off at the defaults too (docs/numerics.md, "Known limitations"): the half
   // ended at
   // t_max with the block factorisation of its padded nodes (commit ca7b793), at equilibrium
   // with the scalar one, and the scalar one's own half ends at t_max with stiffness 852.1

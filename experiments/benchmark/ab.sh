@@ -7,7 +7,7 @@
 #
 # Prints the median CPU of each binary, their ratio B / A and the number of pairs (default 9);
 # --no-pictures and --quiet are added to every run. DIR (default out/ab) keeps the last run of
-# each. Example (the figures of README at 1e1ee2d, "Performance" for commit e57b76b):
+# each. Example (two binaries of two commits, built beforehand):
 #   experiments/benchmark/ab.sh --pairs 15 /tmp/knitsim-b405e40 /tmp/knitsim-e57b76b -- \
 #     drape --scene four_corner
 set -euo pipefail

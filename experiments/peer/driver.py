@@ -106,7 +106,7 @@ def main():
     expkit.finish(args)
     # The study's own check: both reach the same equilibrium. A reduced model's run (not the
     # peer's model, shown for what it buys) may end at t_max on the BDF corrector's residual
-    # plateau (README at 1e1ee2d, "Known limitations"); its status is reported, its state still
+    # plateau (docs/numerics.md, "Known limitations"); its status is reported, its state still
     # checked.
     bad = [c for c in compare if c["max_position_difference_m"] > 1e-6
            or (c["knitsim_model"] == "full" and c["knitsim_status"] != "equilibrium")
