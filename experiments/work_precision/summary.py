@@ -16,8 +16,15 @@ from expkit import (md_table, num, provenance, read_json, read_rows, span,  # no
 FAR = 1e-3  # m: a settled run farther than this from the reference found another equilibrium
 
 
+def by_position_tol(r):
+    return math.isfinite(float(r.get("position_tol") or "nan"))
+
+
 def setting(r):
-    """'rtol 1e-6' for an adaptive run, 'dt 100 s' for a fixed-step one."""
+    """'rtol 1e-6' for an adaptive run, 'dt 100 s' for a fixed-step one, 'position_tol 1e-8 m'
+    for the equilibrium solver."""
+    if by_position_tol(r):
+        return "position_tol %s m" % num(r["position_tol"], exp=True)
     if float(r.get("dt") or 0) > 0:
         return "dt %s s" % num(r["dt"], 4)
     return "rtol %s" % num(r["rtol"], exp=True)
@@ -104,7 +111,7 @@ def build(out):
                         span([r["pos_err_m"] for r in near], lambda v: num(v, 2)),
                         "; Eq. 5 coefficient error %s %%" % span(coeff, lambda v: num(v, 2))
                         if coeff else ""))
-        adaptive = [r for r in sr if float(r["dt"] or 0) == 0]
+        adaptive = [r for r in sr if float(r["dt"] or 0) == 0 and not by_position_tol(r)]
         if adaptive:
             integs = list(dict.fromkeys(r["integrator"] for r in adaptive))
             rtols = sorted({float(r["rtol"]) for r in adaptive}, reverse=True)
