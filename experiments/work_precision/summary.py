@@ -46,11 +46,14 @@ def build(out):
     if refs:
         sections.append((
             "References (references.csv)",
-            "Per scene, the run every error is measured against.\n\n" + md_table(
+            "Per scene, the run every error is measured against; its Newton correction at the "
+            "end estimates its own distance to the minimum, and the correction's round-off floor "
+            "bounds what any stop can resolve.\n\n" + md_table(
                 ["scene", "integrator", "rtol", "atol", "equilibrium_tol", "status", "residual",
-                 "t_final (s)", "CPU (s)"],
+                 "Newton correction (m)", "its round-off floor (m)", "t_final (s)", "CPU (s)"],
                 [[r["scene"], r["integrator"], num(r["rtol"], exp=True), num(r["atol"], exp=True),
                   num(r["equilibrium_tol"], exp=True), r["status"], num(r["residual"], 2),
+                  num(r.get("newton_step_m", "nan"), 2), num(r.get("newton_floor_m", "nan"), 2),
                   num(r["t_final"]), num(r["cpu_seconds"])] for r in refs])))
 
     if best:
