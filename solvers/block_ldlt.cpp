@@ -129,10 +129,13 @@ void BlockLdlt::analyze(const Eigen::SparseMatrix<double>& S) {
 struct BlockLdlt::Symbolic {
   std::vector<int> outer, inner;  // the pattern analysed (the memo's key)
   bool blocked = false;
-  int nb = 0;
-  std::vector<int> perm, first, size, ap, ai, parent, lp;
-  std::vector<std::array<int, 3>> at;
-  bool uniform = true;
+  int nb = 0;                          // nodes (blocks per side)
+  std::vector<int> perm;               // perm[k]: node eliminated k-th
+  std::vector<int> first, size;        // for the node eliminated k-th: its first unknown, its count
+  std::vector<int> ap, ai;             // upper block pattern of P S P^T by column (rows i <= k)
+  std::vector<std::array<int, 3>> at;  // for each: S's value index of the block's column c, row 0
+  std::vector<int> parent, lp;         // elimination tree; where each column of L starts
+  bool uniform = true;                 // every node has 3 unknowns (no padding)
 };
 
 namespace {
@@ -267,38 +270,36 @@ bool BlockLdlt::try_analyze(const Eigen::SparseMatrix<double>& S) {
     SymbolicMemo::instance().insert(sym);
   }
   if (!sym->blocked) return false;
-  nb_ = sym->nb;
-  perm_ = sym->perm;
-  first_ = sym->first;
-  size_ = sym->size;
-  uniform_ = sym->uniform;
-  ap_ = sym->ap;
-  ai_ = sym->ai;
-  at_ = sym->at;
-  parent_ = sym->parent;
-  lp_ = sym->lp;
+  sym_ = std::move(sym);  // shared with the memo: a hit copies nothing
+  nb_ = sym_->nb;
   lnz_.assign(nb_, 0);
   flag_.assign(nb_, -1);
-  li_.resize(lp_[nb_]);
-  lx_.resize(9 * static_cast<std::size_t>(lp_[nb_]));
+  li_.resize(sym_->lp[nb_]);
+  lx_.resize(9 * static_cast<std::size_t>(sym_->lp[nb_]));
   pivot_.resize(6 * static_cast<std::size_t>(nb_));
   work_.assign(9 * static_cast<std::size_t>(nb_), 0.0);
   stack_.resize(nb_);
   return true;
 }
 
+long BlockLdlt::nonzeros_l() const { return sym_ ? 9L * sym_->lp.back() : 0; }
+
 // Node i's three scalar columns hold, below the diagonal, its 3 b blocks' rows (b = its blocks
 // in L) plus 2, 1 and 0 entries of its own pivot block.
 double BlockLdlt::scalar_nonzeros() const {
+  if (!sym_) return 0.0;  // nothing analysed
+  const Symbolic& sym = *sym_;
   double n = 0.0;
-  for (int i = 0; i < nb_; ++i) n += 9.0 * (lp_[i + 1] - lp_[i]) + 3.0;
+  for (int i = 0; i < nb_; ++i) n += 9.0 * (sym.lp[i + 1] - sym.lp[i]) + 3.0;
   return n;
 }
 
 double BlockLdlt::scalar_flops() const {
+  if (!sym_) return 0.0;  // nothing analysed
+  const Symbolic& sym = *sym_;
   double f = 0.0;
   for (int i = 0; i < nb_; ++i) {
-    const double c = 3.0 * (lp_[i + 1] - lp_[i]);
+    const double c = 3.0 * (sym.lp[i + 1] - sym.lp[i]);
     f += (c + 3) * (c + 3) + (c + 2) * (c + 2) + (c + 1) * (c + 1);
   }
   return f;
@@ -306,7 +307,8 @@ double BlockLdlt::scalar_flops() const {
 
 bool BlockLdlt::factorize(const Eigen::SparseMatrix<double>& S) {
   if (nb_ == 0) throw std::logic_error("BlockLdlt::factorize before analyze");
-  return uniform_ ? factorize_blocks<true>(S.valuePtr()) : factorize_blocks<false>(S.valuePtr());
+  return sym_->uniform ? factorize_blocks<true>(S.valuePtr())
+                       : factorize_blocks<false>(S.valuePtr());
 }
 
 // Padded groups (Uniform false) enter as identity rows and columns: their entries of L stay
@@ -316,6 +318,7 @@ bool BlockLdlt::factorize(const Eigen::SparseMatrix<double>& S) {
 // instructions (65.5 vs 69.1 M, 1.1 % of the run; callgrind, same results bit for bit).
 template <bool Uniform>
 bool BlockLdlt::factorize_blocks(const double* s) {
+  const Symbolic& sym = *sym_;
   std::fill(lnz_.begin(), lnz_.end(), 0);
   std::fill(flag_.begin(), flag_.end(), -1);
   std::fill(work_.begin(), work_.end(), 0.0);  // clean even after a failed factorisation
@@ -324,14 +327,14 @@ bool BlockLdlt::factorize_blocks(const double* s) {
     // each entry's row up to k, in topological order at stack_[top..nb_).
     int top = nb_;
     flag_[k] = k;
-    for (int p = ap_[k]; p < ap_[k + 1]; ++p) {
-      double* y = &work_[9 * static_cast<std::size_t>(ai_[p])];
-      const int rows = Uniform ? 3 : size_[ai_[p]];
-      const int cols = Uniform ? 3 : size_[k];
+    for (int p = sym.ap[k]; p < sym.ap[k + 1]; ++p) {
+      double* y = &work_[9 * static_cast<std::size_t>(sym.ai[p])];
+      const int rows = Uniform ? 3 : sym.size[sym.ai[p]];
+      const int cols = Uniform ? 3 : sym.size[k];
       for (int c = 0; c < cols; ++c)
-        for (int r = 0; r < rows; ++r) y[3 * r + c] += s[at_[p][c] + r];
+        for (int r = 0; r < rows; ++r) y[3 * r + c] += s[sym.at[p][c] + r];
       int len = 0;
-      for (int i = ai_[p]; flag_[i] != k; i = parent_[i]) {
+      for (int i = sym.ai[p]; flag_[i] != k; i = sym.parent[i]) {
         stack_[len++] = i;
         flag_[i] = k;
       }
@@ -342,7 +345,7 @@ bool BlockLdlt::factorize_blocks(const double* s) {
     std::copy(yk, yk + 9, d);
     std::fill(yk, yk + 9, 0.0);
     if (!Uniform)
-      for (int q = size_[k]; q < 3; ++q) d[4 * q] = 1.0;  // a padded coordinate's pivot
+      for (int q = sym.size[k]; q < 3; ++q) d[4 * q] = 1.0;  // a padded coordinate's pivot
     // Row k of L: solve L(0:k, 0:k) y = column k along the pattern; L(k, i) = y_i^T D_i^-1,
     // D_k = S_kk - sum_i L(k, i) y_i.
     for (; top < nb_; ++top) {
@@ -351,8 +354,8 @@ bool BlockLdlt::factorize_blocks(const double* s) {
       double y[9];
       std::copy(wi, wi + 9, y);
       std::fill(wi, wi + 9, 0.0);
-      const int end = lp_[i] + lnz_[i];
-      for (int p = lp_[i]; p < end; ++p)
+      const int end = sym.lp[i] + lnz_[i];
+      for (int p = sym.lp[i]; p < end; ++p)
         sub_product(&work_[9 * static_cast<std::size_t>(li_[p])],
                     &lx_[9 * static_cast<std::size_t>(p)], y);
       // L(k, i) = y^T D_i^-1: its row r is D_i^-1 times y's column r (D_i symmetric).
@@ -372,12 +375,13 @@ bool BlockLdlt::factorize_blocks(const double* s) {
 }
 
 void BlockLdlt::solve(const double* b, double* x) {
+  const Symbolic& sym = *sym_;
   double* w = work_.data();  // 3 per node, in elimination order
   for (int k = 0; k < nb_; ++k)
-    for (int r = 0; r < 3; ++r) w[3 * k + r] = r < size_[k] ? b[first_[k] + r] : 0.0;
+    for (int r = 0; r < 3; ++r) w[3 * k + r] = r < sym.size[k] ? b[sym.first[k] + r] : 0.0;
   for (int j = 0; j < nb_; ++j) {  // L z = P b
     const double* wj = &w[3 * j];
-    for (int p = lp_[j]; p < lp_[j + 1]; ++p) {
+    for (int p = sym.lp[j]; p < sym.lp[j + 1]; ++p) {
       const double* l = &lx_[9 * static_cast<std::size_t>(p)];
       double* wr = &w[3 * li_[p]];
       for (int r = 0; r < 3; ++r)
@@ -388,14 +392,14 @@ void BlockLdlt::solve(const double* b, double* x) {
     apply_pivot_inverse(&pivot_[6 * static_cast<std::size_t>(j)], &w[3 * j]);
   for (int j = nb_ - 1; j >= 0; --j) {  // L^T
     double* wj = &w[3 * j];
-    for (int p = lp_[j]; p < lp_[j + 1]; ++p) {
+    for (int p = sym.lp[j]; p < sym.lp[j + 1]; ++p) {
       const double* l = &lx_[9 * static_cast<std::size_t>(p)];
       const double* wr = &w[3 * li_[p]];
       for (int c = 0; c < 3; ++c) wj[c] -= l[c] * wr[0] + l[3 + c] * wr[1] + l[6 + c] * wr[2];
     }
   }
   for (int k = 0; k < nb_; ++k)
-    for (int r = 0; r < size_[k]; ++r) x[first_[k] + r] = w[3 * k + r];
+    for (int r = 0; r < sym.size[k]; ++r) x[sym.first[k] + r] = w[3 * k + r];
 }
 
 int BlockLdlt::negative_pivots() const {

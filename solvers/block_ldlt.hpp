@@ -24,6 +24,7 @@
 
 #include <Eigen/SparseCore>
 #include <array>
+#include <memory>
 #include <vector>
 
 namespace knitsim::detail {
@@ -39,7 +40,7 @@ class BlockLdlt {
   // !blocked(S). Every later S must have this pattern.
   void analyze(const Eigen::SparseMatrix<double>& S);
   // The same, returning false (and analysing nothing) if !blocked(S). Analyses are memoised by
-  // pattern, process-wide (block_ldlt.cpp, SymbolicMemo): a repeated pattern costs a copy.
+  // pattern, process-wide (block_ldlt.cpp, SymbolicMemo): a repeated pattern costs a lookup.
   bool try_analyze(const Eigen::SparseMatrix<double>& S);
   // Forgets the memoised analyses (tests: a fresh analysis against a remembered one).
   static void clear_symbolic_memo();
@@ -52,7 +53,7 @@ class BlockLdlt {
   int negative_pivots() const;
 
   // Stored entries of L (3 x 3 blocks, counted as scalars).
-  long nonzeros_l() const { return 9L * lp_.back(); }
+  long nonzeros_l() const;
   // Entries of L below the diagonal and flops of one factorisation, counted on the scalar
   // columns (SymmetricFactor::factor_flops): padded coordinates count, their zeros are computed
   // too.
@@ -62,16 +63,12 @@ class BlockLdlt {
   struct Symbolic;  // one pattern's analysis (block_ldlt.cpp)
 
  private:
-  int nb_ = 0;                          // nodes (blocks per side)
-  std::vector<int> perm_;               // perm_[k]: node eliminated k-th
-  std::vector<int> ap_, ai_;            // upper block pattern of P S P^T by column (rows i <= k)
-  std::vector<std::array<int, 3>> at_;  // for each: S's value index of the block's column c, row 0
-  std::vector<int> parent_, lp_, lnz_, li_, flag_, stack_;  // elimination tree, L's pattern
-  std::vector<double> lx_;                                  // L's blocks, 9 per entry (row-major)
-  std::vector<double> pivot_;      // D_k = l d l^T, 6 per node: d0, d1, d2, l10, l20, l21
-  std::vector<double> work_;       // 9 per node: the row of L being formed; 3 per node in solve
-  std::vector<int> first_, size_;  // for the node eliminated k-th: its first unknown, its count
-  bool uniform_ = true;            // every node has 3 unknowns (no padding)
+  std::shared_ptr<const Symbolic> sym_;       // the ordering and L's pattern (shared with the memo)
+  int nb_ = 0;                                // nodes (blocks per side)
+  std::vector<int> lnz_, li_, flag_, stack_;  // L's row indices as they are formed
+  std::vector<double> lx_;                    // L's blocks, 9 per entry (row-major)
+  std::vector<double> pivot_;  // D_k = l d l^T, 6 per node: d0, d1, d2, l10, l20, l21
+  std::vector<double> work_;   // 9 per node: the row of L being formed; 3 per node in solve
 
   template <bool Uniform>
   bool factorize_blocks(const double* s);
