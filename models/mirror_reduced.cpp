@@ -67,7 +67,8 @@ MirrorReduced::MirrorReduced(const SpringNetwork& full, const MirrorPlanes& plan
   for (int p = 0; p < np; ++p) {
     auto who = [p] { return "particle " + std::to_string(p); };  // built only to throw
     auto valid = [np](int q) { return q >= 0 && q < np; };
-    if (!valid(ix[p]) || ix[ix[p]] != p) asymmetric(who() + ": the x image map is not an involution");
+    if (!valid(ix[p]) || ix[ix[p]] != p)
+      asymmetric(who() + ": the x image map is not an involution");
     if (has_y && (!valid(iy[p]) || iy[iy[p]] != p || ix[iy[p]] != iy[ix[p]]))
       asymmetric(who() + ": the image maps are not two commuting involutions");
     if (diagonal && (!valid(id[p]) || id[id[p]] != p || id[ix[p]] != iy[id[p]]))
@@ -257,8 +258,8 @@ MirrorReduced::MirrorReduced(const SpringNetwork& full, const MirrorPlanes& plan
       if (r >= 0 && c >= 0) entries.emplace_back(r, c);
     }
   std::vector<int> entry_position;
-  pattern_ = make_csc_pattern(dof(), dof(), std::move(entries), /*with_diagonal=*/true,
-                              &entry_position);
+  pattern_ =
+      make_csc_pattern(dof(), dof(), std::move(entries), /*with_diagonal=*/true, &entry_position);
   jac_target_.assign(kp.nnz(), -1);
   jac_factor_.assign(kp.nnz(), 0.0);
   int next_entry = 0;  // the entries in the order listed above

@@ -141,7 +141,7 @@ class SpringNetwork final : public MechanicalSystem {
   double residual_scale_ = 1.0;
   double pin_move_time_ = 0.0;
   // The stiffness pattern, built on first use: a drape run on its mirror reduction never needs
-  // the whole sheet's (a third of a fit drape's set-up). Shared by copies (same springs and pins).
+  // the whole sheet's. Shared by copies (same springs and pins).
   struct StiffnessStructure {
     std::once_flag once;
     CscPattern pattern;

@@ -97,7 +97,8 @@ TEST_CASE("Jacobian includes the elongation-limit spring when it is active") {
   CHECK(check_stiffness_jacobian(g.network, 0.0, x.data(), 1e-8).max_relative_error < 1e-4);
 }
 
-TEST_CASE("make_csc_pattern: sorted unique rows per column and where each pair lies, against a set") {
+TEST_CASE(
+    "make_csc_pattern: sorted unique rows per column and where each pair lies, against a set") {
   std::mt19937 rng(7);
   for (int trial = 0; trial < 50; ++trial) {
     const int rows = 1 + static_cast<int>(rng() % 9), cols = 1 + static_cast<int>(rng() % 9);

@@ -449,8 +449,8 @@ TEST_CASE("BlockLdlt: a remembered analysis factorises bit for bit as a fresh on
   };
   const Eigen::SparseMatrix<double> Sa = chain({0, 1, 2, 3, 4}), Sb = chain({0, 2, 1, 3, 4});
   REQUIRE(std::equal(Sa.outerIndexPtr(), Sa.outerIndexPtr() + 16, Sb.outerIndexPtr()));
-  REQUIRE_FALSE(std::equal(Sa.innerIndexPtr(), Sa.innerIndexPtr() + Sa.nonZeros(),
-                           Sb.innerIndexPtr()));
+  REQUIRE_FALSE(
+      std::equal(Sa.innerIndexPtr(), Sa.innerIndexPtr() + Sa.nonZeros(), Sb.innerIndexPtr()));
   const int n = static_cast<int>(Sa.rows());
   const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(n, -1.0, 2.0);
   auto solve = [&](const Eigen::SparseMatrix<double>& S) {

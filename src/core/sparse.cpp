@@ -32,7 +32,8 @@ CscPattern make_csc_pattern(int rows, int cols, std::vector<std::pair<int, int>>
   std::vector<int> bucket(entries.size());  // pair indices, by column
   {
     std::vector<int> next(start.begin(), start.end() - 1);
-    for (size_t k = 0; k < entries.size(); ++k) bucket[next[entries[k].second]++] = static_cast<int>(k);
+    for (size_t k = 0; k < entries.size(); ++k)
+      bucket[next[entries[k].second]++] = static_cast<int>(k);
   }
 
   CscPattern p;
@@ -40,7 +41,7 @@ CscPattern make_csc_pattern(int rows, int cols, std::vector<std::pair<int, int>>
   p.cols = cols;
   p.colptr.assign(cols + 1, 0);
   p.rowind.reserve(entries.size());
-  std::vector<int> seen_in(rows, -1);  // the last column that listed this row
+  std::vector<int> seen_in(rows, -1);        // the last column that listed this row
   std::vector<int> at(position ? rows : 0);  // a row's index in the column being built
   if (position) position->assign(named, -1);
   for (int j = 0; j < cols; ++j) {
@@ -55,7 +56,8 @@ CscPattern make_csc_pattern(int rows, int cols, std::vector<std::pair<int, int>>
     if (!position) continue;
     for (int e = p.colptr[j]; e < p.colptr[j + 1]; ++e) at[p.rowind[e]] = e;
     for (int k = start[j]; k < start[j + 1]; ++k)
-      if (static_cast<size_t>(bucket[k]) < named) (*position)[bucket[k]] = at[entries[bucket[k]].first];
+      if (static_cast<size_t>(bucket[k]) < named)
+        (*position)[bucket[k]] = at[entries[bucket[k]].first];
   }
   return p;
 }

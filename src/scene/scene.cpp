@@ -377,14 +377,18 @@ namespace {
 
 // The largest mirror group of the grid and its start: eighth, quarter, half, or none (a
 // perturbed start, two_corner for quarter and eighth, a topology without the diagonal mirror),
-// with its reduced model (built once: a fit's drape spends a third of its set-up there).
-std::optional<MirrorReduced> largest_reduction(const DrapeGrid& grid) {
+// with its reduced model, built once (the reduction is the largest part of a drape's set-up).
+// `symmetry` is set to the group found, or None.
+std::optional<MirrorReduced> largest_reduction(const DrapeGrid& grid, DrapeSymmetry& symmetry) {
   for (DrapeSymmetry s : {DrapeSymmetry::Eighth, DrapeSymmetry::Quarter, DrapeSymmetry::Half}) {
     try {
-      return make_drape_reduced(grid, s);
+      std::optional<MirrorReduced> reduced = make_drape_reduced(grid, s);
+      symmetry = s;
+      return reduced;
     } catch (const std::invalid_argument&) {
     }
   }
+  symmetry = DrapeSymmetry::None;
   return std::nullopt;
 }
 
@@ -442,13 +446,9 @@ DrapeResult run_drape(const Scene& scene, const std::string& integrator, RunObse
   r.symmetry = scene.params.symmetry;
   std::optional<MirrorReduced> reduced;
   if (r.symmetry == DrapeSymmetry::Auto) {
+    r.symmetry = DrapeSymmetry::None;
     if (!(from && static_cast<int>(from->x.size()) == net.dof()))  // not a whole-sheet state
-      reduced = largest_reduction(r.grid);
-    const int order = reduced ? reduced->group_order() : 1;
-    r.symmetry = order == 8   ? DrapeSymmetry::Eighth
-                 : order == 4 ? DrapeSymmetry::Quarter
-                 : order == 2 ? DrapeSymmetry::Half
-                              : DrapeSymmetry::None;
+      reduced = largest_reduction(r.grid, r.symmetry);
   } else if (r.symmetry != DrapeSymmetry::None) {
     reduced = make_drape_reduced(r.grid, r.symmetry);
   }
