@@ -66,10 +66,10 @@ struct DemoArgs {
 void run(const DemoArgs& args) {
   const std::string& out = args.out;
   const double wall_cap = args.wall_cap;
+  const InterruptScope interrupt;  // first: a signal once the folder is locked keeps the rows
   const fs::path dir = make_output_dir(out, "demo");
   const std::string integrator = default_integrator();
   bool all_settled = true;
-  const InterruptScope interrupt;
   const auto stopped = [&] { return interrupt.signal() != 0; };
 
   Table scenes;

@@ -108,13 +108,14 @@ void run(const DrapeArgs& args) {
     }
   }
 
+  // The handlers first: a signal once the folder is locked ends the run with its outputs.
+  const InterruptScope interrupt;
+  scene.options.interrupt = interrupt.flag();
   bool created = false;
   const std::filesystem::path dir = make_output_dir(args.out, "drape-" + scene.name, &created);
   warn_about_run("model.damping", scene.params.damping, integ->info(), args.options,
                  scene.options.t_max);
   note_keys_not_given(scene, physical_scene_keys());
-  const InterruptScope interrupt;
-  scene.options.interrupt = interrupt.flag();
   std::string steps_csv;
   DrapeResult result = [&] {
     ProgressLine progress(scene.name + " " + integrator, scene.options.equilibrium_tol,

@@ -546,6 +546,9 @@ void run(const KnitArgs& args) {
   }
 
   const std::string name = fs::path(args.chart).stem().string();
+  // The handlers first: a signal once the folder is locked ends the run with its outputs.
+  const InterruptScope interrupt;
+  opt.interrupt = interrupt.flag();
   bool created = false;
   const fs::path dir = make_output_dir(args.out, "knit-" + name, &created);
   warn_about_run("knit.damping", params.damping, integ->info(), args.options, opt.t_max);
@@ -554,8 +557,6 @@ void run(const KnitArgs& args) {
                                                           : "knit.stabiliser = 0") +
          ": paper 2's bare network is a mechanism (blocks of fabric shear and swing at no "
          "energy); its steady state depends on the path (integrator, step, tolerances)");
-  const InterruptScope interrupt;
-  opt.interrupt = interrupt.flag();
   RunStats stats;
   std::vector<FrameRecorder::Frame> frames;
   KnitMeasures measures;
