@@ -7,6 +7,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "src/core/memo.hpp"
+
 namespace knitsim {
 
 Vec3 PinPath::at(double t) const {
@@ -102,39 +104,72 @@ SpringNetwork::SpringNetwork(SpringNetworkSpec spec) : spec_(std::move(spec)) {
   scratch_.resize(n);
 }
 
-const SpringNetwork::StiffnessStructure& SpringNetwork::stiffness_structure() const {
+namespace {
+
+// The stiffness layouts of the latest meshes: a fit builds the same few (grid size x topology
+// x reduction) for thousands of drapes, and building one cost ~8 % of a fit drape's CPU (perf
+// of `knitsim fit`). A hit is the layout itself, bit for bit what a fresh build gives.
+PatternMemo<SpringNetwork::StiffnessLayout>& layout_memo() {
+  static PatternMemo<SpringNetwork::StiffnessLayout> memo(std::size_t{1} << 23);  // 32 MB
+  return memo;
+}
+
+// The layout of springs with these free ends (2 per spring) among `free_count` free particles.
+SpringNetwork::StiffnessLayout build_layout(int free_count, std::vector<int> ends) {
+  SpringNetwork::StiffnessLayout layout;
+  const size_t springs = ends.size() / 2;
+  // 3x3 blocks over the pairs of free ends.
+  std::vector<std::pair<int, int>> pairs;
+  pairs.reserve(4 * springs);
+  for (size_t si = 0; si < springs; ++si)
+    for (int r : {ends[2 * si], ends[2 * si + 1]})
+      for (int c : {ends[2 * si], ends[2 * si + 1]})
+        if (r >= 0 && c >= 0) pairs.emplace_back(r, c);
+  std::vector<int> pair_entry;
+  const CscPattern nodes = make_csc_pattern(free_count, free_count, std::move(pairs),
+                                            /*with_diagonal=*/true, &pair_entry);
+  layout.pattern = expand_node_pattern(nodes);
+  layout.slots.assign(springs * 36, -1);
+  int next_pair = 0;  // the pairs in the order listed above
+  for (size_t si = 0; si < springs; ++si) {
+    const int* end = &ends[2 * si];
+    for (int br = 0; br < 2; ++br)
+      for (int bc = 0; bc < 2; ++bc) {
+        if (end[br] < 0 || end[bc] < 0) continue;
+        const int e = pair_entry[next_pair++];
+        for (int q = 0; q < 3; ++q)
+          for (int p = 0; p < 3; ++p)
+            layout.slots[si * 36 + (2 * br + bc) * 9 + 3 * p + q] =
+                node_block_entry(nodes, e, end[bc], p, q);
+      }
+  }
+  layout.free_count = free_count;
+  layout.ends = std::move(ends);
+  return layout;
+}
+
+}  // namespace
+
+const SpringNetwork::StiffnessLayout& SpringNetwork::stiffness_structure() const {
   StiffnessStructure& st = *structure_;
   std::call_once(st.once, [&] {
-    // 3x3 blocks over the pairs of free ends.
-    std::vector<std::pair<int, int>> pairs;
-    pairs.reserve(4 * spec_.springs.size());
+    std::vector<int> ends;
+    ends.reserve(2 * spec_.springs.size());
     for (const Spring& s : spec_.springs) {
-      const int ends[2] = {free_index_[s.a], free_index_[s.b]};
-      for (int r : ends)
-        for (int c : ends)
-          if (r >= 0 && c >= 0) pairs.emplace_back(r, c);
+      ends.push_back(free_index_[s.a]);
+      ends.push_back(free_index_[s.b]);
     }
-    std::vector<int> pair_entry;
-    const CscPattern nodes = make_csc_pattern(free_count_, free_count_, std::move(pairs),
-                                              /*with_diagonal=*/true, &pair_entry);
-    st.pattern = expand_node_pattern(nodes);
-    st.slots.assign(spec_.springs.size() * 36, -1);
-    int next_pair = 0;  // the pairs in the order listed above
-    for (size_t si = 0; si < spec_.springs.size(); ++si) {
-      const Spring& s = spec_.springs[si];
-      const int ends[2] = {free_index_[s.a], free_index_[s.b]};
-      for (int br = 0; br < 2; ++br)
-        for (int bc = 0; bc < 2; ++bc) {
-          if (ends[br] < 0 || ends[bc] < 0) continue;
-          const int e = pair_entry[next_pair++];
-          for (int q = 0; q < 3; ++q)
-            for (int p = 0; p < 3; ++p)
-              st.slots[si * 36 + (2 * br + bc) * 9 + 3 * p + q] =
-                  node_block_entry(nodes, e, ends[bc], p, q);
-        }
+    st.layout = layout_memo().find(
+        [&](const StiffnessLayout& e) { return e.free_count == free_count_ && e.ends == ends; });
+    if (!st.layout) {
+      auto fresh =
+          std::make_shared<const StiffnessLayout>(build_layout(free_count_, std::move(ends)));
+      const std::size_t held = fresh->ends.size() + fresh->slots.size() +
+                               fresh->pattern.colptr.size() + fresh->pattern.rowind.size();
+      st.layout = layout_memo().insert(std::move(fresh), held);
     }
   });
-  return st;
+  return *st.layout;
 }
 
 void SpringNetwork::initial_state(double* x, double* v) const {
@@ -263,7 +298,7 @@ void SpringNetwork::constant_acceleration(double /*t*/, double* a) const {
 
 void SpringNetwork::stiffness_values(double t, const double* x, double* values) const {
   update_pins(t);
-  const StiffnessStructure& st = stiffness_structure();
+  const StiffnessLayout& st = stiffness_structure();
   std::fill(values, values + st.pattern.nnz(), 0.0);
   for (size_t si = 0; si < spec_.springs.size(); ++si) {
     const Spring& s = spec_.springs[si];

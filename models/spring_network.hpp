@@ -128,6 +128,14 @@ class SpringNetwork final : public MechanicalSystem {
   void net_force_tangent(double t, const double* x, const SpringNetworkTangent& dp,
                          double* df) const;
 
+  // The stiffness pattern and where each spring's blocks go (see stiffness_structure below).
+  struct StiffnessLayout {
+    int free_count = 0;
+    std::vector<int> ends;  // per spring: the free indices of a and b (-1: pinned)
+    CscPattern pattern;
+    std::vector<int> slots;  // per spring: 4 blocks (aa, ab, ba, bb) x 9 value positions, or -1
+  };
+
  private:
   Vec3 end_position(int particle, const double* x) const;
   void update_pins(double t) const;
@@ -140,14 +148,14 @@ class SpringNetwork final : public MechanicalSystem {
   std::vector<double> gamma_, dof_mass_, inv_mass_;
   double residual_scale_ = 1.0;
   double pin_move_time_ = 0.0;
-  // The stiffness pattern, built on first use: a drape run on its mirror reduction never needs
-  // the whole sheet's. Shared by copies (same springs and pins).
+  // The stiffness pattern, a function of the springs' free ends alone: built on first use (a
+  // drape run on its mirror reduction never needs the whole sheet's), shared by copies, and
+  // memoised for the process (spring_network.cpp, layout_memo: a fit's drapes share a mesh).
   struct StiffnessStructure {
     std::once_flag once;
-    CscPattern pattern;
-    std::vector<int> slots;  // per spring: 4 blocks (aa, ab, ba, bb) x 9 value positions, or -1
+    std::shared_ptr<const StiffnessLayout> layout;
   };
-  const StiffnessStructure& stiffness_structure() const;
+  const StiffnessLayout& stiffness_structure() const;
   std::shared_ptr<StiffnessStructure> structure_;
   mutable std::vector<Vec3> pin_pos_;
   mutable std::vector<double> scratch_;

@@ -3,10 +3,10 @@
 #include <Eigen/OrderingMethods>
 #include <algorithm>
 #include <cmath>
-#include <deque>
 #include <memory>
-#include <mutex>
 #include <stdexcept>
+
+#include "src/core/memo.hpp"
 
 namespace knitsim::detail {
 
@@ -214,60 +214,31 @@ std::shared_ptr<const Symbolic> analyse_pattern(const Eigen::SparseMatrix<double
 // (size x topology x reduction) for thousands of drapes, and on a fit's drape the analysis (AMD,
 // elimination tree) cost about as much as the reduced solve (perf of `knitsim fit`). The result
 // is a function of the pattern alone, so a hit factorises bit for bit as a fresh analysis, on
-// any thread. Bounded by the integers held; the oldest entry goes first.
-class SymbolicMemo {
- public:
-  static SymbolicMemo& instance() {
-    static SymbolicMemo memo;
-    return memo;
-  }
-  std::shared_ptr<const Symbolic> find(const Eigen::SparseMatrix<double>& S) {
-    const std::lock_guard<std::mutex> lock(mutex_);
-    for (const auto& e : entries_)
-      if (e->outer.size() == static_cast<size_t>(S.cols() + 1) &&
-          e->inner.size() == static_cast<size_t>(S.nonZeros()) &&
-          std::equal(e->outer.begin(), e->outer.end(), S.outerIndexPtr()) &&
-          std::equal(e->inner.begin(), e->inner.end(), S.innerIndexPtr()))
-        return e;
-    return nullptr;
-  }
-  void insert(std::shared_ptr<const Symbolic> e) {
-    const size_t held = footprint(*e);
-    if (held > kMaxIntegers) return;
-    const std::lock_guard<std::mutex> lock(mutex_);
-    while (!entries_.empty() && held_ + held > kMaxIntegers) {
-      held_ -= footprint(*entries_.front());
-      entries_.pop_front();
-    }
-    held_ += held;
-    entries_.push_back(std::move(e));
-  }
-  void clear() {
-    const std::lock_guard<std::mutex> lock(mutex_);
-    entries_.clear();
-    held_ = 0;
-  }
+// any thread. At most 32 MB of integers; the oldest entry goes first.
+PatternMemo<BlockLdlt::Symbolic>& symbolic_memo() {
+  static PatternMemo<BlockLdlt::Symbolic> memo(std::size_t{1} << 23);
+  return memo;
+}
 
- private:
-  static constexpr size_t kMaxIntegers = size_t{1} << 23;  // 32 MB
-  static size_t footprint(const Symbolic& e) {
-    return e.outer.size() + e.inner.size() + 4 * e.perm.size() + e.ai.size() * 5 + e.lp.size();
-  }
-  std::mutex mutex_;
-  std::deque<std::shared_ptr<const Symbolic>> entries_;
-  size_t held_ = 0;
-};
+std::size_t footprint(const BlockLdlt::Symbolic& e) {
+  return e.outer.size() + e.inner.size() + 4 * e.perm.size() + e.ai.size() * 5 + e.lp.size();
+}
 
 }  // namespace
 
-void BlockLdlt::clear_symbolic_memo() { SymbolicMemo::instance().clear(); }
+void BlockLdlt::clear_symbolic_memo() { symbolic_memo().clear(); }
 
 bool BlockLdlt::try_analyze(const Eigen::SparseMatrix<double>& S) {
   if (!S.isCompressed()) return false;
-  std::shared_ptr<const Symbolic> sym = SymbolicMemo::instance().find(S);
+  std::shared_ptr<const Symbolic> sym = symbolic_memo().find([&S](const Symbolic& e) {
+    return e.outer.size() == static_cast<size_t>(S.cols() + 1) &&
+           e.inner.size() == static_cast<size_t>(S.nonZeros()) &&
+           std::equal(e.outer.begin(), e.outer.end(), S.outerIndexPtr()) &&
+           std::equal(e.inner.begin(), e.inner.end(), S.innerIndexPtr());
+  });
   if (!sym) {
-    sym = analyse_pattern(S);
-    SymbolicMemo::instance().insert(sym);
+    std::shared_ptr<const Symbolic> fresh = analyse_pattern(S);
+    sym = symbolic_memo().insert(fresh, footprint(*fresh));
   }
   if (!sym->blocked) return false;
   sym_ = std::move(sym);  // shared with the memo: a hit copies nothing

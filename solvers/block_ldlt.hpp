@@ -40,7 +40,7 @@ class BlockLdlt {
   // !blocked(S). Every later S must have this pattern.
   void analyze(const Eigen::SparseMatrix<double>& S);
   // The same, returning false (and analysing nothing) if !blocked(S). Analyses are memoised by
-  // pattern, process-wide (block_ldlt.cpp, SymbolicMemo): a repeated pattern costs a lookup.
+  // pattern, process-wide (block_ldlt.cpp, symbolic_memo): a repeated pattern costs a lookup.
   bool try_analyze(const Eigen::SparseMatrix<double>& S);
   // Forgets the memoised analyses (tests: a fresh analysis against a remembered one).
   static void clear_symbolic_memo();

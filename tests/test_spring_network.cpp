@@ -159,6 +159,33 @@ TEST_CASE("expand_node_pattern: the 3x3 blocks of a node pattern, and where each
   }
 }
 
+TEST_CASE("the stiffness layout memo: shared by networks with the same ends, never by others") {
+  // Four particles, 0 pinned, four springs: a path 0-1-2-3 closed by 3-1, and the same counts
+  // with the springs between other particles (1-3 instead of 1-2), so only the ends differ.
+  const auto network = [](std::vector<std::pair<int, int>> ends, double k) {
+    SpringNetworkSpec spec;
+    spec.positions = {{0, 0, 0}, {0.1, 0, 0}, {0.2, 0.01, 0}, {0.1, 0.1, 0.02}};
+    spec.masses = {0.01, 0.01, 0.01, 0.01};
+    for (const auto& [a, b] : ends)
+      spec.springs.push_back({a, b, norm(spec.positions[b] - spec.positions[a]), k});
+    spec.pinned = {0};
+    spec.pin_paths = {{spec.positions[0], spec.positions[0], 0.0}};
+    return SpringNetwork(spec);
+  };
+  const SpringNetwork first = network({{0, 1}, {1, 2}, {2, 3}, {3, 1}}, 600.0);
+  const SpringNetwork other = network({{0, 1}, {1, 3}, {2, 3}, {3, 0}}, 600.0);
+  const SpringNetwork stiffer = network({{0, 1}, {1, 2}, {2, 3}, {3, 1}}, 900.0);
+  // A hit is the same layout object; a network with other ends gets its own.
+  CHECK(&first.stiffness_pattern() == &stiffer.stiffness_pattern());
+  CHECK(&first.stiffness_pattern() != &other.stiffness_pattern());
+  CHECK(first.stiffness_pattern().find(0, 3) >= 0);  // particles 1 and 2 (free 0, 1) joined
+  CHECK(other.stiffness_pattern().find(0, 3) < 0);   // not in the other network
+  for (const SpringNetwork* net : {&first, &other, &stiffer}) {
+    auto x = perturbed_state(*net, 0.01, 5);
+    CHECK(check_stiffness_jacobian(*net, 0.0, x.data()).max_relative_error < 1e-6);
+  }
+}
+
 TEST_CASE("every diagonal entry is in the stiffness pattern") {
   DrapeParams p;
   p.topology = 'c';
