@@ -11,7 +11,7 @@ saves against the full model, measured where the code allows it (SPEC 1, 2.1-2.3
                 difference from the equilibrium-stop state.
   static.csv    the `static` integrator (cvode-bdf relaxation + KINSOL Newton polish) vs
                 cvode-bdf alone: CPU, steps, final residual, max position difference.
-  symmetry.csv  four_corner integrated on one quarter (model.symmetry = quarter: the two
+  symmetry.csv  four_corner solved on one quarter (model.symmetry = quarter: the two
                 mid-plane mirrors) and on one eighth (= eighth: the diagonal mirror too), and
                 two_corner on one half (= half: the mirror x = W/2; models/mirror_reduced.hpp)
                 vs the full grid, per scene, grid size n and integrator:
@@ -25,8 +25,9 @@ saves against the full model, measured where the code allows it (SPEC 1, 2.1-2.3
                 two_corner: half): objective, fitted parameters, evaluations, failed
                 evaluations, CPU of the fit process; whether the reduced fit ends on the same
                 country. Single runs (the fits alternate full / reduced).
-CPU figures are medians of REPEATS runs of the solver's own cpu_seconds (set-up and output
-excluded).
+Each section measures one reduction: its drapes run on the whole sheet (model.symmetry = none)
+unless the row is a mirror reduction. CPU figures are medians of REPEATS runs of the solver's own
+cpu_seconds (set-up and output excluded).
 """
 import os
 import statistics
@@ -78,9 +79,13 @@ def main():
     counter = [0]
 
     def drape(scene, integ, extra):
+        # One reduction at a time: the whole sheet unless the row asks for a mirror reduction.
+        extra = [str(e) for e in extra]
+        if not any(e.startswith("model.symmetry=") for e in extra):
+            extra += ["--set", "model.symmetry=none"]
         counter[0] += 1
         return expkit.run_knitsim(args.out, "r%d" % counter[0], ["drape", "--scene", scene,
-                                  "--integrator", integ] + [str(e) for e in extra])
+                                  "--integrator", integ] + extra)
 
     def median_run(scene, integ, extra):
         runs = [drape(scene, integ, extra) for _ in range(repeats)]
@@ -141,14 +146,16 @@ def main():
             print(scene, {k: row[k] for k in row if k != "scene"}, flush=True)
     symmetry = []
     sym = lambda name: ["--set", "model.symmetry=" + name]  # noqa: E731
-    four = [("full", []), ("quarter", sym("quarter")), ("eighth", sym("eighth"))]
-    # (scene, n, integrators, models); implicit-euler at n = 50 takes > 300 s wall per run on the
-    # shared machine (n = 10 only), and on two_corner it needs ~3e5 steps of dt = 1 s.
-    cases = [("four_corner", 10, ["cvode-bdf"] if args.quick else ["cvode-bdf", "implicit-euler"],
-              four)]
+    # "full" is asked for (model.symmetry = none): the default, auto, runs the largest reduction.
+    four = [("full", sym("none")), ("quarter", sym("quarter")), ("eighth", sym("eighth"))]
+    # (scene, n, integrators, models); implicit-euler (a factorisation per step) at n = 10 only,
+    # for run time; on two_corner it needs ~3e5 steps of dt = 1 s.
+    cases = [("four_corner", 10, ["equilibrium", "cvode-bdf"] if args.quick
+              else ["equilibrium", "cvode-bdf", "implicit-euler"], four)]
     if not args.quick:
-        cases += [("four_corner", 50, ["cvode-bdf"], four),
-                  ("two_corner", 10, ["cvode-bdf"], [("full", []), ("half", sym("half"))])]
+        cases += [("four_corner", 50, ["equilibrium", "cvode-bdf"], four),
+                  ("two_corner", 10, ["equilibrium", "cvode-bdf"],
+                   [("full", sym("none")), ("half", sym("half"))])]
     for scene, n, integs, models in cases:
         size = ["--set", "model.natural_length=%r" % (0.5 / n)] if n != 10 else []
         for integ in integs:
