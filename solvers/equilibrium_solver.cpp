@@ -22,9 +22,10 @@
 // (equilibrium_check.hpp). Where a dof has no damping its mass per second stands in for C (the
 // flow's end does not depend on C's scale).
 //
-// Fallback: kMaxRejected flow steps in a row that lower no energy hand the run to the dynamics
-// (cvode-bdf, from the current state at rest) to its end; RunStats.fallbacks counts it and the
-// status message says so. t then advances again.
+// Fallback: kMaxRejected flow steps in a row that lower no energy, or kMaxFlowSteps flow steps
+// without the driver's stop, hand the run to the dynamics (cvode-bdf, from the current state at
+// rest) to its end; RunStats.fallbacks counts it and the status message says so. t then
+// advances again.
 //
 // Time: the flow's h is a continuation parameter, not time. The solver's t stays at the end of
 // the pins' motion (or the start), so t_final says when the pins stopped and --continue from
@@ -54,6 +55,8 @@ constexpr double kFirstMove = 1e-3;  // m: the largest displacement of the first
 constexpr double kEscape = 1e-3;     // m: the largest displacement of a saddle escape
 constexpr double kMaxH = 1e15;       // s: beyond this C / h is below round-off of K
 constexpr int kMaxRejected = 60;     // rejected steps in a row before the solver gives up
+constexpr long kMaxFlowSteps = 5000;  // flow steps before it gives up (drapes take 9-250)
+constexpr int kMaxStalled = 20;       // converged steps in a row where K is not definite, none left
 constexpr double kRoundoffFall = 1e-12;  // relative energy change read as round-off
 
 class EquilibriumSolver final : public Integrator {
@@ -69,7 +72,8 @@ class EquilibriumSolver final : public Integrator {
     t_ = t0;
     x_.assign(x0, x0 + n_);
     v_.assign(v0, v0 + n_);
-    steps_ = rhs_ = factorisations_ = rejected_ = escapes_ = fallbacks_ = 0;
+    steps_ = rhs_ = factorisations_ = rejected_ = escapes_ = fallbacks_ = flow_steps_ = 0;
+    stalled_ = 0;
     fallback_ = false;
     motion_ = RunStats{};
     h_ = 0.0;
@@ -106,17 +110,28 @@ class EquilibriumSolver final : public Integrator {
       fresh_ = false;
     }
     ++steps_;
-    for (int rejected = 0; rejected < kMaxRejected; ++rejected) {
-      const Trial trial = try_step();
-      if (trial.accepted) {
-        rejected_ += rejected;
-        if (trial.move <= opt_.position_tol) escape_saddle();
-        return {};
+    if (++flow_steps_ <= kMaxFlowSteps)
+      for (int rejected = 0; rejected < kMaxRejected; ++rejected) {
+        const Trial trial = try_step();
+        if (trial.accepted) {
+          rejected_ += rejected;
+          if (trial.move > opt_.position_tol) {
+            stalled_ = 0;
+          } else if (!escape_saddle() && ++stalled_ >= kMaxStalled) {
+            return fall_back();  // converged where K is not positive definite, no mode to leave
+          }
+          return {};
+        }
+        h_ /= 4.0;
       }
-      h_ /= 4.0;
-    }
-    // The flow is stuck: the dynamics (cvode-bdf) take over from here, at rest.
-    rejected_ += kMaxRejected;
+    if (flow_steps_ <= kMaxFlowSteps) rejected_ += kMaxRejected;
+    return fall_back();
+  }
+
+  // The flow is stuck, or stays on a state the driver's stop cannot certify (K singular or with
+  // a negative pivot no mode is found for; its t never advances, so t_max would never end it):
+  // the dynamics (cvode-bdf) take over from here, at rest.
+  Step fall_back() {
     ++fallbacks_;
     fallback_ = true;
     std::fill(v_.begin(), v_.end(), 0.0);
@@ -247,14 +262,17 @@ class EquilibriumSolver final : public Integrator {
   }
 
   // At a converged state: a saddle (negative pivots of K) is left along its negative mode.
-  void escape_saddle() {
+  // Returns whether K is positive definite here or the state left a saddle.
+  bool escape_saddle() {
     if (!probe_) probe_ = std::make_unique<StiffnessProbe>(*sys_, opt_.factorization);
     const StiffnessProbe::Result r = probe_->probe(t_, x_.data());
-    if (!r.factored || r.negative_pivots == 0) return;
-    if (!probe_->leave_saddle(t_, x_.data(), kEscape)) return;
+    if (r.factored && !r.singular && r.negative_pivots == 0) return true;
+    if (!r.factored || r.negative_pivots == 0) return false;
+    if (!probe_->leave_saddle(t_, x_.data(), kEscape)) return false;
     ++escapes_;
     evaluate(x_.data());
     h_ = first_h();
+    return true;
   }
 
   IntegratorInfo info_{"equilibrium",
@@ -277,6 +295,8 @@ class EquilibriumSolver final : public Integrator {
   std::unique_ptr<Integrator> inner_;
   RunStats motion_;
   long steps_ = 0, rhs_ = 0, factorisations_ = 0, rejected_ = 0, escapes_ = 0, fallbacks_ = 0;
+  long flow_steps_ = 0;
+  int stalled_ = 0;
 };
 
 }  // namespace

@@ -327,6 +327,45 @@ TEST_CASE("model.symmetry = auto: the largest group the scene and its start allo
   }
 }
 
+TEST_CASE("model.symmetry = auto: a half whose state the whole sheet cannot certify is re-solved") {
+  // A two_corner fabric of topology b (the best fit of twin sample 6 in experiments/reductions):
+  // the half's equilibrium, unfolded, is a state where the whole sheet's K is singular to
+  // round-off (no negative mode to leave along); the whole sheet's own minimum is ~1e-8 m away.
+  // The run used to stay there for ever (the flow's t does not advance, so t_max never came).
+  Scene scene = load_scene("two_corner",
+                           {"model.stiffness=513.5365883457807", "model.damping=18.720940032398524",
+                            "model.elongation_limit=12.163221577762307",
+                            "model.natural_length=0.04479153771739578", "model.topology=b"});
+  REQUIRE(scene.params.symmetry == DrapeSymmetry::Auto);
+  const DrapeResult r = run_drape(scene, default_integrator());
+  CAPTURE(r.stats.message);
+  CHECK(r.whole_sheet_checked);
+  CHECK(r.symmetry == DrapeSymmetry::None);
+  CHECK(r.stats.status == RunStatus::Equilibrium);
+  CHECK(r.stats.certificate == "stable_minimum");
+  CHECK(r.stats.message.find("solved from its start") != std::string::npos);
+  scene.params.symmetry = DrapeSymmetry::None;
+  const DrapeResult whole = run_drape(scene, default_integrator());
+  double d = 0.0;
+  for (size_t p = 0; p < whole.positions.size(); ++p)
+    d = std::max(d, norm(whole.positions[p] - r.positions[p]));
+  CHECK(d <= 1e-12);  // the same run
+
+  // The equilibrium solver started on that state ends (the dynamics take over; exit 3 there),
+  // instead of running for ever.
+  scene.params.symmetry = DrapeSymmetry::Half;
+  const DrapeResult half = run_drape(scene, default_integrator());
+  RunState from;
+  from.x.resize(whole.grid.network.dof());
+  make_drape_reduced(half.grid, DrapeSymmetry::Half).unfold(half.state_x.data(), from.x.data());
+  from.v.assign(from.x.size(), 0.0);
+  scene.params.symmetry = DrapeSymmetry::None;
+  const DrapeResult stuck = run_drape(scene, default_integrator(), nullptr, &from);
+  CAPTURE(stuck.stats.message);
+  CHECK(stuck.stats.fallbacks == 1);
+  CHECK(stuck.stats.message.find("the flow stalled") != std::string::npos);
+}
+
 TEST_CASE("model.symmetry = auto runs whole where the integrator needs the whole sheet") {
   // cvode-bdf-gmres's block-Jacobi preconditioner works on every particle's x, y, z: it refuses
   // a mirror reduction at its start, and auto falls back to the whole sheet.

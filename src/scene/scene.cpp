@@ -395,7 +395,8 @@ std::optional<MirrorReduced> largest_reduction(const DrapeGrid& grid, DrapeSymme
 // model.symmetry = auto: the reduced model cannot see the antisymmetric modes, so its unfolded
 // equilibrium is certified on the whole sheet. Where the whole sheet's K has a negative pivot,
 // the state is moved 1 mm along the most negative mode (largest component positive) and the
-// whole sheet runs on from there; the certificate is the whole sheet's either way.
+// whole sheet runs on from there; where no negative mode is found (a singular K), the whole
+// sheet is solved from its start. The certificate is the whole sheet's either way.
 void certify_whole_sheet(const Scene& scene, const SpringNetwork& net, Integrator& integ,
                          RunObserver* observer, std::vector<double>& x, DrapeResult& r) {
   const double t = r.stats.t_final;
@@ -407,14 +408,24 @@ void certify_whole_sheet(const Scene& scene, const SpringNetwork& net, Integrato
     r.stats.eigenvalue_threshold = p.threshold;
     return;
   }
-  probe.leave_saddle(t, x.data(), 1e-3);  // m; a singular sheet runs on as it is
   std::vector<double> v(x.size(), 0.0);
+  double from = t;
+  std::string how = "is not a minimum of the whole sheet: continued on it";
+  if (!probe.leave_saddle(t, x.data(), 1e-3)) {  // m
+    // No negative mode to leave along (a singular K, or a negative pivot too small for the
+    // power iteration): the flow would stay on the symmetric state, which the stop cannot
+    // certify. The whole sheet is solved from its own start instead.
+    net.initial_state(x.data(), v.data());
+    from = r.t_start;
+    how =
+        "is not certified on the whole sheet (K singular or nearly so): the whole sheet was "
+        "solved from its start";
+  }
   IntegratorOptions options = scene.options;
   const RunStats reduced = r.stats;
-  r.stats = run_to_equilibrium(net, integ, options, x, v, observer, t);
+  r.stats = run_to_equilibrium(net, integ, options, x, v, observer, from);
   add_counters(r.stats, reduced);
-  r.stats.message += "; the " + std::string(to_string(r.symmetry)) +
-                     "'s equilibrium is not a minimum of the whole sheet: continued on it";
+  r.stats.message += "; the " + std::string(to_string(r.symmetry)) + "'s equilibrium " + how;
   r.symmetry = DrapeSymmetry::None;
   r.state_x = x;
   r.state_v = v;
