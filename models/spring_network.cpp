@@ -90,7 +90,7 @@ SpringNetwork::SpringNetwork(SpringNetworkSpec spec) : spec_(std::move(spec)) {
         "spring network: residual_force_scale must be > 0 N when there is no gravity");
   }
 
-  // Springs: validate; their stiffness pattern is built on first use (stiffness_structure).
+  // Springs: validate; their stiffness pattern is built on first use (stiffness_layout).
   for (const Spring& s : spec_.springs) {
     if (s.a < 0 || s.a >= np || s.b < 0 || s.b >= np || s.a == s.b)
       throw std::invalid_argument("spring network: spring end out of range or self-loop");
@@ -150,7 +150,7 @@ SpringNetwork::StiffnessLayout build_layout(int free_count, std::vector<int> end
 
 }  // namespace
 
-const SpringNetwork::StiffnessLayout& SpringNetwork::stiffness_structure() const {
+const SpringNetwork::StiffnessLayout& SpringNetwork::stiffness_layout() const {
   StiffnessStructure& st = *structure_;
   std::call_once(st.once, [&] {
     std::vector<int> ends;
@@ -298,7 +298,7 @@ void SpringNetwork::constant_acceleration(double /*t*/, double* a) const {
 
 void SpringNetwork::stiffness_values(double t, const double* x, double* values) const {
   update_pins(t);
-  const StiffnessLayout& st = stiffness_structure();
+  const StiffnessLayout& st = stiffness_layout();
   std::fill(values, values + st.pattern.nnz(), 0.0);
   for (size_t si = 0; si < spec_.springs.size(); ++si) {
     const Spring& s = spec_.springs[si];

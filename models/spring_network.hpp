@@ -95,7 +95,7 @@ class SpringNetwork final : public MechanicalSystem {
   void constant_acceleration(double t, double* a) const override;  // gravity
   const std::vector<double>& damping_rate() const override { return gamma_; }
   const std::vector<double>& mass() const override { return dof_mass_; }
-  const CscPattern& stiffness_pattern() const override { return stiffness_structure().pattern; }
+  const CscPattern& stiffness_pattern() const override { return stiffness_layout().pattern; }
   void stiffness_values(double t, const double* x, double* values) const override;
   double static_residual(double t, const double* x) const override;
   double residual_roundoff(double t, const double* x) const override;
@@ -128,7 +128,7 @@ class SpringNetwork final : public MechanicalSystem {
   void net_force_tangent(double t, const double* x, const SpringNetworkTangent& dp,
                          double* df) const;
 
-  // The stiffness pattern and where each spring's blocks go (see stiffness_structure below).
+  // The stiffness pattern and where each spring's blocks go (see stiffness_layout below).
   struct StiffnessLayout {
     int free_count = 0;
     std::vector<int> ends;  // per spring: the free indices of a and b (-1: pinned)
@@ -155,7 +155,7 @@ class SpringNetwork final : public MechanicalSystem {
     std::once_flag once;
     std::shared_ptr<const StiffnessLayout> layout;
   };
-  const StiffnessLayout& stiffness_structure() const;
+  const StiffnessLayout& stiffness_layout() const;
   std::shared_ptr<StiffnessStructure> structure_;
   mutable std::vector<Vec3> pin_pos_;
   mutable std::vector<double> scratch_;

@@ -110,21 +110,21 @@ class EquilibriumSolver final : public Integrator {
       fresh_ = false;
     }
     ++steps_;
-    if (++flow_steps_ <= kMaxFlowSteps)
-      for (int rejected = 0; rejected < kMaxRejected; ++rejected) {
-        const Trial trial = try_step();
-        if (trial.accepted) {
-          rejected_ += rejected;
-          if (trial.move > opt_.position_tol) {
-            stalled_ = 0;
-          } else if (!escape_saddle() && ++stalled_ >= kMaxStalled) {
-            return fall_back();  // converged where K is not positive definite, no mode to leave
-          }
-          return {};
+    if (++flow_steps_ > kMaxFlowSteps) return fall_back();
+    for (int rejected = 0; rejected < kMaxRejected; ++rejected) {
+      const Trial trial = try_step();
+      if (trial.accepted) {
+        rejected_ += rejected;
+        if (trial.move > opt_.position_tol) {
+          stalled_ = 0;
+        } else if (!escape_saddle() && ++stalled_ >= kMaxStalled) {
+          return fall_back();  // converged where K is not positive definite, no mode to leave
         }
-        h_ /= 4.0;
+        return {};
       }
-    if (flow_steps_ <= kMaxFlowSteps) rejected_ += kMaxRejected;
+      h_ /= 4.0;
+    }
+    rejected_ += kMaxRejected;
     return fall_back();
   }
 
