@@ -1,6 +1,7 @@
 #include "models/knit_loops.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -245,6 +246,8 @@ void KnitParams::validate() const {
     bad("knit.areal_density", areal_density, "must be > 0 g/m^2");
   if (!(stabiliser_ratio >= 0.0 && stabiliser_ratio <= 1.0))
     bad("knit.stabiliser", stabiliser_ratio, "must be in [0, 1]");
+  if (!(bending_ratio >= 0.0 && bending_ratio <= 10.0))
+    bad("knit.bending", bending_ratio, "must be in [0, 10]");
   if (max_points < 1) bad("max_points", static_cast<double>(max_points), "must be >= 1");
 }
 
@@ -357,6 +360,16 @@ KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
     auto link = [&](int a, int b, double k, KnitSpringKind kind) {
       add(a, b, norm(points[b].rest - points[a].rest), k, kind);
     };
+    // Out of the plane (knit.bending = b > 0): the yarn's bending rigidity B = b s k_w h^3 / 12
+    // (s's basis, above) as quadratic stencils on the same triples and quads, zero on every rigid
+    // motion of the flat rest lattice: second differences along wales (B / h^3) and levels
+    // (B / w^3), and each quad's twist, B (w + h) / (w h)^2 (a torsional rigidity of order B in
+    // the wale and course legs of one cell).
+    const double B =
+        p.out_of_plane_bending() ? p.bending_ratio * s * p.wale_stiffness * h * h * h / 12.0 : 0.0;
+    auto stencil = [&](std::array<int, 4> ids, std::array<double, 4> weights, double k) {
+      if (B > 0.0) spec.stencils.push_back({ids, weights, k});
+    };
     for (int L = 0; L <= C; ++L)
       for (int i = 0; i < W; ++i) {
         const int a = point(i, L);
@@ -367,13 +380,23 @@ KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
             const double k = s * 0.5 * (p.wale_stiffness + p.course_stiffness);
             link(a, d, k, KnitSpringKind::Shear);
             link(b, c, k, KnitSpringKind::Shear);
+            stencil({a, b, c, d}, {1.0, -1.0, -1.0, 1.0}, B * (w + h) / (w * h * w * h));
           }
         }
-        if (L + 2 <= C && point(i, L + 1) >= 0 && point(i, L + 2) >= 0)
+        if (L + 2 <= C && point(i, L + 1) >= 0 && point(i, L + 2) >= 0) {
           link(a, point(i, L + 2), s * p.wale_stiffness, KnitSpringKind::Bending);
-        if (i + 2 < W && point(i + 1, L) >= 0 && point(i + 2, L) >= 0)
+          stencil({a, point(i, L + 1), point(i, L + 2), -1}, {1.0, -2.0, 1.0, 0.0},
+                  B / (h * h * h));
+        }
+        if (i + 2 < W && point(i + 1, L) >= 0 && point(i + 2, L) >= 0) {
           link(a, point(i + 2, L), s * p.course_stiffness, KnitSpringKind::Bending);
+          stencil({a, point(i + 1, L), point(i + 2, L), -1}, {1.0, -2.0, 1.0, 0.0},
+                  B / (w * w * w));
+        }
       }
+    // With the stencils the only zero-energy modes are the rigid motions: a chart without pins
+    // or gravity is certified on the rest (MechanicalSystem::free_floating).
+    spec.free_floating = B > 0.0;
   }
 
   const int count = static_cast<int>(points.size());

@@ -73,7 +73,16 @@
 //            vary): s is a key, knit.stabiliser in [0, 1].
 //            Out of the plane: every spring of a flat chart lies in z = 0, so at rest no spring
 //            resists a z displacement to first order (the stiffness's z block is zero; tension
-//            stiffens it once the fabric is strained). The stabiliser does not change that.
+//            stiffens it, compression softens it below zero). No force has a z component at
+//            z = 0, so every integrator keeps a flat start flat: the chart stays in its plane.
+//   bending  (knit.bending = b > 0, off by default) the yarn's out-of-plane bending as
+//            quadratic stencils (SpringNetwork's Stencil) on the bending springs' triples and the
+//            shear springs' quads, B = b s k_w h^3 / 12: second differences along wales (B/h^3)
+//            and levels (B/w^3), each quad's twist (B (w + h) / (w h)^2). Zero at rest and on
+//            every rigid motion; with them the only zero modes are the 6 rigid motions, and a
+//            free chart declares them (MechanicalSystem::free_floating). Measured consequence
+//            (docs/knit.md): a tuck's or miss's flat steady state is then a saddle, and the
+//            fabric puckers; without yarn contact its yarns pass through each other there.
 //   paper    paper 2's network exactly (wale, course, tuck and float springs; s is ignored):
 //            a mechanism, see above. knit.stabiliser = 0 gives the same network. `knitsim knit`
 //            prints one warning line for it.
@@ -178,14 +187,20 @@ struct KnitParams {
   // relative to k_w, k_c (see above; 0.1 from the yarn's bending rigidity); 0 = off, which is
   // paper 2's network whatever `network` says. Ignored for KnitNetwork::Paper.
   double stabiliser_ratio = 0.1;
+  // b, dimensionless, in [0, 10]: the out-of-plane bending stencils' rigidity as a multiple of
+  // the yarn rigidity s stands for, B = b s k_w h^3 / 12 (see "Out of the plane" above). 0 (the
+  // default) = off: the chart stays in its plane. Needs the stabiliser (s > 0).
+  double bending_ratio = 0.0;
   long max_points = 4'000'000;  // refuse larger charts before allocating
 
   // Throws std::invalid_argument naming the field by its `knit --set` key (knit.loop_radius,
   // knit.wale_stiffness, knit.course_stiffness, knit.damping, knit.areal_density,
-  // knit.stabiliser; max_points has none) and the accepted range with units.
+  // knit.stabiliser, knit.bending; max_points has none) and the accepted range with units.
   void validate() const;
   // True when the network has no stabiliser (paper 2's mechanism): network Paper or s = 0.
   bool mechanism() const { return network == KnitNetwork::Paper || stabiliser_ratio == 0.0; }
+  // True when the network has the out-of-plane bending stencils: a stabiliser and b > 0.
+  bool out_of_plane_bending() const { return !mechanism() && bending_ratio > 0.0; }
   double wale_spacing() const { return 8.0 * loop_radius; }    // w, m
   double course_spacing() const { return 7.0 * loop_radius; }  // h, m
 };

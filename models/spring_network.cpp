@@ -99,6 +99,21 @@ SpringNetwork::SpringNetwork(SpringNetworkSpec spec) : spec_(std::move(spec)) {
     if (!(s.stiffness > 0.0) || !std::isfinite(s.stiffness))
       throw std::invalid_argument("spring network: spring stiffness must be > 0 N/m");
   }
+  for (const Stencil& st : spec_.stencils) {
+    int count = 0;
+    while (count < 4 && st.particles[count] >= 0) ++count;
+    for (int i = 0; i < 4; ++i) {
+      const int p = st.particles[i];
+      if (i >= count ? p >= 0 : (p >= np || !std::isfinite(st.weights[i])))
+        throw std::invalid_argument("spring network: stencil particle out of range or bad weight");
+      for (int j = 0; j < i && i < count; ++j)
+        if (st.particles[j] == p)
+          throw std::invalid_argument("spring network: stencil names a particle twice");
+    }
+    if (count < 2) throw std::invalid_argument("spring network: a stencil needs 2-4 particles");
+    if (!(st.stiffness > 0.0) || !std::isfinite(st.stiffness))
+      throw std::invalid_argument("spring network: stencil stiffness must be > 0 N/m");
+  }
   structure_ = std::make_shared<StiffnessStructure>();
   pin_pos_.resize(spec_.pinned.size());
   scratch_.resize(n);
@@ -114,17 +129,25 @@ PatternMemo<SpringNetwork::StiffnessLayout>& layout_memo() {
   return memo;
 }
 
-// The layout of springs with these free ends (2 per spring) among `free_count` free particles.
-SpringNetwork::StiffnessLayout build_layout(int free_count, std::vector<int> ends) {
+// The layout of springs with these free ends (2 per spring) and stencils with these (4 per
+// stencil) among `free_count` free particles.
+SpringNetwork::StiffnessLayout build_layout(int free_count, std::vector<int> ends,
+                                            std::vector<int> stencil_ends) {
   SpringNetwork::StiffnessLayout layout;
-  const size_t springs = ends.size() / 2;
-  // 3x3 blocks over the pairs of free ends.
+  const size_t springs = ends.size() / 2, stencils = stencil_ends.size() / 4;
+  // 3x3 blocks over the pairs of free ends: the springs' first, then the stencils'.
   std::vector<std::pair<int, int>> pairs;
-  pairs.reserve(4 * springs);
+  pairs.reserve(4 * springs + 16 * stencils);
   for (size_t si = 0; si < springs; ++si)
     for (int r : {ends[2 * si], ends[2 * si + 1]})
       for (int c : {ends[2 * si], ends[2 * si + 1]})
         if (r >= 0 && c >= 0) pairs.emplace_back(r, c);
+  for (size_t si = 0; si < stencils; ++si)
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) {
+        const int r = stencil_ends[4 * si + i], c = stencil_ends[4 * si + j];
+        if (r >= 0 && c >= 0) pairs.emplace_back(r, c);
+      }
   std::vector<int> pair_entry;
   const CscPattern nodes = make_csc_pattern(free_count, free_count, std::move(pairs),
                                             /*with_diagonal=*/true, &pair_entry);
@@ -143,8 +166,21 @@ SpringNetwork::StiffnessLayout build_layout(int free_count, std::vector<int> end
                 node_block_entry(nodes, e, end[bc], p, q);
       }
   }
+  layout.stencil_slots.assign(stencils * 48, -1);
+  for (size_t si = 0; si < stencils; ++si) {
+    const int* end = &stencil_ends[4 * si];
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) {
+        if (end[i] < 0 || end[j] < 0) continue;
+        const int e = pair_entry[next_pair++];
+        for (int p = 0; p < 3; ++p)
+          layout.stencil_slots[si * 48 + (4 * i + j) * 3 + p] =
+              node_block_entry(nodes, e, end[j], p, p);
+      }
+  }
   layout.free_count = free_count;
   layout.ends = std::move(ends);
+  layout.stencil_ends = std::move(stencil_ends);
   return layout;
 }
 
@@ -159,12 +195,18 @@ const SpringNetwork::StiffnessLayout& SpringNetwork::stiffness_layout() const {
       ends.push_back(free_index_[s.a]);
       ends.push_back(free_index_[s.b]);
     }
-    st.layout = layout_memo().find(
-        [&](const StiffnessLayout& e) { return e.free_count == free_count_ && e.ends == ends; });
+    std::vector<int> stencil_ends;
+    stencil_ends.reserve(4 * spec_.stencils.size());
+    for (const Stencil& s : spec_.stencils)
+      for (int p : s.particles) stencil_ends.push_back(p < 0 ? -1 : free_index_[p]);
+    st.layout = layout_memo().find([&](const StiffnessLayout& e) {
+      return e.free_count == free_count_ && e.ends == ends && e.stencil_ends == stencil_ends;
+    });
     if (!st.layout) {
-      auto fresh =
-          std::make_shared<const StiffnessLayout>(build_layout(free_count_, std::move(ends)));
+      auto fresh = std::make_shared<const StiffnessLayout>(
+          build_layout(free_count_, std::move(ends), std::move(stencil_ends)));
       const std::size_t held = fresh->ends.size() + fresh->slots.size() +
+                               fresh->stencil_ends.size() + fresh->stencil_slots.size() +
                                fresh->pattern.colptr.size() + fresh->pattern.rowind.size();
       st.layout = layout_memo().insert(std::move(fresh), held);
     }
@@ -208,6 +250,24 @@ inline void SpringNetwork::spring_force_law(const Spring& s, double L, double& f
   }
 }
 
+inline Vec3 SpringNetwork::stencil_vector(const Stencil& st, const double* x) const {
+  Vec3 v{};
+  for (int i = 0; i < 4 && st.particles[i] >= 0; ++i)
+    v = v + st.weights[i] * end_position(st.particles[i], x);
+  return v;
+}
+
+// F_i = -k w_i v on each free particle i of a stencil with k v = kv.
+void SpringNetwork::add_stencil_force(const Stencil& st, Vec3 kv, double* out) const {
+  for (int i = 0; i < 4 && st.particles[i] >= 0; ++i) {
+    const int f = free_index_[st.particles[i]];
+    if (f < 0) continue;
+    out[3 * f] -= st.weights[i] * kv.x;
+    out[3 * f + 1] -= st.weights[i] * kv.y;
+    out[3 * f + 2] -= st.weights[i] * kv.z;
+  }
+}
+
 void SpringNetwork::net_force(double t, const double* x, double* force) const {
   update_pins(t);
   const int n = dof();
@@ -226,6 +286,8 @@ void SpringNetwork::net_force(double t, const double* x, double* force) const {
     const Vec3 F = (f / L) * d;  // force on a
     add_spring_pair(force, fa, fb, F);
   }
+  for (const Stencil& st : spec_.stencils)
+    add_stencil_force(st, st.stiffness * stencil_vector(st, x), force);
 }
 
 void SpringNetwork::net_force_tangent(double t, const double* x, const SpringNetworkTangent& dp,
@@ -281,6 +343,13 @@ void SpringNetwork::net_force_tangent(double t, const double* x, const SpringNet
     }
     add_spring_pair(df, fa, fb, dF);
   }
+  if (!dp.pin_position.empty())
+    for (const Stencil& st : spec_.stencils) {
+      Vec3 dv{};
+      for (int i = 0; i < 4 && st.particles[i] >= 0; ++i)
+        dv = dv + st.weights[i] * pin_tangent(st.particles[i]);
+      add_stencil_force(st, st.stiffness * dv, df);
+    }
 }
 
 void SpringNetwork::conservative_acceleration(double t, const double* x, double* a) const {
@@ -324,6 +393,20 @@ void SpringNetwork::stiffness_values(double t, const double* x, double* values) 
       for (int e = 0; e < 9; ++e) values[slot[blk * 9 + e]] += scale * B[e];
     }
   }
+  // Stencils: block (i, j) = -k w_i w_j I, row i scaled by 1/m_i.
+  for (size_t si = 0; si < spec_.stencils.size(); ++si) {
+    const Stencil& s = spec_.stencils[si];
+    const int* slot = &st.stencil_slots[si * 48];
+    for (int i = 0; i < 4 && s.particles[i] >= 0; ++i) {
+      const int fi = free_index_[s.particles[i]];
+      if (fi < 0) continue;
+      for (int j = 0; j < 4 && s.particles[j] >= 0; ++j) {
+        if (slot[(4 * i + j) * 3] < 0) continue;
+        const double value = -s.stiffness * s.weights[i] * s.weights[j] * inv_mass_[3 * fi];
+        for (int p = 0; p < 3; ++p) values[slot[(4 * i + j) * 3 + p]] += value;
+      }
+    }
+  }
 }
 
 double SpringNetwork::static_residual(double t, const double* x) const {
@@ -347,6 +430,17 @@ double SpringNetwork::residual_roundoff(double t, const double* x) const {
                      (norm(end_position(s.a, x)) + norm(end_position(s.b, x)));
     if (fa >= 0) scratch_[3 * fa] += e;
     if (fb >= 0) scratch_[3 * fb] += e;
+  }
+  // A stencil's k v carries up to k eps sum_j |w_j| |x_j|; particle i gets |w_i| of it.
+  for (const Stencil& st : spec_.stencils) {
+    double e = 0.0;
+    for (int j = 0; j < 4 && st.particles[j] >= 0; ++j)
+      e += std::abs(st.weights[j]) * norm(end_position(st.particles[j], x));
+    e *= st.stiffness * std::numeric_limits<double>::epsilon();
+    for (int i = 0; i < 4 && st.particles[i] >= 0; ++i) {
+      const int f = free_index_[st.particles[i]];
+      if (f >= 0) scratch_[3 * f] += std::abs(st.weights[i]) * e;
+    }
   }
   if (scratch_.empty()) return 0.0;
   return *std::max_element(scratch_.begin(), scratch_.end()) / residual_scale_;
@@ -394,6 +488,13 @@ double SpringNetwork::potential_energy(double t, const double* x) const {
       if (over > 0.0) e += 0.5 * spec_.limit_stiffness_factor * s.stiffness * over * over;
     }
   }
+  for (const Stencil& st : spec_.stencils) {
+    bool moves = false;
+    for (int i = 0; i < 4 && st.particles[i] >= 0; ++i) moves |= free_index_[st.particles[i]] >= 0;
+    if (!moves) continue;
+    const Vec3 v = stencil_vector(st, x);
+    e += 0.5 * st.stiffness * dot(v, v);
+  }
   for (int i = 0; i < dof(); i += 3)
     e -= dof_mass_[i] *
          (spec_.gravity.x * x[i] + spec_.gravity.y * x[i + 1] + spec_.gravity.z * x[i + 2]);
@@ -424,7 +525,9 @@ bool SpringNetwork::free_floating() const {
 std::string SpringNetwork::describe() const {
   std::ostringstream os;
   os << particle_count() << " particles (" << free_count_ << " free), " << spec_.springs.size()
-     << " springs, " << dof() << " dof, Jacobian nnz " << stiffness_pattern().nnz();
+     << " springs, ";
+  if (!spec_.stencils.empty()) os << spec_.stencils.size() << " bending stencils, ";
+  os << dof() << " dof, Jacobian nnz " << stiffness_pattern().nnz();
   return os.str();
 }
 

@@ -32,6 +32,7 @@
 // never throws; a non-finite state produces non-finite output for the caller to detect.
 #pragma once
 
+#include <array>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -57,10 +58,19 @@ struct Spring {
   double stiffness = 0.0;  // k, N/m
 };
 
+// A stencil's energy k/2 |sum_i w_i x_i|^2 (see the header comment); particles[i] < 0 ends the
+// list (2 to 4 particles, distinct).
+struct Stencil {
+  std::array<int, 4> particles{-1, -1, -1, -1};
+  std::array<double, 4> weights{};  // dimensionless
+  double stiffness = 0.0;           // k, N/m
+};
+
 struct SpringNetworkSpec {
   std::vector<Vec3> positions;  // initial positions of all particles, m
   std::vector<double> masses;   // kg, all particles (pinned ones are ignored)
   std::vector<Spring> springs;
+  std::vector<Stencil> stencils;
   std::vector<int> pinned;                // particle indices
   std::vector<PinPath> pin_paths;         // one per pinned particle
   double damping = 0.0;                   // c, N s/m per particle (absolute damping)
@@ -76,6 +86,8 @@ struct SpringNetworkSpec {
 
 // A direction in the network's data (d(data)/dp for one parameter p), for the equilibrium
 // sensitivities dx*/dp = -K^-1 dF/dp (src/fit/sensitivity.hpp). An empty vector means zero.
+// Stencils enter only through their pinned particles (their stiffness and weights are not
+// parameters of a fit).
 struct SpringNetworkTangent {
   std::vector<double> stiffness;   // per spring: dk_s/dp, N/m per unit of p
   std::vector<double> rest;        // per spring: dL0_s/dp, m per unit of p
@@ -132,14 +144,19 @@ class SpringNetwork final : public MechanicalSystem {
   struct StiffnessLayout {
     int free_count = 0;
     std::vector<int> ends;  // per spring: the free indices of a and b (-1: pinned)
+    std::vector<int> stencil_ends;  // per stencil: 4 free indices (-1: pinned or absent)
     CscPattern pattern;
     std::vector<int> slots;  // per spring: 4 blocks (aa, ab, ba, bb) x 9 value positions, or -1
+    // per stencil: 16 blocks (i, j) x 3 diagonal value positions (i's row, j's column), or -1
+    std::vector<int> stencil_slots;
   };
 
  private:
   Vec3 end_position(int particle, const double* x) const;
   void update_pins(double t) const;
   void spring_force_law(const Spring& s, double L, double& f, double& df) const;
+  Vec3 stencil_vector(const Stencil& st, const double* x) const;  // v = sum_i w_i x_i
+  void add_stencil_force(const Stencil& st, Vec3 kv, double* out) const;
 
   SpringNetworkSpec spec_;
   int free_count_ = 0;
@@ -148,8 +165,8 @@ class SpringNetwork final : public MechanicalSystem {
   std::vector<double> gamma_, dof_mass_, inv_mass_;
   double residual_scale_ = 1.0;
   double pin_move_time_ = 0.0;
-  // The stiffness pattern, a function of the springs' free ends alone: built on first use (a
-  // drape run on its mirror reduction never needs the whole sheet's), shared by copies, and
+  // The stiffness pattern, a function of the springs' and stencils' free ends alone: built on first
+  // use (a drape run on its mirror reduction never needs the whole sheet's), shared by copies, and
   // memoised for the process (spring_network.cpp, layout_memo: a fit's drapes share a mesh).
   struct StiffnessStructure {
     std::once_flag once;

@@ -1,6 +1,7 @@
 // Knit model (paper 2, SPEC 2.9): chart parsing and its errors, hand-counted topology, the
 // rest geometry of the type-value points, intermeshing, Jacobian, relaxation and integrators,
 // and the number text of `knitsim knit`'s CSV/VTK files.
+#include <Eigen/Dense>
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -69,6 +70,26 @@ double max_spring_strain(const KnitModel& m, const std::vector<Vec3>& pos) {
   for (const Spring& s : m.network.spec().springs)
     e = std::max(e, std::abs(norm(pos[s.b] - pos[s.a]) - s.rest) / s.rest);
   return e;
+}
+
+// Eigenvalues of the symmetric stiffness K = -dF/dx (N/m) of a network at free state x, ascending.
+Eigen::VectorXd stiffness_spectrum(const SpringNetwork& net, const std::vector<double>& x) {
+  const CscPattern& pat = net.stiffness_pattern();
+  std::vector<double> values(pat.nnz());
+  net.stiffness_values(0.0, x.data(), values.data());
+  Eigen::MatrixXd K = Eigen::MatrixXd::Zero(net.dof(), net.dof());
+  for (int c = 0; c < pat.cols; ++c)
+    for (int k = pat.colptr[c]; k < pat.colptr[c + 1]; ++k)
+      K(pat.rowind[k], c) = -net.mass()[pat.rowind[k]] * values[k];
+  return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(0.5 * (K + K.transpose()),
+                                                        Eigen::EigenvaluesOnly)
+      .eigenvalues();
+}
+
+// Eigenvalues within 1e-9 of the largest in magnitude: the zero-energy modes.
+int zero_modes(const Eigen::VectorXd& spectrum) {
+  const double scale = spectrum.cwiseAbs().maxCoeff();
+  return static_cast<int>((spectrum.array().abs() <= 1e-9 * scale).count());
 }
 
 }  // namespace
@@ -355,19 +376,22 @@ TEST_CASE("centrelines interpolate the yarn points and follow the deformed point
   CHECK(norm(lines[0].points.back() - yarns[0].back()) < 1e-15);
 }
 
-TEST_CASE("knit Jacobian matches finite differences (tuck, miss, stacked tucks)") {
-  for (const char* name : {"single_tuck.chart", "several_misses.chart", "several_tucks.chart"}) {
-    const KnitModel m = model_of(chart_file(name));
-    std::vector<double> x(m.network.dof()), v(m.network.dof());
-    m.network.initial_state(x.data(), v.data());
-    std::mt19937 rng(5);
-    std::uniform_real_distribution<double> u(-1.0, 1.0);
-    for (double& xi : x) xi += 0.5 * m.params.loop_radius * u(rng);
-    const JacobianCheck c = check_stiffness_jacobian(m.network, 0.0, x.data(), 1e-9);
-    INFO(name << ": worst (" << c.worst_row << "," << c.worst_col << ") analytic "
-              << c.worst_analytic << " fd " << c.worst_fd);
-    CHECK(c.max_relative_error < 1e-6);
-  }
+TEST_CASE("knit Jacobian matches finite differences (tuck, miss, stacked tucks; bending)") {
+  KnitParams bending;
+  bending.bending_ratio = 1.0;
+  for (const char* name : {"single_tuck.chart", "several_misses.chart", "several_tucks.chart"})
+    for (const KnitParams& p : {paper_network(), bending}) {
+      const KnitModel m = model_of(chart_file(name), p);
+      std::vector<double> x(m.network.dof()), v(m.network.dof());
+      m.network.initial_state(x.data(), v.data());
+      std::mt19937 rng(5);
+      std::uniform_real_distribution<double> u(-1.0, 1.0);
+      for (double& xi : x) xi += 0.5 * m.params.loop_radius * u(rng);
+      const JacobianCheck c = check_stiffness_jacobian(m.network, 0.0, x.data(), 1e-9);
+      INFO(name << ": worst (" << c.worst_row << "," << c.worst_col << ") analytic "
+                << c.worst_analytic << " fd " << c.worst_fd);
+      CHECK(c.max_relative_error < 1e-6);
+    }
 }
 
 TEST_CASE("plain jersey is at rest: residual ~0 and integration moves nothing") {
@@ -519,6 +543,44 @@ TEST_CASE("stabiliser: a plain chart stays at rest; shear and bending springs ha
   CHECK_THROWS_WITH(parse_knit_network("bare"),
                     "knit.network = bare: must be stabilised (the default) or paper (paper 2's "
                     "network)");
+}
+
+TEST_CASE("out-of-plane bending (knit.bending): only rigid zero modes; a flat tuck is a saddle") {
+  KnitParams flat, bent;
+  bent.bending_ratio = 1.0;
+  CHECK(KnitParams{}.bending_ratio == 0.0);  // off by default: the chart stays in its plane
+  const KnitModel plain_flat = model_of(chart_file("plain_jersey.chart"), flat);
+  const KnitModel plain = model_of(chart_file("plain_jersey.chart"), bent);
+  // Stencils on the bending springs' triples (82) and the shear springs' quads (84 / 2).
+  CHECK(plain.network.spec().stencils.size() == 82 + 42);
+  CHECK(plain_flat.network.spec().stencils.empty());
+  std::vector<double> x(plain.network.dof()), v(plain.network.dof());
+  plain.network.initial_state(x.data(), v.data());
+  CHECK(plain.network.static_residual(0.0, x.data()) < 1e-12);  // exactly at rest
+  CHECK(plain.network.potential_energy(0.0, x.data()) == Approx(0.0).margin(1e-25));
+  // Without the stencils every point's z is a zero mode (56 points) besides the 3 in-plane rigid
+  // motions; with them only the 6 rigid motions are, and a free chart declares them.
+  CHECK(zero_modes(stiffness_spectrum(plain_flat.network, x)) == 56 + 3);
+  CHECK(zero_modes(stiffness_spectrum(plain.network, x)) == 6);
+  CHECK(plain.network.free_floating());
+  CHECK(!plain_flat.network.free_floating());
+  CHECK(plain.network.describe().find("124 bending stencils") != std::string::npos);
+
+  // A tuck's flat steady state (every integrator keeps z = 0 from the flat start: no force has a
+  // z component there) is a saddle once bending holds z: the compressed springs' negative
+  // transverse stiffness wins, the fabric puckers (docs/knit.md).
+  const KnitModel tuck_flat = model_of(chart_file("single_tuck.chart"), flat);
+  const KnitModel tuck = model_of(chart_file("single_tuck.chart"), bent);
+  std::vector<double> xs, vs;
+  IntegratorOptions opt;
+  REQUIRE(run_to_equilibrium(tuck_flat.network, "cvode-bdf", opt, xs, vs).status ==
+          RunStatus::Equilibrium);
+  const Eigen::VectorXd spectrum = stiffness_spectrum(tuck.network, xs);
+  INFO("lowest eigenvalues " << spectrum.head(3).transpose() << " N/m");
+  CHECK(spectrum[0] < -1e-6 * spectrum.cwiseAbs().maxCoeff());
+
+  bent.bending_ratio = 11.0;
+  CHECK_THROWS_WITH(bent.validate(), "knit.bending = 11: must be in [0, 10]");
 }
 
 TEST_CASE("stabiliser: a tuck's displacement decays with distance and the state is unique") {

@@ -136,6 +136,7 @@ TEST_CASE("knitsim knit: paper 2's network by name warns once that it is a mecha
   auto summary = nlohmann::json::parse(slurp(tmp.path / "out" / "summary.json"));
   CHECK(summary["params"]["network"] == "stabilised");
   CHECK(summary["params"]["stabiliser_ratio"] == 0.1);
+  CHECK(summary["params"]["bending_ratio"] == 0.0);
   for (const char* set : {"knit.network=paper", "knit.stabiliser=0"}) {
     CAPTURE(set);
     REQUIRE(run_small_chart(tmp, std::string("--no-pictures --set ") + set, err) == 0);
@@ -195,6 +196,11 @@ TEST_CASE("knitsim knit: bad input exits 2 with one line and writes nothing") {
       {"--chart '" + (tmp / "good.chart").string() +
            "' --set knit.network=paper --set knit.stabiliser=0.1",
        "paper 2's network has no stabiliser"},
+      {"--chart '" + (tmp / "good.chart").string() + "' --set knit.bending=-1",
+       "knit.bending = -1: must be in [0, 10]"},
+      {"--chart '" + (tmp / "good.chart").string() +
+           "' --set knit.network=paper --set knit.bending=1",
+       "paper 2's network has no stabiliser and no bending"},
       {"--chart '" + (tmp / "good.chart").string() + "' --integrator nope", "--integrator = nope"},
       {"--chart '" + (tmp / "good.chart").string() + "' --newton-solver lu",
        "--newton-solver: lu not in {klu,ldl,cg-ldl}"},

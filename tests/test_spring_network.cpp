@@ -186,6 +186,83 @@ TEST_CASE("the stiffness layout memo: shared by networks with the same ends, nev
   }
 }
 
+TEST_CASE("stencils: forces and Jacobian are the energy's derivatives, zero on rigid motions") {
+  // A flat 3 x 2 lattice (x along i, y along j): a wale-like second difference, a twist quad,
+  // and a spring; particle 0 pinned and moving, so stencils meet pinned ends in every role.
+  SpringNetworkSpec spec;
+  for (int j = 0; j < 2; ++j)
+    for (int i = 0; i < 3; ++i) spec.positions.push_back({0.1 * i, 0.07 * j, 0.0});
+  spec.masses.assign(6, 0.01);
+  spec.springs.push_back({1, 4, 0.07, 50.0});
+  spec.stencils.push_back({{0, 1, 2, -1}, {1.0, -2.0, 1.0, 0.0}, 3.0});
+  spec.stencils.push_back({{0, 1, 3, 4}, {1.0, -1.0, -1.0, 1.0}, 2.0});
+  spec.stencils.push_back({{1, 2, 4, 5}, {1.0, -1.0, -1.0, 1.0}, 2.0});
+  spec.pinned = {0};
+  spec.pin_paths = {{spec.positions[0], spec.positions[0] + Vec3{0.0, 0.0, 0.03}, 2.0}};
+  spec.gravity = {0.0, 0.0, 0.0};
+  spec.residual_force_scale = 1.0;
+  const SpringNetwork net(spec);
+  const int n = net.dof();
+
+  // At rest the stencils hold no energy and exert no force.
+  std::vector<double> x(n), v(n), f(n);
+  net.initial_state(x.data(), v.data());
+  CHECK(net.potential_energy(0.0, x.data()) == 0.0);
+  CHECK(net.static_residual(0.0, x.data()) == 0.0);
+
+  // Away from rest, the pin half-way through its move: the Jacobian by central differences,
+  // the forces as minus the energy's gradient.
+  for (unsigned seed : {1u, 2u}) {
+    x = perturbed_state(net, 0.01, seed);
+    CHECK(check_stiffness_jacobian(net, 1.0, x.data()).max_relative_error < 1e-6);
+    net.net_force(1.0, x.data(), f.data());
+    for (int i = 0; i < n; ++i) {
+      const double h = 1e-6;
+      std::vector<double> xp = x, xm = x;
+      xp[i] += h;
+      xm[i] -= h;
+      const double grad =
+          (net.potential_energy(1.0, xp.data()) - net.potential_energy(1.0, xm.data())) / (2 * h);
+      CHECK(f[i] == Approx(-grad).margin(1e-7));
+    }
+  }
+
+  // A rigid motion of the rest lattice (pin included: at t = 0 it is at rest) is free: the
+  // stencils' energy stays zero, whatever the rotation.
+  SpringNetworkSpec moved = spec;
+  const double c = std::cos(0.7), s = std::sin(0.7);
+  for (Vec3& p : moved.positions)
+    p = Vec3{c * p.x - s * p.z, p.y, s * p.x + c * p.z} + Vec3{1, 2, 3};
+  moved.pin_paths = {{moved.positions[0], moved.positions[0], 0.0}};
+  moved.springs.clear();
+  const SpringNetwork turned(moved);
+  turned.initial_state(x.data(), v.data());
+  CHECK(turned.potential_energy(0.0, x.data()) == Approx(0.0).margin(1e-28));
+  CHECK(turned.static_residual(0.0, x.data()) == Approx(0.0).margin(1e-13));
+
+  // The layout depends on the stencils: the same springs without them give another pattern.
+  SpringNetworkSpec bare = spec;
+  bare.stencils.clear();
+  const SpringNetwork without(bare);
+  CHECK(&without.stiffness_pattern() != &net.stiffness_pattern());
+  CHECK(net.stiffness_pattern().find(0, 3 * 4) >= 0);     // particles 1 and 5 (free 0 and 4)
+  CHECK(without.stiffness_pattern().find(0, 3 * 4) < 0);  // share only a twist quad
+
+  // Bad stencils are refused at construction.
+  SpringNetworkSpec bad = spec;
+  bad.stencils[0].particles = {0, 1, 1, -1};
+  CHECK_THROWS_WITH(SpringNetwork(bad), Catch::Contains("names a particle twice"));
+  bad = spec;
+  bad.stencils[0].particles = {0, 9, 2, -1};
+  CHECK_THROWS_WITH(SpringNetwork(bad), Catch::Contains("stencil particle out of range"));
+  bad = spec;
+  bad.stencils[0].particles = {0, -1, 2, -1};
+  CHECK_THROWS_WITH(SpringNetwork(bad), Catch::Contains("stencil particle out of range"));
+  bad = spec;
+  bad.stencils[0].stiffness = 0.0;
+  CHECK_THROWS_WITH(SpringNetwork(bad), Catch::Contains("stencil stiffness must be > 0"));
+}
+
 TEST_CASE("every diagonal entry is in the stiffness pattern") {
   DrapeParams p;
   p.topology = 'c';

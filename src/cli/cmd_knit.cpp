@@ -122,6 +122,7 @@ std::vector<SetKey> set_keys(KnitParams& p, IntegratorOptions& o) {
           {"knit.damping", &p.damping},
           {"knit.areal_density", &p.areal_density},
           {"knit.stabiliser", &p.stabiliser_ratio},
+          {"knit.bending", &p.bending_ratio},
           {"run.t_max", &o.t_max},
           {"run.equilibrium_tol", &o.equilibrium_tol}};
 }
@@ -130,8 +131,8 @@ std::vector<SetKey> set_keys(KnitParams& p, IntegratorOptions& o) {
 constexpr const char* kNetworkKey = "knit.network";
 
 // Applies "key=value" overrides; throws std::invalid_argument naming the bad --set.
-// knit.network = paper with an explicit knit.stabiliser > 0 is refused (the paper's network has
-// no stabiliser).
+// knit.network = paper with an explicit knit.stabiliser or knit.bending > 0 is refused (the
+// paper's network has neither).
 void apply_sets(const std::vector<std::string>& sets, KnitParams& p, IntegratorOptions& o) {
   const std::vector<SetKey> keys = set_keys(p, o);
   bool stabiliser_given = false;
@@ -142,7 +143,7 @@ void apply_sets(const std::vector<std::string>& sets, KnitParams& p, IntegratorO
       p.network = parse_knit_network(eq == std::string::npos ? "" : s.substr(eq + 1));
       continue;
     }
-    stabiliser_given = stabiliser_given || key == "knit.stabiliser";
+    stabiliser_given = stabiliser_given || key == "knit.stabiliser" || key == "knit.bending";
     const SetKey* found = nullptr;
     for (const SetKey& k : keys)
       if (key == k.name) found = &k;
@@ -164,10 +165,11 @@ void apply_sets(const std::vector<std::string>& sets, KnitParams& p, IntegratorO
       throw std::invalid_argument("--set " + s + ": expected " + key + "=<number>");
     *found->field = v;
   }
-  if (p.network == KnitNetwork::Paper && stabiliser_given && p.stabiliser_ratio > 0.0)
+  if (p.network == KnitNetwork::Paper && stabiliser_given &&
+      (p.stabiliser_ratio > 0.0 || p.bending_ratio > 0.0))
     throw std::invalid_argument(
-        "--set knit.stabiliser with knit.network = paper: paper 2's network has no stabiliser "
-        "(drop one of them)");
+        "--set knit.stabiliser or knit.bending with knit.network = paper: paper 2's network has "
+        "no stabiliser and no bending (drop one of them)");
 }
 
 // What a knit run integrates, as SavedRun::model (--continue): the chart, one string of stitch
@@ -302,7 +304,11 @@ std::string centerlines_vtk(const std::string& title, const std::vector<CurveSam
 // "stabilised network (s 0.1)" or "paper 2's network (a mechanism)".
 std::string network_label(const KnitParams& p) {
   return p.mechanism() ? "paper 2's network (a mechanism)"
-                       : "stabilised network (s " + format_number(p.stabiliser_ratio, 3) + ")";
+                       : "stabilised network (s " + format_number(p.stabiliser_ratio, 3) +
+                             (p.out_of_plane_bending()
+                                  ? ", out-of-plane bending b " + format_number(p.bending_ratio, 3)
+                                  : std::string()) +
+                             ")";
 }
 
 // Front view of the centrelines, courses in alternating colours, interlacing points as dots.
@@ -339,6 +345,7 @@ nlohmann::json params_json(const KnitParams& p) {
           {"damping", p.damping},
           {"areal_density", p.areal_density},
           {"stabiliser_ratio", p.stabiliser_ratio},
+          {"bending_ratio", p.out_of_plane_bending() ? p.bending_ratio : 0.0},
           {"network", p.mechanism() ? "paper" : "stabilised"}};
 }
 
@@ -659,7 +666,7 @@ void register_knit_command(CLI::App& app) {
                   "Override a parameter, e.g. knit.network=paper (repeatable); keys "
                   "knit.network (stabilised | paper), knit.loop_radius, knit.wale_stiffness, "
                   "knit.course_stiffness, knit.damping, knit.areal_density, knit.stabiliser, "
-                  "run.t_max, run.equilibrium_tol")
+                  "knit.bending, run.t_max, run.equilibrium_tol")
       ->allow_extra_args(false)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_option("--integrator", args->integrator,
