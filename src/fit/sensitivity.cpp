@@ -1,8 +1,8 @@
 #include "src/fit/sensitivity.hpp"
+#include "solvers/symmetric_factor.hpp"
 #include "src/measure/measurement.hpp"
 
 #include <Eigen/Dense>
-#include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -114,8 +114,10 @@ EdgeCoefficients fit_tangent(const EdgePoints& p, const EdgeCoefficients& c, con
 // --- StiffnessFactor ----------------------------------------------------------------------
 
 struct StiffnessFactor::Impl {
-  SparseMatrix K;
-  Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower> ldlt;
+  // The integrators' symmetric factorisation (3 x 3 block LDL^T on these networks, its symbolic
+  // analysis memoised per pattern) of the stiffness -K, positive definite at a stable state.
+  detail::SymmetricFactor factor;
+  int dof = 0;
   bool ok = false;
   int positive = 0;
 };
@@ -124,31 +126,28 @@ StiffnessFactor::StiffnessFactor(const SpringNetwork& network, double t, const d
     : impl_(new Impl) {
   const CscPattern& pat = network.stiffness_pattern();
   std::vector<double> values(pat.nnz());
-  network.stiffness_values(t, x, values.data());  // M^-1 dF/dx: scale row r back by m_r
+  network.stiffness_values(t, x, values.data());  // M^-1 dF/dx: scale row r back by -m_r
   const std::vector<double>& m = network.mass();
   for (int col = 0; col < pat.cols; ++col)
-    for (int e = pat.colptr[col]; e < pat.colptr[col + 1]; ++e) values[e] *= m[pat.rowind[e]];
-  impl_->K = Eigen::Map<const SparseMatrix>(pat.rows, pat.cols, pat.nnz(), pat.colptr.data(),
-                                            pat.rowind.data(), values.data());
-  impl_->ldlt.compute(impl_->K);
-  impl_->ok = impl_->ldlt.info() == Eigen::Success;
-  if (impl_->ok) {
-    const Eigen::VectorXd D = impl_->ldlt.vectorD();
-    for (int i = 0; i < D.size(); ++i) {
-      if (!(D(i) != 0.0) || !std::isfinite(D(i))) impl_->ok = false;
-      if (D(i) > 0.0) ++impl_->positive;
-    }
-  }
+    for (int e = pat.colptr[col]; e < pat.colptr[col + 1]; ++e) values[e] *= -m[pat.rowind[e]];
+  const SparseMatrix stiffness = Eigen::Map<const SparseMatrix>(
+      pat.rows, pat.cols, pat.nnz(), pat.colptr.data(), pat.rowind.data(), values.data());
+  impl_->dof = pat.rows;
+  impl_->factor.analyze(stiffness);
+  impl_->ok = impl_->factor.factorize(stiffness);
+  if (impl_->ok) impl_->positive = impl_->factor.negative_pivots();  // K = -stiffness
 }
 
 StiffnessFactor::~StiffnessFactor() { delete impl_; }
 bool StiffnessFactor::ok() const { return impl_->ok; }
 int StiffnessFactor::positive_pivots() const { return impl_->positive; }
-int StiffnessFactor::dof() const { return static_cast<int>(impl_->K.rows()); }
+int StiffnessFactor::dof() const { return impl_->dof; }
 
 void StiffnessFactor::solve(const double* b, double* y) const {
   const int n = dof();
-  Eigen::Map<Eigen::VectorXd>(y, n) = impl_->ldlt.solve(Eigen::Map<const Eigen::VectorXd>(b, n));
+  Eigen::Map<Eigen::VectorXd> out(y, n);
+  impl_->factor.solve(Eigen::Map<const Eigen::VectorXd>(b, n), out);
+  out = -out;  // K y = b with K = -stiffness
 }
 
 // --- Newton polish ------------------------------------------------------------------------

@@ -5,7 +5,8 @@
 //     K dx*/dp = -dF/dp,      K = dF/dx (symmetric 3n x 3n, the model's stiffness pattern with
 //                             rows scaled back by the mass: K = M da_c/dx)
 // dF/dp comes from the model (SpringNetwork::net_force_tangent, drape_tangent); K is factored
-// once by a sparse LDL^T (Eigen SimplicialLDLT, no pivoting). K need not be definite (a
+// once by the integrators' symmetric factorisation (solvers/symmetric_factor.hpp: 3 x 3 block
+// LDL^T, supernodal LL^T on large grids with an LDL^T fallback). K need not be definite (a
 // compressed spring's geometric term is negative), so the factor is LDL^T, not Cholesky; by
 // Sylvester's law the signs of D give K's inertia: a stable equilibrium has no positive pivot
 // (K negative definite), and the count is reported.
