@@ -1,25 +1,26 @@
 #!/usr/bin/env bash
 # Scaling study (issue 5 item 7; SPEC 2.12 "report how cost grows with the number of
 # particles"): four_corner drapes of one 50 x 50 cm sheet refined from 11 x 11 to 101 x 101
-# particles (and 141 x 141 in full mode) with cvode-bdf (Schur LDL^T and KLU), cvode-bdf-gmres
-# and implicit-euler on the full grid, and `static` on the eighth the scene requires
-# (model.symmetry = eighth; solver label static-eighth). CPU time, steps and peak memory per
+# particles (and 141 x 141 in full mode) with cvode-bdf (Schur LDL^T and KLU), cvode-bdf-gmres,
+# implicit-euler and the equilibrium solver on the full grid, the equilibrium solver as the
+# default runs it (model.symmetry = auto: the eighth here; label equilibrium-auto), and `static`
+# on the eighth the scene requires (model.symmetry = eighth; solver label static-eighth). CPU time, steps and peak memory per
 # run; growth exponents fitted by plot.py (reads only the CSV; repeated runs enter as medians).
 #
 #   experiments/scaling/run.sh [--quick | --target [--repeats R]] [--grids "N ..."]
-#                              [--solver LABEL] [--out DIR] [--max-wall S]
+#                              [--solver "LABEL ..."] [--out DIR] [--max-wall S]
 #
 # --target: the SPEC 2.12 target "a 101 x 101 four_corner equilibrium in <= 5 s" only: n = 100
-# with static on the eighth and on the quarter and cvode-bdf on the eighth, R rounds (default
-# 3) of the three in turn (runs interleaved, so load drifts hit all three alike); default DIR
-# out/scaling-target.
-# --grids: cells per side to run instead of the mode's list; --solver: only the runs with this
-# label (cvode-bdf-ldl (--factorization auto: block below 33 000 unknowns, supernodal from
+# with static on the eighth and on the quarter, cvode-bdf on the eighth and the equilibrium
+# solver on the whole sheet and as the default runs it, R rounds (default 3) of the five in turn
+# (runs interleaved, so load drifts hit all alike); default DIR out/scaling-target.
+# --grids: cells per side to run instead of the mode's list; --solver: only the runs with these
+# labels (cvode-bdf-ldl (--factorization auto: block below 33 000 unknowns, supernodal from
 # there), cvode-bdf-ldl-simplicial, -block, -supernodal (the same with that --factorization:
 # run only at n >= 60, where the back ends part ways), cvode-bdf-klu,
 # cvode-bdf-gmres (its default preconditioner, the lagged
-# Schur LDL^T), cvode-bdf-gmres-bj (block-Jacobi), implicit-euler, static-eighth,
-# static-quarter, cvode-bdf-eighth), e.g. --solver static-eighth --grids "100 140 200" for the
+# Schur LDL^T), cvode-bdf-gmres-bj (block-Jacobi), implicit-euler, equilibrium, equilibrium-auto,
+# static-eighth, static-quarter, cvode-bdf-eighth), e.g. --solver static-eighth --grids "100 140 200" for the
 # reduced model on grids the full-grid solvers cannot reach in useful time.
 #
 # Refinement: cells per side n, natural length L0 = W / n (W = 0.50 m, so the sheet is the
@@ -46,7 +47,7 @@ TARGET=0
 REPEATS=3
 OUT=
 MAX_WALL=
-usage="usage: $0 [--quick | --target [--repeats R]] [--grids \"N ...\"] [--solver LABEL] [--out DIR] [--max-wall S]"
+usage="usage: $0 [--quick | --target [--repeats R]] [--grids \"N ...\"] [--solver \"LABEL ...\"] [--out DIR] [--max-wall S]"
 GRIDS_OPT=
 SOLVER=
 while [ $# -gt 0 ]; do
@@ -66,10 +67,12 @@ case "$REPEATS" in '' | *[!0-9]* | 0) echo "scaling: --repeats must be an intege
 for g in $GRIDS_OPT; do
   case "$g" in '' | *[!0-9]* | 0 | 1) echo "scaling: --grids: $g is not an integer >= 2" >&2; exit 2 ;; esac
 done
-case "$SOLVER" in
-  '' | cvode-bdf-ldl | cvode-bdf-ldl-simplicial | cvode-bdf-ldl-block | cvode-bdf-ldl-supernodal | cvode-bdf-klu | cvode-bdf-gmres | cvode-bdf-gmres-bj | implicit-euler | static-eighth | static-quarter | cvode-bdf-eighth) ;;
-  *) echo "scaling: --solver $SOLVER not in {cvode-bdf-ldl,cvode-bdf-ldl-simplicial,cvode-bdf-ldl-block,cvode-bdf-ldl-supernodal,cvode-bdf-klu,cvode-bdf-gmres,cvode-bdf-gmres-bj,implicit-euler,static-eighth,static-quarter,cvode-bdf-eighth}" >&2; exit 2 ;;
-esac
+for label in $SOLVER; do
+  case "$label" in
+    cvode-bdf-ldl | cvode-bdf-ldl-simplicial | cvode-bdf-ldl-block | cvode-bdf-ldl-supernodal | cvode-bdf-klu | cvode-bdf-gmres | cvode-bdf-gmres-bj | implicit-euler | equilibrium | equilibrium-auto | static-eighth | static-quarter | cvode-bdf-eighth) ;;
+    *) echo "scaling: --solver $label not in {cvode-bdf-ldl,cvode-bdf-ldl-simplicial,cvode-bdf-ldl-block,cvode-bdf-ldl-supernodal,cvode-bdf-klu,cvode-bdf-gmres,cvode-bdf-gmres-bj,implicit-euler,equilibrium,equilibrium-auto,static-eighth,static-quarter,cvode-bdf-eighth}" >&2; exit 2 ;;
+  esac
+done
 [ "$QUICK$TARGET" != 11 ] || { echo "scaling: --quick and --target exclude each other" >&2; exit 2; }
 if [ -z "$OUT" ]; then
   if [ "$TARGET" = 1 ]; then OUT=$root/out/scaling-target; else OUT=$root/out/scaling; fi
@@ -89,7 +92,7 @@ echo "n,particles,dof,natural_length_m,damping_Ns_per_m,solver,status,t_final,st
 ROUND=1
 run() {
   local n=$1 solver=$2 integ=$3; shift 3
-  [ -z "$SOLVER" ] || [ "$SOLVER" = "$solver" ] || return 0
+  [ -z "$SOLVER" ] || [[ " $SOLVER " == *" $solver "* ]] || return 0
   local dir=$OUT/runs/$n-$solver-r$ROUND
   local L0 c
   L0=$(python3 -c "print(repr(0.50 / $n))")
@@ -128,6 +131,8 @@ if [ "$TARGET" = 1 ]; then
       run "$n" static-eighth static "${eighth[@]}"
       run "$n" static-quarter static --set model.symmetry=quarter
       run "$n" cvode-bdf-eighth cvode-bdf "${eighth[@]}"
+      run "$n" equilibrium equilibrium
+      run "$n" equilibrium-auto equilibrium --set model.symmetry=auto
     done
   done
 else
@@ -143,6 +148,8 @@ else
     run "$n" cvode-bdf-gmres cvode-bdf-gmres
     run "$n" cvode-bdf-gmres-bj cvode-bdf-gmres --gmres-preconditioner block-jacobi
     run "$n" implicit-euler implicit-euler
+    run "$n" equilibrium equilibrium
+    run "$n" equilibrium-auto equilibrium --set model.symmetry=auto
     run "$n" static-eighth static "${eighth[@]}"
   done
 fi
@@ -155,7 +162,7 @@ mode=
 [ "$QUICK" = 1 ] && mode=" --quick"
 [ "$TARGET" = 1 ] && mode=" --target --repeats $REPEATS"
 [ -z "$GRIDS_OPT" ] || mode="$mode --grids \"$GRIDS_OPT\""
-[ -z "$SOLVER" ] || mode="$mode --solver $SOLVER"
+[ -z "$SOLVER" ] || mode="$mode --solver \"$SOLVER\""
 python3 - "$OUT/manifest.json" "$KNITSIM" "$mode" "$MAX_WALL" "$commit" "$GRIDS" <<'PY'
 import datetime, glob, json, os, sys
 m = {"experiment": "scaling",

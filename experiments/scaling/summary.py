@@ -5,7 +5,8 @@ them. Standard library only (plot.py imports medians() and slope() from here).
     summary.py [DIR] [--output FILE]     (default DIR: experiments/scaling/data)
 
 Reads every PREFIX`runs.csv` in DIR (run.sh writes runs.csv; the committed data/ keeps each
-run under its own prefix: quick_, target_, eighth_, block_, factorization_, flops_) with its
+run under its own prefix: quick_, equilibrium_, target_, eighth_, block_, factorization_,
+flops_) with its
 PREFIX`manifest.json`, PREFIX`nested_runs.csv` of nested.py, and the knitsim summary.json
 files n100_*_summary.json. Per runs file: every (solver, grid) as the median of its rounds
 (the run with the median CPU time), the growth exponents of CPU time and steps against the
@@ -29,12 +30,14 @@ TITLES = {
     "target_": "Target: a 101×101 equilibrium, n = 100 on the eighth and the quarter "
                "(target_runs.csv)",
     "eighth_": "Beyond 101×101 on the eighth (eighth_runs.csv)",
+    "equilibrium_": "The equilibrium solver, whole sheet and as the default runs it "
+                    "(model.symmetry = auto: the eighth), n = 10 to 200 (equilibrium_runs.csv)",
     "block_": "Factorisation back ends: 3×3 block LDLᵀ, simplicial, supernodal (block_runs.csv)",
     "factorization_": "Factorisation back ends: supernodal (automatic) against simplicial "
                       "(factorization_runs.csv)",
     "flops_": "Flops of the factorisations (flops_runs.csv)",
 }
-ORDER = ["", "quick_", "target_", "eighth_", "block_", "factorization_", "flops_"]
+ORDER = ["", "quick_", "equilibrium_", "target_", "eighth_", "block_", "factorization_", "flops_"]
 
 
 def slope(xs, ys):
@@ -128,9 +131,12 @@ def runs_section(folder, prefix):
                      [[f["solver"], f["points"], "%.2f" % f["cpu_exponent"],
                        "%.2f" % f["steps_exponent"], f["largest_particles"]] for f in fit]))
 
-    if has_factorization and len({r["factorization"] for r in rows}) > 1:
+    grids = sorted({int(r["particles"]) for r in rows})
+    # Back ends side by side only where every run of a grid integrates the same model.
+    one_model = all(len({r["integrated_dof"] for r in rows if int(r["particles"]) == p}) == 1
+                    for p in grids)
+    if has_factorization and one_model and len({r["factorization"] for r in rows}) > 1:
         backs = sorted({r["factorization"] for r in rows})
-        grids = sorted({int(r["particles"]) for r in rows})
         piv = []
         for p in grids:
             at = {r["factorization"]: r for r in rows if int(r["particles"]) == p}
