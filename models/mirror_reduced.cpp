@@ -5,6 +5,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "src/core/memo.hpp"
+
 namespace knitsim {
 
 namespace {
@@ -23,47 +25,107 @@ bool same_value(double a, double b) { return std::abs(a - b) <= 1e-12 * std::abs
 
 }  // namespace
 
-MirrorReduced::MirrorReduced(const SpringNetwork& full, const MirrorPlanes& planes)
-    : full_(std::make_unique<SpringNetwork>(full)),
-      gravity_(full.spec().gravity),
-      residual_scale_(full.residual_force_scale()),
-      full_dof_count_(full.dof()) {
+// The integer part of a reduction: a pure function of its key (the image maps, the pinned
+// particles, the springs' ends, each particle's sides of the mirrors), shared by every network
+// with that key whatever its values.
+struct MirrorReduced::Structure {
+  // The key.
+  std::vector<int> image_x, image_y, image_d, pinned, ends;  // ends: a, b per spring
+  std::vector<unsigned char> sides;                          // per particle: side_bits
+  // q entries and the domain's free particles (layouts as in the header comment).
+  int group_order = 2;
+  std::vector<int> q_particle;       // q entry -> its domain particle
+  std::vector<int> full_dof;         // q entry -> full free dof
+  std::vector<int> coordinate;       // q entry -> 0, 1, 2 (x, y, z)
+  std::vector<double> multiplicity;  // q entry -> coordinates of its particle tied to it
+  std::vector<int> particle_begin;   // q entries of domain free particle r: [begin r, begin r+1)
+  std::vector<double> weight;        // per domain free particle: w_p
+  // The tie x_full[k] = tie_sign[k] q[tie_dof[k]] + offset(k) of every full free dof k; the
+  // offset is a function of the planes (tie_offsets).
+  std::vector<int> tie_dof;
+  std::vector<double> tie_sign;
+  std::vector<int> tie_source;             // 3 d + src: the domain coordinate k copies
+  std::vector<unsigned char> tie_element;  // g with p = g(d)
+  std::vector<unsigned char> source_base;  // per 3 d + c: Base of that domain coordinate
+  // The reduced network: its particles (domain, then ghosts), pins and springs.
+  std::vector<int> net_full;                  // reduced network particle -> full particle
+  std::vector<int> net_pinned, net_pin_slot;  // its pinned particles, their full pin slots
+  std::vector<int> net_ends, net_source;      // per reduced spring: its ends, its full spring
+  std::vector<double> net_weight;             // per reduced spring: w_s = |O| / |G|
+  // The spring orbits, for the value checks: per orbit its first spring and the spring image
+  // g(s) for every g.
+  std::vector<int> orbit_first, orbit_images;
+  std::vector<int> net_full_dof;  // reduced network free dof -> full free dof
+  CscPattern pattern;             // of dF/dq
+  std::vector<int> jac_target;    // per reduced network nnz: q pattern position or -1
+
+  // The base of a domain coordinate: 0, held on its plane, or tied to x by the diagonal.
+  enum Base : unsigned char { kZero, kPlane, kDiagonal };
+  int image(int g, int p) const {  // g: bit 0 X, bit 1 Y, bit 2 D; Y^(bit 1) X^(bit 0) D^(bit 2)
+    if (g & 4) p = image_d[p];
+    if (g & 1) p = image_x[p];
+    if (g & 2) p = image_y[p];
+    return p;
+  }
+  std::size_t footprint() const;  // the integers it holds (doubles count 2)
+};
+
+namespace {
+
+// Which side of each mirror p lies on: bit 0 beyond the x plane, bit 1 beyond the y plane, bit
+// 2 above the diagonal (y - c_y > x - c_x). The fold into the domain reads only these.
+unsigned char side_bits(Vec3 p, const MirrorPlanes& planes) {
+  return static_cast<unsigned char>((p.x > planes.x_plane) | (p.y > planes.y_plane) << 1 |
+                                    (p.y - planes.y_plane > p.x - planes.x_plane) << 2);
+}
+
+// Whether `e` is the structure of (spec, planes): its key compared in place.
+bool same_key(const MirrorReduced::Structure& e, const SpringNetworkSpec& spec,
+              const MirrorPlanes& planes) {
+  if (e.sides.size() != spec.positions.size() || e.ends.size() != 2 * spec.springs.size() ||
+      e.image_x != planes.image_x || e.image_y != planes.image_y || e.image_d != planes.image_d ||
+      e.pinned != spec.pinned)
+    return false;
+  for (std::size_t s = 0; s < spec.springs.size(); ++s)
+    if (e.ends[2 * s] != spec.springs[s].a || e.ends[2 * s + 1] != spec.springs[s].b) return false;
+  for (std::size_t p = 0; p < spec.positions.size(); ++p)
+    if (e.sides[p] != side_bits(spec.positions[p], planes)) return false;
+  return true;
+}
+
+// The mirrors' group acting on positions, as Structure::image on particles.
+Vec3 mirror(Vec3 v, int g, const double plane[3]) {
+  if (g & 4) v = {plane[0] + v.y - plane[1], plane[1] + v.x - plane[0], v.z};
+  if (g & 1) v.x = 2.0 * plane[0] - v.x;
+  if (g & 2) v.y = 2.0 * plane[1] - v.y;
+  return v;
+}
+
+// The per-particle conditions (values included): image maps that are involutions of the
+// dihedral group, mirror positions, masses, pins and pin paths; throws naming the first
+// offender.
+void check_particles(const SpringNetwork& full, const MirrorPlanes& planes) {
   const SpringNetworkSpec& spec = full.spec();
   const int np = full.particle_count();
   const std::vector<int>& ix = planes.image_x;
   const std::vector<int>& iy = planes.image_y;
   const std::vector<int>& id = planes.image_d;
   const bool has_y = !iy.empty(), diagonal = !id.empty();
-  group_order_ = diagonal ? 8 : has_y ? 4 : 2;  // elements g = 0 .. |G| - 1 (bits below)
   const double plane[3] = {planes.x_plane, planes.y_plane, 0.0};  // no mirror in z
   if (diagonal && !has_y) asymmetric("a diagonal mirror needs the y mirror too");
   if (static_cast<int>(ix.size()) != np || (has_y && static_cast<int>(iy.size()) != np) ||
       (diagonal && static_cast<int>(id.size()) != np))
     asymmetric("the image maps need one entry per particle (" + std::to_string(np) + ")");
-  if (gravity_.x != 0.0 || gravity_.y != 0.0) asymmetric("gravity has an x or y component");
-
-  // Group element g: bit 0 X, bit 1 Y, bit 2 D, acting as Y^(bit 1) X^(bit 0) D^(bit 2).
-  auto image = [&](int g, int p) {
-    if (g & 4) p = id[p];
-    if (g & 1) p = ix[p];
-    if (g & 2) p = iy[p];
-    return p;
-  };
-  auto mirror = [&](Vec3 v, int g) {
-    if (g & 4) v = {plane[0] + v.y - plane[1], plane[1] + v.x - plane[0], v.z};
-    if (g & 1) v.x = 2.0 * plane[0] - v.x;
-    if (g & 2) v.y = 2.0 * plane[1] - v.y;
-    return v;
-  };
+  if (spec.gravity.x != 0.0 || spec.gravity.y != 0.0) asymmetric("gravity has an x or y component");
+  auto image = [&](int g, int p) { return g == 1 ? ix[p] : g == 2 ? iy[p] : id[p]; };
   double extent = 0.0;
   for (const Vec3& p : spec.positions)
     extent = std::max({extent, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
   const double tol = 1e-9 * (extent > 0.0 ? extent : 1.0);
   std::vector<int> pin_slot(np, -1);
   for (size_t k = 0; k < spec.pinned.size(); ++k) pin_slot[spec.pinned[k]] = static_cast<int>(k);
-  std::vector<int> generators = {1};
-  if (has_y) generators.push_back(2);
-  if (diagonal) generators.push_back(4);
+  const int generators[] = {1, 2, 4};
+  const int generator_count = diagonal ? 3 : has_y ? 2 : 1;
   for (int p = 0; p < np; ++p) {
     auto who = [p] { return "particle " + std::to_string(p); };  // built only to throw
     auto valid = [np](int q) { return q >= 0 && q < np; };
@@ -73,13 +135,14 @@ MirrorReduced::MirrorReduced(const SpringNetwork& full, const MirrorPlanes& plan
       asymmetric(who() + ": the image maps are not two commuting involutions");
     if (diagonal && (!valid(id[p]) || id[id[p]] != p || id[ix[p]] != iy[id[p]]))
       asymmetric(who() + ": the diagonal image map is not an involution with D X = Y D");
-    for (int g : generators) {
+    for (int i = 0; i < generator_count; ++i) {
+      const int g = generators[i];
       const int q = image(g, p);
       const char* plane_name = g == 1 ? "x plane" : g == 2 ? "y plane" : "diagonal";
-      if (!close(spec.positions[q], mirror(spec.positions[p], g), tol))
+      if (!close(spec.positions[q], mirror(spec.positions[p], g, plane), tol))
         asymmetric(who() + " and its image " + std::to_string(q) + " across the " + plane_name +
                    " are not mirror positions");
-      if (q != p && close(spec.positions[p], mirror(spec.positions[p], g), tol))
+      if (q != p && close(spec.positions[p], mirror(spec.positions[p], g, plane), tol))
         asymmetric(who() + " lies on the " + plane_name + " but is not its own image");
       if (!same_value(spec.masses[p], spec.masses[q]))
         asymmetric(who() + " and its image " + std::to_string(q) + " have different masses");
@@ -89,23 +152,96 @@ MirrorReduced::MirrorReduced(const SpringNetwork& full, const MirrorPlanes& plan
       if (pin_slot[p] >= 0) {
         const PinPath& a = spec.pin_paths[pin_slot[p]];
         const PinPath& b = spec.pin_paths[pin_slot[q]];
-        if (!close(b.start, mirror(a.start, g), tol) || !close(b.end, mirror(a.end, g), tol) ||
-            a.move_time != b.move_time)
+        if (!close(b.start, mirror(a.start, g, plane), tol) ||
+            !close(b.end, mirror(a.end, g, plane), tol) || a.move_time != b.move_time)
           asymmetric("the pin paths of particles " + std::to_string(p) + " and " +
                      std::to_string(q) + " are not mirror images");
       }
     }
   }
+}
+
+// The message of a spring without a mirror image of the same data (g(s) = a-b).
+[[noreturn]] void no_spring_image(const Spring& sp, int a, int b) {
+  asymmetric("spring " + std::to_string(sp.a) + "-" + std::to_string(sp.b) +
+             " has no mirror image with the same rest length and stiffness (" + std::to_string(a) +
+             "-" + std::to_string(b) + ")");
+}
+
+// The per-spring conditions on values: every spring's images have its rest length and
+// stiffness (their existence is the structure's).
+void check_springs(const SpringNetworkSpec& spec, const MirrorReduced::Structure& s) {
+  const int order = s.group_order;
+  for (std::size_t o = 0; o < s.orbit_first.size(); ++o) {
+    const Spring& sp = spec.springs[s.orbit_first[o]];
+    for (int g = 0; g < order; ++g) {
+      const Spring& match = spec.springs[s.orbit_images[o * order + g]];
+      if (!same_value(sp.rest, match.rest) || !same_value(sp.stiffness, match.stiffness))
+        no_spring_image(sp, s.image(g, sp.a), s.image(g, sp.b));
+    }
+  }
+}
+
+// The reduced network: `spec`'s values on the structure's springs and particles (no damping, no
+// gravity: the reduction's own act on q directly).
+SpringNetworkSpec reduced_network_spec(const SpringNetworkSpec& spec,
+                                       const MirrorReduced::Structure& s) {
+  SpringNetworkSpec q;
+  q.positions.reserve(s.net_full.size());
+  q.masses.reserve(s.net_full.size());
+  for (int p : s.net_full) {
+    q.positions.push_back(spec.positions[p]);
+    q.masses.push_back(spec.masses[p]);
+  }
+  q.pinned = s.net_pinned;
+  q.pin_paths.reserve(s.net_pin_slot.size());
+  for (int slot : s.net_pin_slot) q.pin_paths.push_back(spec.pin_paths[slot]);
+  q.springs.reserve(s.net_source.size());
+  for (std::size_t k = 0; k < s.net_source.size(); ++k) {
+    const Spring& sp = spec.springs[s.net_source[k]];
+    q.springs.push_back(
+        {s.net_ends[2 * k], s.net_ends[2 * k + 1], sp.rest, s.net_weight[k] * sp.stiffness});
+  }
+  q.damping = 0.0;
+  q.elongation_limit = spec.elongation_limit;
+  q.limit_stiffness_factor = spec.limit_stiffness_factor;
+  q.gravity = {0.0, 0.0, 0.0};
+  q.residual_force_scale = 1.0;  // unused: static_residual() is the reduction's own
+  return q;
+}
+
+// The structure of a network that passed check_particles. Throws (asymmetric) where its
+// integers break the mirrors: two springs on one pair, a spring without an image, a particle on
+// the x plane and the diagonal that is not the centre.
+std::shared_ptr<const MirrorReduced::Structure> build_structure(const SpringNetwork& full,
+                                                                const MirrorPlanes& planes) {
+  using Structure = MirrorReduced::Structure;
+  auto made = std::make_shared<Structure>();
+  Structure& s = *made;
+  const SpringNetworkSpec& spec = full.spec();
+  const int np = full.particle_count();
+  s.image_x = planes.image_x;
+  s.image_y = planes.image_y;
+  s.image_d = planes.image_d;
+  s.pinned = spec.pinned;
+  for (const Spring& sp : spec.springs) s.ends.insert(s.ends.end(), {sp.a, sp.b});
+  for (const Vec3& p : spec.positions) s.sides.push_back(side_bits(p, planes));
+  const std::vector<int>& ix = s.image_x;
+  const std::vector<int>& iy = s.image_y;
+  const std::vector<int>& id = s.image_d;
+  const bool has_y = !iy.empty(), diagonal = !id.empty();
+  const int order = s.group_order = diagonal ? 8 : has_y ? 4 : 2;
+  std::vector<int> pin_slot(np, -1);
+  for (size_t k = 0; k < spec.pinned.size(); ++k) pin_slot[spec.pinned[k]] = static_cast<int>(k);
 
   // Fold: every particle's domain image d(p) and the element taking d(p) to p (p = g(d)).
   std::vector<int> domain_of(np), element(np);
   for (int p = 0; p < np; ++p) {
     int g = 0;
-    if (ix[p] != p && spec.positions[p].x > plane[0]) g |= 1;
-    if (has_y && iy[p] != p && spec.positions[p].y > plane[1]) g |= 2;
-    int d = image(g, p);  // x <= c_x (and y <= c_y: the quarter, which D maps onto itself)
-    const Vec3& r = spec.positions[d];
-    if (diagonal && id[d] != d && r.y - plane[1] > r.x - plane[0]) {
+    if (ix[p] != p && (s.sides[p] & 1)) g |= 1;
+    if (has_y && iy[p] != p && (s.sides[p] & 2)) g |= 2;
+    int d = s.image(g, p);  // x <= c_x (and y <= c_y: the quarter, which D maps onto itself)
+    if (diagonal && id[d] != d && (s.sides[d] & 4)) {
       d = id[d];
       g |= 4;
     }
@@ -116,22 +252,20 @@ MirrorReduced::MirrorReduced(const SpringNetwork& full, const MirrorPlanes& plan
   // The unknowns q: free coordinates of the free domain particles, in particle order. Each
   // domain coordinate (d, c) is x_d[c] = q[q_of] + base (q_of -1: the constant base).
   std::vector<int> q_of(3 * np, -1);
-  std::vector<double> base(3 * np, 0.0);
+  s.source_base.assign(3 * np, Structure::kZero);
   for (int p = 0; p < np; ++p) {
     if (domain_of[p] != p || full.free_index(p) < 0) continue;
     int orbit = 0;
-    for (int g = 0; g < group_order_; ++g) {
+    for (int g = 0; g < order; ++g) {
       bool seen = false;
-      for (int h = 0; h < g; ++h) seen = seen || image(h, p) == image(g, p);
+      for (int h = 0; h < g; ++h) seen = seen || s.image(h, p) == s.image(g, p);
       if (!seen) ++orbit;
     }
-    const double w = orbit / static_cast<double>(group_order_);
-    const double m = spec.masses[p];
-    particle_begin_.push_back(static_cast<int>(mass_.size()));
-    weight_.push_back(w);
+    s.particle_begin.push_back(static_cast<int>(s.q_particle.size()));
+    s.weight.push_back(orbit / static_cast<double>(order));
     for (int c = 0; c < 3; ++c) {
       if ((c == 0 && ix[p] == p) || (c == 1 && has_y && iy[p] == p)) {  // held on the plane
-        base[3 * p + c] = plane[c];
+        s.source_base[3 * p + c] = Structure::kPlane;
         continue;
       }
       if (c == 1 && diagonal && id[p] == p) {  // on the diagonal: y - c_y = x - c_x
@@ -139,27 +273,26 @@ MirrorReduced::MirrorReduced(const SpringNetwork& full, const MirrorPlanes& plan
           asymmetric("particle " + std::to_string(p) +
                      " lies on the x plane and the diagonal but is not its own y image");
         q_of[3 * p + 1] = q_of[3 * p];
-        base[3 * p + 1] = plane[1] - plane[0];
-        multiplicity_[q_of[3 * p]] += 1.0;
+        s.source_base[3 * p + 1] = Structure::kDiagonal;
+        s.multiplicity[q_of[3 * p]] += 1.0;
         continue;
       }
-      q_of[3 * p + c] = static_cast<int>(mass_.size());
-      full_dof_.push_back(3 * full.free_index(p) + c);
-      coordinate_.push_back(c);
-      mass_.push_back(w * m);  // x the multiplicity, below
-      multiplicity_.push_back(1.0);
-      gamma_.push_back(spec.damping / m);
-      initial_.push_back(component(spec.positions[p], c));
+      q_of[3 * p + c] = static_cast<int>(s.q_particle.size());
+      s.q_particle.push_back(p);
+      s.full_dof.push_back(3 * full.free_index(p) + c);
+      s.coordinate.push_back(c);
+      s.multiplicity.push_back(1.0);
     }
   }
-  particle_begin_.push_back(static_cast<int>(mass_.size()));
-  for (size_t j = 0; j < mass_.size(); ++j) mass_[j] *= multiplicity_[j];
+  s.particle_begin.push_back(static_cast<int>(s.q_particle.size()));
 
   // The tie of every full free dof to q: coordinate c of p = g(d) is the mirrored coordinate
   // src of d (D swaps x and y, X and Y flip them).
-  tie_dof_.assign(full_dof_count_, -1);
-  tie_sign_.assign(full_dof_count_, 1.0);
-  tie_offset_.assign(full_dof_count_, 0.0);
+  const int full_dofs = full.dof();
+  s.tie_dof.assign(full_dofs, -1);
+  s.tie_sign.assign(full_dofs, 1.0);
+  s.tie_source.assign(full_dofs, 0);
+  s.tie_element.assign(full_dofs, 0);
   for (int p = 0; p < np; ++p) {
     if (full.free_index(p) < 0) continue;
     const int d = domain_of[p], g = element[p];
@@ -167,25 +300,23 @@ MirrorReduced::MirrorReduced(const SpringNetwork& full, const MirrorPlanes& plan
       const int k = 3 * full.free_index(p) + c;
       const int src = (g & 4) && c < 2 ? 1 - c : c;
       const int j = q_of[3 * d + src];
-      double offset = base[3 * d + src] + ((g & 4) && c < 2 ? plane[c] - plane[src] : 0.0);
       const bool flipped = (c == 0 && (g & 1)) || (c == 1 && (g & 2));
-      if (flipped) offset = 2.0 * plane[c] - offset;
-      tie_dof_[k] = j;
-      tie_sign_[k] = j >= 0 && flipped ? -1.0 : 1.0;
-      tie_offset_[k] = offset;
+      s.tie_dof[k] = j;
+      s.tie_sign[k] = j >= 0 && flipped ? -1.0 : 1.0;
+      s.tie_source[k] = 3 * d + src;
+      s.tie_element[k] = static_cast<unsigned char>(g);
     }
   }
 
-  // Springs: every mirror image present with the same data; one weighted representative per
-  // orbit, chosen with as many ends in the domain as possible (the rest become ghosts).
+  // Springs: every mirror image present; one weighted representative per orbit, chosen with as
+  // many ends in the domain as possible (the rest become ghosts).
   auto key = [np](int a, int b) {
     return static_cast<long long>(std::min(a, b)) * np + std::max(a, b);
   };
-  // (key, spring) sorted by key: a lookup table without a node per spring (an unordered_map
-  // spent ~0.1 of this constructor's time in its allocations).
+  // (key, spring) sorted by key: a lookup table without a node per spring.
   std::vector<std::pair<long long, int>> by_key(spec.springs.size());
-  for (size_t s = 0; s < spec.springs.size(); ++s)
-    by_key[s] = {key(spec.springs[s].a, spec.springs[s].b), static_cast<int>(s)};
+  for (size_t k = 0; k < spec.springs.size(); ++k)
+    by_key[k] = {key(spec.springs[k].a, spec.springs[k].b), static_cast<int>(k)};
   std::sort(by_key.begin(), by_key.end());
   for (size_t k = 1; k < by_key.size(); ++k)
     if (by_key[k].first == by_key[k - 1].first) {
@@ -198,99 +329,189 @@ MirrorReduced::MirrorReduced(const SpringNetwork& full, const MirrorPlanes& plan
     return it != by_key.end() && it->first == k ? it->second : -1;
   };
   std::vector<int> net_of(np, -1);
-  SpringNetworkSpec q;
-  std::vector<int> net_full;  // reduced network particle -> full particle
   auto add_particle = [&](int p) {
-    net_of[p] = static_cast<int>(net_full.size());
-    net_full.push_back(p);
-    q.positions.push_back(spec.positions[p]);
-    q.masses.push_back(spec.masses[p]);
+    net_of[p] = static_cast<int>(s.net_full.size());
+    s.net_full.push_back(p);
     if (pin_slot[p] >= 0) {
-      q.pinned.push_back(net_of[p]);
-      q.pin_paths.push_back(spec.pin_paths[pin_slot[p]]);
+      s.net_pinned.push_back(net_of[p]);
+      s.net_pin_slot.push_back(pin_slot[p]);
     }
   };
   for (int p = 0; p < np; ++p)
     if (domain_of[p] == p) add_particle(p);
   std::vector<char> done(spec.springs.size(), 0);
-  for (size_t s = 0; s < spec.springs.size(); ++s) {
-    if (done[s]) continue;
-    const Spring& sp = spec.springs[s];
+  for (size_t k = 0; k < spec.springs.size(); ++k) {
+    if (done[k]) continue;
+    const Spring& sp = spec.springs[k];
     int members[8], count = 0, best = 0, best_inside = -1;
-    for (int g = 0; g < group_order_; ++g) {
-      const int a = image(g, sp.a), b = image(g, sp.b);
+    s.orbit_first.push_back(static_cast<int>(k));
+    for (int g = 0; g < order; ++g) {
+      const int a = s.image(g, sp.a), b = s.image(g, sp.b);
       const int match = spring_of(key(a, b));
-      if (match < 0 || !same_value(sp.rest, spec.springs[match].rest) ||
-          !same_value(sp.stiffness, spec.springs[match].stiffness))
-        asymmetric("spring " + std::to_string(sp.a) + "-" + std::to_string(sp.b) +
-                   " has no mirror image with the same rest length and stiffness (" +
-                   std::to_string(a) + "-" + std::to_string(b) + ")");
+      if (match < 0) no_spring_image(sp, a, b);
+      s.orbit_images.push_back(match);
       if (std::find(members, members + count, match) == members + count) members[count++] = match;
       const int inside = (domain_of[a] == a) + (domain_of[b] == b);
       if (inside > best_inside) best_inside = inside, best = g;
     }
     for (int i = 0; i < count; ++i) done[members[i]] = 1;
-    const int a = image(best, sp.a), b = image(best, sp.b);
+    const int a = s.image(best, sp.a), b = s.image(best, sp.b);
     for (int p : {a, b})
       if (net_of[p] < 0) add_particle(p);  // a ghost: tied to its domain image
-    q.springs.push_back(
-        {net_of[a], net_of[b], sp.rest, count / static_cast<double>(group_order_) * sp.stiffness});
+    s.net_ends.insert(s.net_ends.end(), {net_of[a], net_of[b]});
+    s.net_source.push_back(static_cast<int>(k));
+    s.net_weight.push_back(count / static_cast<double>(order));
   }
-  q.damping = 0.0;  // the reduction's damping and gravity act on q directly
-  q.elongation_limit = spec.elongation_limit;
-  q.limit_stiffness_factor = spec.limit_stiffness_factor;
-  q.gravity = {0.0, 0.0, 0.0};
-  q.residual_force_scale = 1.0;  // unused: static_residual() is the reduction's own
-  net_ = std::make_unique<SpringNetwork>(std::move(q));
 
-  // Reduced network dof -> full dof, and the Jacobian P^T K P into the q pattern.
-  net_full_dof_.assign(net_->dof(), -1);
-  for (int k = 0; k < net_->particle_count(); ++k) {
-    const int f = net_->free_index(k);
+  // Reduced network dof -> full dof, and the Jacobian P^T K P into the q pattern (the network's
+  // free particles and pattern follow from its integers; this drape's values stand in).
+  const SpringNetwork net(reduced_network_spec(spec, s));
+  s.net_full_dof.assign(net.dof(), -1);
+  for (int k = 0; k < net.particle_count(); ++k) {
+    const int f = net.free_index(k);
     if (f < 0) continue;
-    for (int c = 0; c < 3; ++c) net_full_dof_[3 * f + c] = 3 * full.free_index(net_full[k]) + c;
+    for (int c = 0; c < 3; ++c) s.net_full_dof[3 * f + c] = 3 * full.free_index(s.net_full[k]) + c;
   }
-  const CscPattern& kp = net_->stiffness_pattern();
+  const CscPattern& kp = net.stiffness_pattern();
   std::vector<std::pair<int, int>> entries;
   for (int col = 0; col < kp.cols; ++col)
     for (int e = kp.colptr[col]; e < kp.colptr[col + 1]; ++e) {
-      const int r = tie_dof_[net_full_dof_[kp.rowind[e]]], c = tie_dof_[net_full_dof_[col]];
+      const int r = s.tie_dof[s.net_full_dof[kp.rowind[e]]], c = s.tie_dof[s.net_full_dof[col]];
       if (r >= 0 && c >= 0) entries.emplace_back(r, c);
     }
+  const int dof = static_cast<int>(s.q_particle.size());
   std::vector<int> entry_position;
-  pattern_ =
-      make_csc_pattern(dof(), dof(), std::move(entries), /*with_diagonal=*/true, &entry_position);
-  jac_target_.assign(kp.nnz(), -1);
-  jac_factor_.assign(kp.nnz(), 0.0);
+  s.pattern =
+      make_csc_pattern(dof, dof, std::move(entries), /*with_diagonal=*/true, &entry_position);
+  s.jac_target.assign(kp.nnz(), -1);
   int next_entry = 0;  // the entries in the order listed above
   for (int col = 0; col < kp.cols; ++col)
     for (int e = kp.colptr[col]; e < kp.colptr[col + 1]; ++e) {
-      const int kr = net_full_dof_[kp.rowind[e]], kc = net_full_dof_[col];
-      const int r = tie_dof_[kr], c = tie_dof_[kc];
-      if (r < 0 || c < 0) continue;
-      jac_target_[e] = entry_position[next_entry++];
+      const int r = s.tie_dof[s.net_full_dof[kp.rowind[e]]], c = s.tie_dof[s.net_full_dof[col]];
+      if (r >= 0 && c >= 0) s.jac_target[e] = entry_position[next_entry++];
+    }
+  return made;
+}
+
+// The structures of the latest meshes: a fit's drapes (thousands) share a few (grid size x
+// topology x reduction), and building one costs ~10 % of a fit drape's CPU (perf of `knitsim
+// fit`). A hit is bit for bit what a fresh build gives. At most 32 MB of integers.
+PatternMemo<MirrorReduced::Structure>& structure_memo() {
+  static PatternMemo<MirrorReduced::Structure> memo(std::size_t{1} << 23);
+  return memo;
+}
+
+std::shared_ptr<const MirrorReduced::Structure> structure_of(const SpringNetwork& full,
+                                                             const MirrorPlanes& planes) {
+  std::shared_ptr<const MirrorReduced::Structure> s = structure_memo().find(
+      [&](const MirrorReduced::Structure& e) { return same_key(e, full.spec(), planes); });
+  if (!s) {
+    std::shared_ptr<const MirrorReduced::Structure> fresh = build_structure(full, planes);
+    s = structure_memo().insert(fresh, fresh->footprint());
+  }
+  return s;
+}
+
+}  // namespace
+
+std::size_t MirrorReduced::Structure::footprint() const {
+  const std::size_t ints =
+      image_x.size() + image_y.size() + image_d.size() + pinned.size() + ends.size() +
+      sides.size() + q_particle.size() + full_dof.size() + coordinate.size() +
+      particle_begin.size() + tie_dof.size() + tie_source.size() + tie_element.size() +
+      source_base.size() + net_full.size() + net_pinned.size() + net_pin_slot.size() +
+      net_ends.size() + net_source.size() + orbit_first.size() + orbit_images.size() +
+      net_full_dof.size() + pattern.colptr.size() + pattern.rowind.size() + jac_target.size();
+  const std::size_t doubles =
+      multiplicity.size() + weight.size() + tie_sign.size() + net_weight.size();
+  return ints + 2 * doubles;
+}
+
+void MirrorReduced::clear_structure_memo() { structure_memo().clear(); }
+
+MirrorReduced::MirrorReduced(const SpringNetwork& full, const MirrorPlanes& planes)
+    : full_(std::make_unique<SpringNetwork>(full)),
+      gravity_(full.spec().gravity),
+      residual_scale_(full.residual_force_scale()) {
+  check_particles(full, planes);
+  s_ = structure_of(full, planes);
+  const Structure& s = *s_;
+  const SpringNetworkSpec& spec = full.spec();
+  check_springs(spec, s);
+
+  // Per q entry: mass w_p m_p mult_j, damping rate c / m_p, the start.
+  const int n = static_cast<int>(s.q_particle.size());
+  mass_.resize(n);
+  gamma_.resize(n);
+  initial_.resize(n);
+  for (size_t r = 0; r + 1 < s.particle_begin.size(); ++r)
+    for (int j = s.particle_begin[r]; j < s.particle_begin[r + 1]; ++j) {
+      const int p = s.q_particle[j];
+      const double m = spec.masses[p];
+      mass_[j] = s.weight[r] * m * s.multiplicity[j];
+      gamma_[j] = spec.damping / m;
+      initial_[j] = component(spec.positions[p], s.coordinate[j]);
+    }
+
+  // The ties' offsets: a domain coordinate's base (0, its plane, or the diagonal's c_y - c_x),
+  // moved by D's swap and X's and Y's flips.
+  const double plane[3] = {planes.x_plane, planes.y_plane, 0.0};
+  tie_offset_.resize(s.tie_dof.size());
+  for (size_t k = 0; k < s.tie_dof.size(); ++k) {
+    const int c = static_cast<int>(k % 3), g = s.tie_element[k];
+    const int src = s.tie_source[k] % 3;
+    const unsigned char kind = s.source_base[s.tie_source[k]];
+    const double base = kind == Structure::kPlane      ? plane[src]
+                        : kind == Structure::kDiagonal ? plane[1] - plane[0]
+                                                       : 0.0;
+    double offset = base + ((g & 4) && c < 2 ? plane[c] - plane[src] : 0.0);
+    const bool flipped = (c == 0 && (g & 1)) || (c == 1 && (g & 2));
+    if (flipped) offset = 2.0 * plane[c] - offset;
+    tie_offset_[k] = offset;
+  }
+
+  net_ = std::make_unique<SpringNetwork>(reduced_network_spec(spec, s));
+  const CscPattern& kp = net_->stiffness_pattern();
+  jac_factor_.assign(kp.nnz(), 0.0);
+  for (int col = 0; col < kp.cols; ++col)
+    for (int e = kp.colptr[col]; e < kp.colptr[col + 1]; ++e) {
+      if (s.jac_target[e] < 0) continue;
+      const int kr = s.net_full_dof[kp.rowind[e]], kc = s.net_full_dof[col];
       // The network's values are rows of M_net^-1 dF/dx; the reduction's are M_q^-1 dF/dq.
-      jac_factor_[e] = tie_sign_[kr] * tie_sign_[kc] * net_->mass()[kp.rowind[e]] / mass_[r];
+      jac_factor_[e] =
+          s.tie_sign[kr] * s.tie_sign[kc] * net_->mass()[kp.rowind[e]] / mass_[s.tie_dof[kr]];
     }
   x_net_.resize(net_->dof());
   f_net_.resize(net_->dof());
   k_net_.resize(kp.nnz());
   f_red_.resize(dof());
-  x_full_.resize(full_dof_count_);
+  x_full_.resize(s.tie_dof.size());
+}
+
+const CscPattern& MirrorReduced::stiffness_pattern() const { return s_->pattern; }
+
+const std::vector<int>& MirrorReduced::full_dof() const { return s_->full_dof; }
+
+int MirrorReduced::group_order() const { return s_->group_order; }
+
+inline double MirrorReduced::tied_value(const double* q, int k) const {
+  const int j = s_->tie_dof[k];
+  return (j >= 0 ? s_->tie_sign[k] * q[j] : 0.0) + tie_offset_[k];
 }
 
 void MirrorReduced::expand(const double* q) const {
-  for (size_t k = 0; k < x_net_.size(); ++k) x_net_[k] = tied_value(q, net_full_dof_[k]);
+  for (size_t k = 0; k < x_net_.size(); ++k) x_net_[k] = tied_value(q, s_->net_full_dof[k]);
 }
 
 void MirrorReduced::reduced_force(double t, const double* q) const {
   expand(q);
   net_->net_force(t, x_net_.data(), f_net_.data());
   std::fill(f_red_.begin(), f_red_.end(), 0.0);
+  const Structure& s = *s_;
   for (size_t k = 0; k < f_net_.size(); ++k) {
-    const int full = net_full_dof_[k];
-    const int j = tie_dof_[full];
-    if (j >= 0) f_red_[j] += tie_sign_[full] * f_net_[k];
+    const int full = s.net_full_dof[k];
+    const int j = s.tie_dof[full];
+    if (j >= 0) f_red_[j] += s.tie_sign[full] * f_net_[k];
   }
 }
 
@@ -302,31 +523,34 @@ void MirrorReduced::initial_state(double* q, double* v) const {
 void MirrorReduced::conservative_acceleration(double t, const double* q, double* a) const {
   reduced_force(t, q);
   const double g[3] = {gravity_.x, gravity_.y, gravity_.z};
-  for (int j = 0; j < dof(); ++j) a[j] = f_red_[j] / mass_[j] + g[coordinate_[j]];
+  const std::vector<int>& coordinate = s_->coordinate;
+  for (int j = 0; j < dof(); ++j) a[j] = f_red_[j] / mass_[j] + g[coordinate[j]];
 }
 
 void MirrorReduced::constant_acceleration(double /*t*/, double* a) const {
   const double g[3] = {gravity_.x, gravity_.y, gravity_.z};
-  for (int j = 0; j < dof(); ++j) a[j] = g[coordinate_[j]];
+  for (int j = 0; j < dof(); ++j) a[j] = g[s_->coordinate[j]];
 }
 
 void MirrorReduced::stiffness_values(double t, const double* q, double* values) const {
   expand(q);
   net_->stiffness_values(t, x_net_.data(), k_net_.data());
-  std::fill(values, values + pattern_.nnz(), 0.0);
+  std::fill(values, values + s_->pattern.nnz(), 0.0);
+  const std::vector<int>& target = s_->jac_target;
   for (size_t e = 0; e < k_net_.size(); ++e)
-    if (jac_target_[e] >= 0) values[jac_target_[e]] += jac_factor_[e] * k_net_[e];
+    if (target[e] >= 0) values[target[e]] += jac_factor_[e] * k_net_[e];
 }
 
 double MirrorReduced::static_residual(double t, const double* q) const {
   reduced_force(t, q);
   const double g[3] = {gravity_.x, gravity_.y, gravity_.z};
+  const Structure& s = *s_;
   double worst = 0.0;
-  for (size_t r = 0; r + 1 < particle_begin_.size(); ++r) {
+  for (size_t r = 0; r + 1 < s.particle_begin.size(); ++r) {
     double f2 = 0.0;
-    for (int j = particle_begin_[r]; j < particle_begin_[r + 1]; ++j) {
-      const double f = (f_red_[j] + mass_[j] * g[coordinate_[j]]) / weight_[r];
-      f2 += f * f / multiplicity_[j];
+    for (int j = s.particle_begin[r]; j < s.particle_begin[r + 1]; ++j) {
+      const double f = (f_red_[j] + mass_[j] * g[s.coordinate[j]]) / s.weight[r];
+      f2 += f * f / s.multiplicity[j];
     }
     if (!(f2 <= worst)) worst = f2;  // NaN propagates
   }
@@ -342,10 +566,11 @@ bool MirrorReduced::project(double t, double* q, double* /*v*/) const {
   expand(q);
   // SpringNetwork::project moves positions only (velocities unchanged), so v is not passed.
   if (!net_->project(t, x_net_.data(), nullptr)) return false;
+  const Structure& s = *s_;
   for (size_t k = 0; k < x_net_.size(); ++k) {
-    const int full = net_full_dof_[k];
-    const int j = tie_dof_[full];
-    if (j >= 0 && full_dof_[j] == full) q[j] = x_net_[k];  // its own coordinate
+    const int full = s.net_full_dof[k];
+    const int j = s.tie_dof[full];
+    if (j >= 0 && s.full_dof[j] == full) q[j] = x_net_[k];  // its own coordinate
   }
   return true;
 }
@@ -354,22 +579,22 @@ double MirrorReduced::potential_energy(double t, const double* q) const {
   expand(q);
   double e = net_->potential_energy(t, x_net_.data());  // springs (the network has no gravity)
   const double g[3] = {gravity_.x, gravity_.y, gravity_.z};
-  for (int j = 0; j < dof(); ++j) e -= mass_[j] * g[coordinate_[j]] * q[j];
+  for (int j = 0; j < dof(); ++j) e -= mass_[j] * g[s_->coordinate[j]] * q[j];
   return e;
 }
 
 void MirrorReduced::unfold(const double* q, double* x_full) const {
-  for (int k = 0; k < full_dof_count_; ++k) x_full[k] = tied_value(q, k);
+  for (size_t k = 0; k < tie_offset_.size(); ++k) x_full[k] = tied_value(q, static_cast<int>(k));
 }
 
 std::string MirrorReduced::describe() const {
   std::ostringstream os;
-  os << (group_order_ == 8   ? "mirror eighth: "
-         : group_order_ == 4 ? "mirror quarter: "
-                             : "mirror half: ")
-     << weight_.size() << " free particles, " << dof() << " dof (" << full_dof_count_
+  os << (s_->group_order == 8   ? "mirror eighth: "
+         : s_->group_order == 4 ? "mirror quarter: "
+                                : "mirror half: ")
+     << s_->weight.size() << " free particles, " << dof() << " dof (" << tie_offset_.size()
      << " in the full model), " << net_->spec().springs.size() << " springs, Jacobian nnz "
-     << pattern_.nnz();
+     << s_->pattern.nnz();
   return os.str();
 }
 

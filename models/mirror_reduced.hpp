@@ -43,6 +43,14 @@
 // exactly symmetric itself, so on those paths the reduction agrees with the full model only to
 // that order effect.
 //
+// Set-up: everything that depends only on the integers of the network and the mirrors (the
+// orbits, the domain, the ghosts, the tie P, the reduced network's springs and the Jacobian's
+// pattern) is a Structure, memoised process-wide (mirror_reduced.cpp, structure_memo): a fit's
+// drapes share a mesh, so each drape only checks and copies its values (positions, masses,
+// stiffness, rest lengths, pins, damping) into it. The memo's key is what decides the structure:
+// the image maps, the pinned particles, the springs' ends and the side of each mirror each
+// particle lies on.
+//
 // Failure modes: a network that is not symmetric (a spring, mass, position or pin without its
 // mirror image, image maps that are not involutions of the dihedral group, gravity with an x or
 // y component) throws std::invalid_argument with one line naming the first offender.
@@ -84,7 +92,7 @@ class MirrorReduced final : public MechanicalSystem {
   void constant_acceleration(double t, double* a) const override;  // gravity
   const std::vector<double>& damping_rate() const override { return gamma_; }
   const std::vector<double>& mass() const override { return mass_; }
-  const CscPattern& stiffness_pattern() const override { return pattern_; }
+  const CscPattern& stiffness_pattern() const override;
   void stiffness_values(double t, const double* q, double* values) const override;
   double static_residual(double t, const double* q) const override;
   // The full network's floor at the unfolded state (one pass over the full springs; the
@@ -100,40 +108,33 @@ class MirrorReduced final : public MechanicalSystem {
   void unfold(const double* q, double* x_full) const;
   // q entry j is the full free dof full_dof()[j] (the coordinate of a domain particle), so
   // the restriction of a full state or force is x_full[full_dof()[j]].
-  const std::vector<int>& full_dof() const { return full_dof_; }
+  const std::vector<int>& full_dof() const;
   // The springs the reduction evaluates (domain + ghost particles, weighted stiffness).
   const SpringNetwork& reduced_network() const { return *net_; }
-  int group_order() const { return group_order_; }  // |G|: 2 (half), 4 (quarter), 8 (eighth)
+  int group_order() const;  // |G|: 2 (half), 4 (quarter), 8 (eighth)
+
+  // Forgets the memoised structures (tests: a fresh build against a remembered one).
+  static void clear_structure_memo();
+
+  struct Structure;  // the integer part of a reduction (mirror_reduced.cpp)
 
  private:
   // x_full[k] in the state q (k a full free dof).
-  double tied_value(const double* q, int k) const {
-    const int j = tie_dof_[k];
-    return (j >= 0 ? tie_sign_[k] * q[j] : 0.0) + tie_offset_[k];
-  }
+  double tied_value(const double* q, int k) const;
   void expand(const double* q) const;                   // x_net_ from q
   void reduced_force(double t, const double* q) const;  // f_red_ = P^T F_net (springs only)
 
+  std::shared_ptr<const Structure> s_;  // shared with the memo
   std::unique_ptr<SpringNetwork> net_;
   std::unique_ptr<SpringNetwork> full_;  // a copy of the full model, for residual_roundoff
   Vec3 gravity_;
   double residual_scale_ = 1.0;  // N, the full network's F_ref
-  int full_dof_count_ = 0;
-  // Full free dof k: x_full[k] = tie_sign_[k] q[tie_dof_[k]] + tie_offset_[k] (tie_dof_ -1: the
-  // constant tie_offset_, a coordinate on a plane).
-  std::vector<int> tie_dof_;
-  std::vector<double> tie_sign_, tie_offset_;
-  std::vector<int> net_full_dof_;     // quarter network free dof -> full free dof
-  std::vector<int> full_dof_;         // q entry -> full free dof
-  std::vector<int> coordinate_;       // q entry -> 0, 1, 2 (x, y, z)
-  std::vector<int> particle_begin_;   // q entries of domain free particle r: [begin r, begin r+1)
-  std::vector<double> weight_;        // per domain free particle: w_p
-  std::vector<double> multiplicity_;  // per q entry: coordinates of its particle tied to it
-  int group_order_ = 4;
+  // Full free dof k: x_full[k] = tie_sign[k] q[tie_dof[k]] + tie_offset_[k] (tie_dof -1: the
+  // constant tie_offset_, a coordinate on a plane; sign and dof in the Structure).
+  std::vector<double> tie_offset_;
   std::vector<double> mass_, gamma_, initial_;
-  CscPattern pattern_;
-  std::vector<int> jac_target_;     // per quarter network nnz: q pattern position or -1
-  std::vector<double> jac_factor_;  // sign_row sign_col m_net,row / m_q,row
+  std::vector<double>
+      jac_factor_;  // per reduced network nnz: sign_row sign_col m_net,row / m_q,row
   mutable std::vector<double> x_net_, f_net_, k_net_, f_red_, x_full_;
 };
 

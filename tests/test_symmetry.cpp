@@ -1,7 +1,7 @@
 // MirrorReduced (models/mirror_reduced.hpp): the quarter and the eighth of a symmetric drape grid
 // are the exact restriction of the full equations to symmetric states, their Jacobians pass the
-// finite-difference check, their unfolded equilibria are the full model's, and asymmetric scenes
-// are refused.
+// finite-difference check, their unfolded equilibria are the full model's, asymmetric scenes
+// are refused, and a reduction on a memoised structure is the one built afresh.
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -379,3 +379,125 @@ TEST_CASE("model.symmetry = auto runs whole where the integrator needs the whole
   CHECK_THROWS_AS(run_drape(scene, "cvode-bdf-gmres"), std::invalid_argument);
 }
 
+
+namespace {
+
+// Everything a reduction computes, as numbers: its layout, masses, damping, start, ties, and
+// its forces, Jacobian values, energy and residual at a symmetric state. Equal fingerprints:
+// the two reductions are the same system bit for bit.
+std::vector<double> fingerprint(const MirrorReduced& r, const SpringNetwork& full) {
+  std::vector<double> f = {static_cast<double>(r.dof()), static_cast<double>(r.group_order())};
+  const auto add = [&f](const auto& v) { f.insert(f.end(), v.begin(), v.end()); };
+  add(r.mass());
+  add(r.damping_rate());
+  add(r.full_dof());
+  add(r.stiffness_pattern().colptr);
+  add(r.stiffness_pattern().rowind);
+  const std::vector<double> q = random_reduced_state(r, 0.02, 11);
+  std::vector<double> q0(r.dof()), v0(r.dof()), a(r.dof()), x(full.dof());
+  std::vector<double> k(r.stiffness_pattern().nnz());
+  r.initial_state(q0.data(), v0.data());
+  add(q0);
+  r.conservative_acceleration(1.0, q.data(), a.data());
+  add(a);
+  r.stiffness_values(1.0, q.data(), k.data());
+  add(k);
+  r.unfold(q.data(), x.data());
+  add(x);
+  f.push_back(r.potential_energy(1.0, q.data()));
+  f.push_back(r.static_residual(1.0, q.data()));
+  f.push_back(r.reduced_network().spec().springs.size());
+  return f;
+}
+
+}  // namespace
+
+TEST_CASE("a reduction built on a memoised structure is the reduction built afresh") {
+  // (grid, symmetry): same-mesh pairs with other values (k, c, rho_A, eps_max and L0 at the same
+  // n), other topologies, other pins, other groups, other meshes, the same springs in another
+  // order, and the sheet turned (the same integers but the domain on the other side).
+  struct Case {
+    DrapeGrid grid;
+    MirrorPlanes planes;
+  };
+  std::vector<Case> cases;
+  auto add_grid = [&](DrapeParams p, DrapeSymmetry sym) {
+    DrapeGrid g = build_drape_grid(p);
+    MirrorPlanes planes = drape_mirror_planes(g, sym);
+    cases.push_back({std::move(g), std::move(planes)});
+  };
+  DrapeParams base;
+  base.natural_length = 0.1;  // n = 5
+  DrapeParams other = base;
+  other.natural_length = 0.098;  // n = 5 still
+  other.stiffness = 1130.0;
+  other.damping = 17.0;
+  other.areal_density = 77.0;
+  other.elongation_limit = 12.0;
+  for (DrapeSymmetry sym : {DrapeSymmetry::Eighth, DrapeSymmetry::Quarter, DrapeSymmetry::Half})
+    for (char topo : {'a', 'b', 'c'})
+      for (const DrapeParams& values : {base, other}) {
+        DrapeParams p = values;
+        p.topology = topo;
+        add_grid(p, sym);
+      }
+  DrapeParams two = other;
+  two.layout = PinLayout::TwoCorner;
+  add_grid(two, DrapeSymmetry::Half);  // four_corner's half with two pins fewer
+  DrapeParams six = other;
+  six.natural_length = 0.0833;  // n = 6: particles on the planes
+  add_grid(six, DrapeSymmetry::Eighth);
+  {
+    Case reversed = cases.front();
+    SpringNetworkSpec spec = reversed.grid.network.spec();
+    std::reverse(spec.springs.begin(), spec.springs.end());
+    reversed.grid.network = SpringNetwork(spec);
+    cases.push_back(std::move(reversed));
+  }
+  {
+    // Turned half a turn about the centre, x -> 2c - x, y -> 2c - y: every mirror commutes with
+    // it, so the maps are unchanged and the domain is the opposite corner.
+    Case flipped = cases.front();
+    SpringNetworkSpec spec = flipped.grid.network.spec();
+    const double c = flipped.planes.x_plane;
+    auto flip = [c](Vec3 v) { return Vec3{2 * c - v.x, 2 * c - v.y, v.z}; };
+    for (Vec3& p : spec.positions) p = flip(p);
+    for (PinPath& path : spec.pin_paths) path.start = flip(path.start), path.end = flip(path.end);
+    flipped.grid.network = SpringNetwork(spec);
+    cases.push_back(std::move(flipped));
+  }
+
+  std::vector<std::vector<double>> fresh;
+  for (const Case& c : cases) {
+    MirrorReduced::clear_structure_memo();
+    fresh.push_back(fingerprint(MirrorReduced(c.grid.network, c.planes), c.grid.network));
+  }
+  // All cases in one memo, twice over: each must still give its fresh build.
+  MirrorReduced::clear_structure_memo();
+  for (int pass = 0; pass < 2; ++pass)
+    for (size_t i = 0; i < cases.size(); ++i) {
+      CAPTURE(pass, i);
+      const MirrorReduced r(cases[i].grid.network, cases[i].planes);
+      CHECK(fingerprint(r, cases[i].grid.network) == fresh[i]);
+    }
+
+  // The same mesh with other values shares one structure; another key never does.
+  const MirrorReduced a(cases[0].grid.network, cases[0].planes);
+  const MirrorReduced b(cases[1].grid.network, cases[1].planes);
+  CHECK(&a.stiffness_pattern() == &b.stiffness_pattern());
+  for (size_t i = 2; i < cases.size(); ++i) {
+    CAPTURE(i);
+    const MirrorReduced r(cases[i].grid.network, cases[i].planes);
+    CHECK(&r.stiffness_pattern() != &a.stiffness_pattern());
+  }
+
+  // Values are checked on every build: a fabric stiffer along one grid direction, on the
+  // memoised structure of the isotropic eighth, is refused.
+  SpringNetworkSpec warp = cases[0].grid.network.spec();
+  for (Spring& s : warp.springs)
+    if (s.b == s.a + 1) s.stiffness *= 2.0;
+  const SpringNetwork anisotropic(warp);
+  const std::string refused = error_of([&] { (void)MirrorReduced(anisotropic, cases[0].planes); });
+  CHECK(refused.find("has no mirror image with the same rest length and stiffness") !=
+        std::string::npos);
+}
