@@ -1,6 +1,7 @@
-// run_work_units (src/parallel/work_units.hpp): results in unit order, the checkpoint's lines, resume
-// (completed units are not run again, a half-written last line is dropped, other settings or
-// unknown units are refused), exact doubles through the checkpoint, and -- when mpirun was
+// run_work_units (src/parallel/work_units.hpp): results in unit order (on threads too), the
+// checkpoint's lines, resume (completed units are not run again, a half-written last line is
+// dropped, other settings or unknown units are refused), exact doubles through the
+// checkpoint, and -- when mpirun was
 // found at configure time -- 2 MPI ranks giving the same results as one process ([mpi], hidden:
 // ctest runs it as test_work_units_mpi, label mpi).
 #include <sys/wait.h>
@@ -8,6 +9,7 @@
 
 #include <algorithm>
 #include <catch2/catch.hpp>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -17,6 +19,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "src/parallel/work_units.hpp"
@@ -122,6 +125,32 @@ TEST_CASE("the checkpoint: the config, then one {key, result} line per unit", "[
   // A fresh run (no resume) starts the file over.
   run_work_units(units, with_checkpoint(path, false));
   CHECK(lines_of(slurp(path)).size() == 1 + 5);
+  fs::remove(path);
+}
+
+TEST_CASE("units on threads: each runs once; results and checkpoint lines in unit order",
+          "[work_units]") {
+  const fs::path path = temp_file("threads.jsonl");
+  const int n = 9;
+  std::vector<int> runs(n, 0);
+  std::vector<WorkUnit> units;
+  for (int i = 0; i < n; ++i)  // the later units finish first
+    units.push_back({"u" + std::to_string(i), [i, &runs] {
+                       std::this_thread::sleep_for(std::chrono::milliseconds(4 * (n - i)));
+                       ++runs[i];
+                       return toy_result(i);
+                     }});
+  WorkUnitOptions o = with_checkpoint(path, false);
+  o.threads = 3;
+  const std::vector<json> results = run_work_units(units, o);
+  REQUIRE(results.size() == static_cast<size_t>(n));
+  const std::vector<std::string> lines = lines_of(slurp(path));
+  REQUIRE(lines.size() == static_cast<size_t>(1 + n));
+  for (int i = 0; i < n; ++i) {
+    CHECK(runs[i] == 1);
+    CHECK(results[i] == toy_result(i));
+    CHECK(json::parse(lines[1 + i]).at("key") == "u" + std::to_string(i));
+  }
   fs::remove(path);
 }
 

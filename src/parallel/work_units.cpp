@@ -4,16 +4,21 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
 #include <chrono>
-#include <filesystem>
+#include <condition_variable>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
+#include <functional>
 #include <memory>
+#include <mutex>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 #include <unordered_map>
 
 #include "src/parallel/message_passing.hpp"
@@ -46,6 +51,53 @@ std::string run_unit(const WorkUnit& unit) {
     result = {{"error", e.what()}};
   }
   return serialise(result);
+}
+
+// Runs units[share[i]] for every i on `threads` threads and hands each result to take(index,
+// result) on the calling thread, in the order of `share`. If take throws, the threads finish the
+// unit they are on and start no other; the exception propagates.
+void run_share(const std::vector<WorkUnit>& units, const std::vector<int>& share, int threads,
+               const std::function<void(int, const std::string&)>& take) {
+  const int n = static_cast<int>(share.size());
+  if (threads <= 1 || n <= 1) {
+    for (int i = 0; i < n; ++i) take(share[i], run_unit(units[share[i]]));
+    return;
+  }
+  std::mutex mutex;
+  std::condition_variable finished;
+  std::vector<std::string> results(n);
+  std::vector<char> done(n, 0);
+  std::atomic<int> next{0};
+  auto work = [&] {
+    for (int i = next++; i < n; i = next++) {
+      std::string result = run_unit(units[share[i]]);
+      {
+        const std::lock_guard<std::mutex> lock(mutex);
+        results[i] = std::move(result);
+        done[i] = 1;
+      }
+      finished.notify_one();
+    }
+  };
+  struct Pool {  // joined however the loop below ends
+    std::atomic<int>& next;
+    int n;
+    std::vector<std::thread> threads;
+    ~Pool() {
+      next = n;
+      for (std::thread& t : threads) t.join();
+    }
+  } pool{next, n, {}};
+  for (int t = 0; t < std::min(threads, n); ++t) pool.threads.emplace_back(work);
+  for (int i = 0; i < n; ++i) {
+    std::string result;
+    {
+      std::unique_lock<std::mutex> lock(mutex);
+      finished.wait(lock, [&] { return done[i] != 0; });
+      result = std::move(results[i]);
+    }
+    take(share[i], result);
+  }
 }
 
 // A checkpoint that cannot be written is an output failure (exit status 4, src/cli/main.cpp):
@@ -297,18 +349,21 @@ std::vector<json> run_work_units(const std::vector<WorkUnit>& units,
 
   // Static split of what is left: pending[j] runs on rank j % size.
   const int n = static_cast<int>(pending.size());
+  std::vector<int> share;
+  for (int j = rank; j < n; j += size) share.push_back(pending[j]);
   if (rank != 0) {  // only under MPI: send each result without waiting for rank 0 to take it
-    for (int j = rank; j < n; j += size)
-      message_passing()->send_to_root(result_message(pending[j], run_unit(units[pending[j]])));
+    run_share(units, share, options.threads, [](int index, const std::string& result) {
+      message_passing()->send_to_root(result_message(index, result));
+    });
     message_passing()->complete_sends();
     return {};
   }
   try {
     std::string message;
-    for (int j = 0; j < n; j += size) {
-      collector.record(pending[j], run_unit(units[pending[j]]));
+    run_share(units, share, options.threads, [&](int index, const std::string& result) {
+      collector.record(index, result);
       while (receive_result(false, message)) collector.record_message(message);
-    }
+    });
     while (collector.recorded() < n) {
       receive_result(true, message);
       collector.record_message(message);

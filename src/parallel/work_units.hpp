@@ -26,10 +26,14 @@ struct WorkUnitOptions {
   nlohmann::json config;   // what must match for a resume to be valid (preset, seeds, ...)
   bool progress = false;   // a progress line with ETA on stderr (rank 0, terminal only)
   std::string label;       // progress label
+  // Units run at once by each process, on their own threads (>= 1). Results, the checkpoint's
+  // lines and the progress stay in unit order: a finished unit waits for those before it.
+  int threads = 1;
 };
 
 // Runs every unit not already completed and returns all results in the order of `units`, on
-// rank 0 (other ranks get an empty vector). Every rank must call it with the same units.
+// rank 0 (other ranks get an empty vector). Every rank must call it with the same units. With
+// options.threads > 1 units run concurrently: WorkUnit::run must then be reentrant.
 // Failure modes: a unit that throws std::exception is an error result {"error": what} (it is
 // not retried on resume); a checkpoint whose config differs from options.config, or that names
 // unknown units, throws std::invalid_argument before any unit runs.
