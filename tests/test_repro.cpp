@@ -58,7 +58,7 @@ ReproOptions tiny_options(int jobs) {
   o.ica.countries = 4;
   o.ica.imperialists = 2;
   o.ica.decades = 1;
-  o.ica.jobs = jobs;
+  o.jobs = jobs;
   o.pictures = false;
   o.progress = false;
   const fs::path committed = fs::path(KNITSIM_PAPER_DATA) / "targets";

@@ -21,8 +21,9 @@
 // targets; only then create --out. Bad input therefore writes nothing (exit 2).
 // --resume continues an interrupted run in the same --out from its checkpoints (fits.jsonl,
 // taguchi.jsonl); the options must be the same (else exit 2).
-// --jobs J: threads per ICA fit (the results do not depend on it). Under MPI
-// (mpirun -np N knitsim repro ...) the units are spread over the ranks; --out is then required.
+// --jobs J: threads; J fits run at once, each on one thread (the results do not depend on it).
+// Under MPI (mpirun -np N knitsim repro ...) the units are spread over the ranks; --out is then
+// required.
 #include <CLI/CLI.hpp>
 #include <filesystem>
 #include <iostream>
@@ -68,7 +69,7 @@ struct ReproArgs {
 void run(const ReproArgs& a, const CLI::App& cmd) {
   ReproOptions o = repro_preset(a.preset);
   o.task = repro_task_from_name(a.task);
-  o.ica.jobs = a.jobs;
+  o.jobs = a.jobs;
   if (cmd.count("--samples")) o.samples = parse_sample_list(a.samples);
   if (cmd.count("--sets")) {
     o.sets.clear();
@@ -157,7 +158,8 @@ void register_repro_command(CLI::App& app) {
                   "quick (reduced budget, ~5 s with 2 jobs) | paper (the paper's protocol; "
                   "Tables 4 + 6: ~1 min with 2 jobs)")
       ->capture_default_str();
-  cmd->add_option("--jobs", args->jobs, "Threads per ICA fit (results do not depend on it)")
+  cmd->add_option("--jobs", args->jobs,
+                  "Threads: fits run this many at once (results do not depend on it)")
       ->capture_default_str();
   cmd->add_option("--out", args->out,
                   "Output folder (default: a fresh out/repro-<task>-<YYYYmmdd-HHMMSS>)");

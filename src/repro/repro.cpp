@@ -126,7 +126,7 @@ ReproSummary run_repro(const ReproOptions& o, ReproTargets& targets, const fs::p
         for (int s : o.samples) jobs.push_back({m, set, s, m == ReproOptimizer::Ica ? o.runs : 1});
   if (fig13 && !has_job(ReproOptimizer::Ica, o.fig13_set, o.fig13_sample))
     jobs.push_back({ReproOptimizer::Ica, o.fig13_set, o.fig13_sample, o.runs});
-  std::vector<WorkUnit> units;
+  std::vector<FitSpec> specs;
   int ica_runs = 0, lm_fits = 0;
   for (const FitJob& j : jobs)
     for (int r = 0; r < j.runs && targets.available(j.set, j.sample); ++r) {
@@ -134,10 +134,9 @@ ReproSummary run_repro(const ReproOptions& o, ReproTargets& targets, const fs::p
       FitMethod m{j.optimizer, o.ica, o.lm};
       m.ica.seed = m.lm.seed = unit_seed(o.seed, key);
       (j.optimizer == ReproOptimizer::Ica ? ica_runs : lm_fits) += 1;
-      const Target* target = &targets.get(j.set, j.sample);
-      units.push_back(
-          {key, [&o, target, j, m] { return fit_unit(o, *target, j.set, j.sample, m); }});
+      specs.push_back({key, &targets.get(j.set, j.sample), j.set, j.sample, m});
     }
+  const std::vector<WorkUnit> units = fit_work_units(o, std::move(specs));
   // Checkpoint <name>.jsonl in the output folder, shared settings (src/parallel/work_units.hpp).
   const auto unit_options = [&](const std::string& name) {
     WorkUnitOptions wo;
@@ -146,6 +145,7 @@ ReproSummary run_repro(const ReproOptions& o, ReproTargets& targets, const fs::p
     wo.config = config;
     wo.progress = o.progress;
     wo.label = "repro " + name.substr(0, name.find('.'));  // "repro fits"
+    wo.threads = o.jobs;
     return wo;
   };
   std::vector<json> fit_results;
@@ -160,7 +160,7 @@ ReproSummary run_repro(const ReproOptions& o, ReproTargets& targets, const fs::p
   // ---- Taguchi ----
   std::vector<json> taguchi_results;
   if (taguchi && targets.available(o.taguchi_set, o.taguchi_sample)) {
-    std::vector<WorkUnit> tunits;
+    std::vector<FitSpec> tspecs;
     const Target* target = &targets.get(o.taguchi_set, o.taguchi_sample);
     long drapes = 0;
     for (int e = 0; e < kL27Runs; ++e)
@@ -169,16 +169,15 @@ ReproSummary run_repro(const ReproOptions& o, ReproTargets& targets, const fs::p
         IcaOptions ica = taguchi_ica(o, e);
         ica.seed = unit_seed(o.seed, key);
         drapes += ica_evaluation_estimate(ica);
-        const int s = o.taguchi_sample;
         const FitMethod m{ReproOptimizer::Ica, ica, o.lm};
-        tunits.push_back(
-            {key, [&o, target, s, m] { return fit_unit(o, *target, o.taguchi_set, s, m); }});
+        tspecs.push_back({key, target, o.taguchi_set, o.taguchi_sample, m});
       }
     if (root)
       print_stage(o, "taguchi: L27 x " + std::to_string(o.taguchi_replicates) + " ICA runs on " +
                          to_string(o.taguchi_set) + "_sample" + std::to_string(o.taguchi_sample) +
                          ", ~" + std::to_string(drapes) + " drapes");
-    taguchi_results = run_work_units(tunits, unit_options(repro_checkpoint_files()[1]));
+    taguchi_results = run_work_units(fit_work_units(o, std::move(tspecs)),
+                                     unit_options(repro_checkpoint_files()[1]));
   }
   ReproSummary summary;
   if (!root) return summary;
@@ -224,8 +223,8 @@ ReproSummary run_repro(const ReproOptions& o, ReproTargets& targets, const fs::p
          << " countries, " << o.ica.imperialists << " imperialists, " << o.ica.decades
          << " decades, beta " << o.ica.beta << ", gamma " << o.ica.gamma << ", revolution "
          << o.ica.revolution_rate << ", xi " << o.ica.xi << "; base seed " << o.seed
-         << "; integrator " << repro_integrator(o)
-         << ", rtol " << format_number(o.rtol) << "; four_corner integrated "
+         << "; integrator " << repro_integrator(o) << ", rtol " << format_number(o.rtol)
+         << "; four_corner integrated "
          << (o.four_corner_symmetry == DrapeSymmetry::None
                  ? std::string("whole")
                  : std::string("on the ") + to_string(o.four_corner_symmetry) + " (model.symmetry)")
@@ -259,16 +258,17 @@ ReproSummary run_repro(const ReproOptions& o, ReproTargets& targets, const fs::p
              << format_number(spread[1], 2) << ", elongation " << format_number(spread[2], 2)
              << ", natural length " << format_number(spread[3], 2) << ".\n\n";
     }
-    report << "Reading: damping only sets how fast the sheet settles and the elongation limit "
-              "only acts on springs stretched beyond it, so neither changes the equilibrium the "
-              "edges measure: their fitted values are arbitrary within the box (wide spread), "
-              "while stiffness and natural length are determined only together: at a fixed "
-              "grid size n = round(W / L0) the edges depend on k / L0 alone (src/fit/sensitivity.hpp, "
-              "experiments/identifiability/README.md), so the fit identifies k / L0, n and the "
-              "topology, and k and L0 slide together along a valley of equal error. On twin the "
-              "recovery errors of k and L0 are in the columns stiffness_rel_error, "
-              "natural_length_rel_error of table4.csv; with a reduced budget (quick preset) the "
-              "ICA is also far from converged.\n\n";
+    report
+        << "Reading: damping only sets how fast the sheet settles and the elongation limit "
+           "only acts on springs stretched beyond it, so neither changes the equilibrium the "
+           "edges measure: their fitted values are arbitrary within the box (wide spread), "
+           "while stiffness and natural length are determined only together: at a fixed "
+           "grid size n = round(W / L0) the edges depend on k / L0 alone (src/fit/sensitivity.hpp, "
+           "experiments/identifiability/README.md), so the fit identifies k / L0, n and the "
+           "topology, and k and L0 slide together along a valley of equal error. On twin the "
+           "recovery errors of k and L0 are in the columns stiffness_rel_error, "
+           "natural_length_rel_error of table4.csv; with a reduced budget (quick preset) the "
+           "ICA is also far from converged.\n\n";
   }
 
   if (table6) {

@@ -3,7 +3,8 @@
 // pictures of the fitted drapes (Tables 5 and 7), on the synthetic targets of
 // src/fit/synthetic_targets.hpp, side by side with the paper's numbers (src/paper/paper_data.hpp).
 //
-// Work (every independent unit goes through run_work_units, src/parallel/work_units.hpp: checkpoint,
+// Work (every independent unit goes through run_work_units, src/parallel/work_units.hpp:
+// checkpoint,
 // --resume, MPI):
 //   fit unit "fit/<set>/s<sample>/run<r>": one ICA fit (src/fit/drape_fit.hpp) of the four_corner
 //     scene of that sample (Table 2 areal density, rtol 1e-8) to the target <set>_sample<s>.
@@ -95,7 +96,8 @@ struct ReproOptions {
   std::vector<ReproOptimizer> optimizers = {ReproOptimizer::Ica};
   int runs = 10;      // ICA runs per (set, sample), the best kept (paper: 10); >= 1
   IcaOptions ica;     // each fit's budget (default: Taguchi-best A3 B3 C1 D2 E1 F2 G2);
-                      // ica.seed is replaced per unit, ica.jobs = threads per fit
+                      // ica.seed and ica.jobs are set per unit
+  int jobs = 1;       // threads: units (fits) run this many at once, each on one thread
   DrapeLmOptions lm;  // each LM fit (one per (set, sample)); lm.seed is replaced per unit
   // Fig. 13: the runs of this (set, sample) (the same units as Table 4's when it is included).
   SyntheticSet fig13_set = SyntheticSet::Cross;
@@ -195,8 +197,8 @@ struct ReproSummary {
   std::vector<std::string> files;         // written, relative to the output folder
 };
 
-// The checkpoints run_repro keeps in its folder (JSON lines, src/parallel/work_units.hpp): the fits'
-// and the Taguchi experiment's.
+// The checkpoints run_repro keeps in its folder (JSON lines, src/parallel/work_units.hpp): the
+// fits' and the Taguchi experiment's.
 inline const std::vector<std::string>& repro_checkpoint_files() {
   static const std::vector<std::string> names = {"fits.jsonl", "taguchi.jsonl"};
   return names;

@@ -11,6 +11,7 @@
 
 #include "src/base/table.hpp"
 #include "src/fit/drape_fit.hpp"
+#include "src/parallel/work_units.hpp"
 #include "src/repro/repro.hpp"
 #include "src/scene/scene.hpp"
 
@@ -25,6 +26,8 @@ std::vector<std::pair<SyntheticSet, int>> needed_targets(const ReproOptions& o);
 
 // CPU seconds of this process (std::clock).
 double cpu_now();
+// CPU seconds of the calling thread.
+double thread_cpu_now();
 // The built-in scene `scene` with the sample's areal density and the reproduction's rtol (and
 // on four_corner its symmetry reduction).
 Scene sample_scene(const std::string& scene, int sample, const ReproOptions& o);
@@ -40,6 +43,18 @@ struct FitMethod {
 // (src/repro/repro.hpp).
 nlohmann::json fit_unit(const ReproOptions& o, const Target& target, SyntheticSet set, int sample,
                         const FitMethod& m);
+// A fit unit before it runs.
+struct FitSpec {
+  std::string key;  // fit_key or taguchi_key
+  const Target* target = nullptr;
+  SyntheticSet set = SyntheticSet::Twin;
+  int sample = 0;
+  FitMethod method;  // seeds set; its ica.jobs is fit_work_units'
+};
+// The work units of `specs` (fit_unit each). o.jobs threads run o.jobs units at once
+// (WorkUnitOptions::threads), each fit on one thread; a unit alone runs its ICA on all of them.
+// Neither changes a result (the ICA is bit-identical for any number of jobs).
+std::vector<WorkUnit> fit_work_units(const ReproOptions& o, std::vector<FitSpec> specs);
 // "fit/<set>/s<sample>/run<NN>" (ICA) or "lm/<set>/s<sample>" (one LM fit per sample).
 std::string fit_key(ReproOptimizer optimizer, SyntheticSet set, int sample, int run);
 // "taguchi/<set>/s<sample>/e<NN>/r<k>".
@@ -59,8 +74,8 @@ struct SampleFits {
   SyntheticSet set = SyntheticSet::Twin;
   int sample = 0;
   std::vector<nlohmann::json> runs;  // unit results in run order
-  int best = -1;           // index of the lowest error among runs without error; -1 if none
-  std::string error;       // the first unit error, if every run failed
+  int best = -1;      // index of the lowest error among runs without error; -1 if none
+  std::string error;  // the first unit error, if every run failed
 
   long evaluations() const {  // drape evaluations of the good runs
     long n = 0;

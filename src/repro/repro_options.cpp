@@ -83,6 +83,7 @@ void ReproOptions::validate() const {
         std::string("accepted for the tasks table4|table6|all only (") + to_string(task) +
             " studies the ICA)");
   if (runs < 1) bad("runs", std::to_string(runs), "accepted >= 1");
+  if (jobs < 1) bad("jobs", std::to_string(jobs), "accepted >= 1");
   check_sample("fig13_sample", fig13_sample);
   check_sample("taguchi_sample", taguchi_sample);
   if (taguchi_replicates < 1)

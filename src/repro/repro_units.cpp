@@ -18,6 +18,12 @@ using nlohmann::json;
 
 double cpu_now() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
 
+double thread_cpu_now() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
 // The built-in scene `scene` with the sample's areal density and the reproduction's rtol (and
 // on four_corner its symmetry reduction).
 Scene sample_scene(const std::string& scene, int sample, const ReproOptions& o) {
@@ -84,12 +90,16 @@ std::string lm_status(const DrapeLmResult& r) {
 
 }  // namespace
 
-// One fit of the sample's four_corner scene to `target` by `m`: the unit result (src/repro/repro.hpp).
+// One fit of the sample's four_corner scene to `target` by `m`: the unit result
+// (src/repro/repro.hpp).
 json fit_unit(const ReproOptions& o, const Target& target, SyntheticSet set, int sample,
               const FitMethod& m) {
   const DrapeFitProblem problem(sample_scene("four_corner", sample, o), target,
                                 fit_options(o, m.ica));
-  const double cpu0 = cpu_now();
+  // The fit's CPU: its thread's when the fit runs on one (other units may run beside it), the
+  // process's when it runs alone on ica.jobs threads (fit_work_units).
+  const auto cpu = [&m] { return m.ica.jobs > 1 ? cpu_now() : thread_cpu_now(); };
+  const double cpu0 = cpu();
   json unit;
   if (m.optimizer == ReproOptimizer::Ica) {
     const DrapeFitResult r = fit_drape(problem);
@@ -114,10 +124,19 @@ json fit_unit(const ReproOptions& o, const Target& target, SyntheticSet set, int
             {"seed", m.lm.seed},
             {"wall_seconds", r.wall_seconds}};
   }
-  unit["cpu_seconds"] = cpu_now() - cpu0;
+  unit["cpu_seconds"] = cpu() - cpu0;
   if (m.optimizer == ReproOptimizer::Lm && set == SyntheticSet::Twin)
     unit["known_length"] = stiffness_at_true_length(problem, paper_sample(sample), m.lm);
   return unit;
+}
+
+std::vector<WorkUnit> fit_work_units(const ReproOptions& o, std::vector<FitSpec> specs) {
+  std::vector<WorkUnit> units;
+  for (FitSpec& s : specs) {
+    s.method.ica.jobs = specs.size() == 1 ? o.jobs : 1;
+    units.push_back({s.key, [&o, s] { return fit_unit(o, *s.target, s.set, s.sample, s.method); }});
+  }
+  return units;
 }
 
 // "fit/<set>/s<sample>/run<NN>" (ICA) or "lm/<set>/s<sample>" (one LM fit per sample).
@@ -148,7 +167,6 @@ IcaOptions taguchi_ica(const ReproOptions& o, int e) {
   const std::array<int, 7> levels = experiment_levels(e);
   IcaOptions ica = ica_table1_options(levels);
   ica.decades = o.taguchi_decades[levels[0] - 1];
-  ica.jobs = o.ica.jobs;
   return ica;
 }
 
