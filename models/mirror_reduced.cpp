@@ -113,6 +113,8 @@ void check_particles(const SpringNetwork& full, const MirrorPlanes& planes) {
   const bool has_y = !iy.empty(), diagonal = !id.empty();
   const double plane[3] = {planes.x_plane, planes.y_plane, 0.0};  // no mirror in z
   if (diagonal && !has_y) asymmetric("a diagonal mirror needs the y mirror too");
+  if (!spec.stencils.empty())
+    throw std::invalid_argument("mirror reduction: a network with stencils is not reduced");
   if (static_cast<int>(ix.size()) != np || (has_y && static_cast<int>(iy.size()) != np) ||
       (diagonal && static_cast<int>(id.size()) != np))
     asymmetric("the image maps need one entry per particle (" + std::to_string(np) + ")");

@@ -51,7 +51,8 @@
 // the image maps, the pinned particles, the springs' ends and the side of each mirror each
 // particle lies on.
 //
-// Failure modes: a network that is not symmetric (a spring, mass, position or pin without its
+// Failure modes: a network with stencils (SpringNetworkSpec::stencils; the drape has none) is
+// refused; a network that is not symmetric (a spring, mass, position or pin without its
 // mirror image, image maps that are not involutions of the dihedral group, gravity with an x or
 // y component) throws std::invalid_argument with one line naming the first offender.
 #pragma once

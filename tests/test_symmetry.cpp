@@ -294,6 +294,13 @@ TEST_CASE("asymmetric scenes and networks are refused with one line") {
       [&] { (void)MirrorReduced(anisotropic, drape_mirror_planes(g, DrapeSymmetry::Eighth)); });
   CHECK(eighth.find("has no mirror image with the same rest length and stiffness") !=
         std::string::npos);
+
+  // A network with stencils (the knit model's bending) is refused, not reduced without them.
+  SpringNetworkSpec bent = g.network.spec();
+  bent.stencils.push_back({{0, 1, 2, -1}, {1.0, -2.0, 1.0, 0.0}, 1.0});
+  CHECK(error_of([&] {
+          (void)MirrorReduced(SpringNetwork(bent), drape_mirror_planes(g, DrapeSymmetry::Quarter));
+        }) == "mirror reduction: a network with stencils is not reduced");
 }
 
 TEST_CASE("model.symmetry = auto: the largest group the scene and its start allow, certified whole") {

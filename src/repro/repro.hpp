@@ -4,8 +4,7 @@
 // src/fit/synthetic_targets.hpp, side by side with the paper's numbers (src/paper/paper_data.hpp).
 //
 // Work (every independent unit goes through run_work_units, src/parallel/work_units.hpp:
-// checkpoint,
-// --resume, MPI):
+// checkpoint, --resume, MPI):
 //   fit unit "fit/<set>/s<sample>/run<r>": one ICA fit (src/fit/drape_fit.hpp) of the four_corner
 //     scene of that sample (Table 2 areal density, rtol 1e-8) to the target <set>_sample<s>.
 //   lm unit "lm/<set>/s<sample>" (with --optimizer lm): one multi-start Levenberg-Marquardt fit
