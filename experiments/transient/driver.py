@@ -16,7 +16,8 @@ expkit.run_knitsim).
 Outputs in --out: runs.csv (one row per run: case, integrator, rtol / atol / velocity atol or the
 step asked for (dt_given, 0 = automatic) and used (dt), T, status, counters, CPU, error = max over particles of |x - x_ref(T)| in m and, for the knit,
 in loop radii r; `measured` = extrapolated for the explicit methods whose cost is only
-estimated), references.csv (the reference per case and T and its distance to the same run one
+estimated; clearance_states = the knit's yarn clearance measurements within the run, whose CPU
+cpu_seconds includes), references.csv (the reference per case and T and its distance to the same run one
 decade looser, and for the knit one decade tighter), ringing.csv (the knit reference's largest
 displacement, distance to the settled state and largest speed against time: the time scale the
 fixed times were chosen on), manifest.json.
@@ -156,6 +157,10 @@ def run_case(args, case, c, wall_cap, rows, refs, ringing):
                    steps=s.get("steps", 0), rhs_evals=s.get("rhs_evals", 0),
                    lin_setups=s.get("lin_setups", 0), err_test_fails=s.get("err_test_fails", 0),
                    restarts=s.get("restarts", 0), cpu_seconds=s.get("cpu_seconds", math.nan),
+                   # knit: yarn clearance measurements inside the run (their CPU is in
+                   # cpu_seconds: ~0.7 ms each on single_tuck; see README)
+                   clearance_states=((r.summary or {}).get("yarn") or {}).get(
+                       "clearance_measured_states", ""),
                    error_m=math.nan, error_over_r=math.nan)
         if measured == "yes" and r.summary:
             row["dt"] = s.get("dt", dt) or dt

@@ -98,21 +98,27 @@ def case_sections(case, runs, refs, ringing):
     sw = sweeps(runs)
     T_last = times[-1] if times else 0
     rows = []
+    clearance = any(r.get("clearance_states", "") != "" for r in runs)
     for (name, s), by_t in sw.items():
         last = by_t.get(T_last)
         rows.append([name, s] + [num(by_t[T][err], 2) if T in by_t else "—" for T in times]
                     + [num(max(float(by_t[T][err]) for T in by_t), 2),
-                       last["status"] if last else "—", last["steps"] if last else "—",
-                       num(last["cpu_seconds"]) if last else "—"])
+                       last["status"] if last else "—", last["steps"] if last else "—"]
+                    + ([last["clearance_states"] if last else "—"] if clearance else [])
+                    + [num(last["cpu_seconds"]) if last else "—"])
     sections.append((
         "%s: error at each time and cost (runs.csv)" % title,
         "Error: max over particles of |x − x_ref(t)| (%s) of the state at t (a run with "
         "`run.t_max = t`); inf where the run did not reach t. Status, steps and CPU: the run to "
-        "t = %s %s.\n\n" % (eu, t(T_last), tu)
+        "t = %s %s%s.\n\n" % (eu, t(T_last), tu,
+                               "; clearance measurements: the yarn clearance measured by `knitsim "
+                               "knit` within that run, whose CPU is in the run's" if clearance
+                               else "")
         + md_table(["integrator", "setting"] + ["error at %s %s (%s)" % (t(T), tu, eu)
                                                 for T in times]
-                   + ["largest error (%s)" % eu, "status", "steps",
-                      "CPU to %s %s (s)" % (t(T_last), tu)], rows)))
+                   + ["largest error (%s)" % eu, "status", "steps"]
+                   + (["clearance measurements"] if clearance else [])
+                   + ["CPU to %s %s (s)" % (t(T_last), tu)], rows)))
 
     # Error per unit rtol of the adaptive sweeps whose velocities share atol.
     rows = []
