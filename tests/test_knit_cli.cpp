@@ -102,6 +102,10 @@ TEST_CASE("knitsim knit: a small tuck chart settles and its outputs agree with t
   CHECK(yarn["clearance_min_over_r"].get<double>() <= yarn["clearance_end_over_r"].get<double>());
   CHECK(yarn["clearance_min_over_r"].get<double>() <= yarn["clearance_rest_over_r"].get<double>());
   CHECK(yarn["clearance_measured_states"].get<int>() >= 2);
+  // The measuring inside the run is part of the run's CPU, never more.
+  CHECK(yarn["clearance_cpu_seconds"].get<double>() >= 0.0);
+  CHECK(yarn["clearance_cpu_seconds"].get<double>() <=
+        summary["stats"]["cpu_seconds"].get<double>());
   CHECK(yarn["crossings_designed"].get<int>() > 0);
   CHECK(yarn["crossings_changed"].get<int>() >= 0);
   // One header line plus one row per particle; T0..T8 per knit loop, 7 per tuck loop.

@@ -356,6 +356,7 @@ struct KnitMeasures {
   YarnClearance min_clearance;  // over the measured states of the run, start and end included
   double t_min_clearance = 0.0;
   int measured_states = 0;
+  double measure_cpu_seconds = 0.0;  // the clearance over the run, inside stats.cpu_seconds
   double min_resolution = 0.0;  // 2 A tau: a deeper dip between measured states would be seen
   CrossingCheck crossings;      // at the end against the rest state
 };
@@ -369,6 +370,7 @@ nlohmann::json measures_json(const KnitMeasures& k) {
           {"clearance_end_over_r", k.end_clearance},
           {"clearance_rest_over_r", k.rest_clearance},
           {"clearance_measured_states", k.measured_states},
+          {"clearance_cpu_seconds", k.measure_cpu_seconds},
           {"clearance_min_resolution_over_r", k.min_resolution},
           {"crossings_designed", k.crossings.designed},
           {"crossings_changed", k.crossings.changed}};
@@ -497,7 +499,9 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
                                 "course, >= pi r apart along it) / loop radius, 2 = at least 2; "
                                 "clearance_min_t s; clearance_min_where m; "
                                 "clearance_min_resolution_over_r 1: a dip between measured "
-                                "states shallower than this can be missed; crossings: designed "
+                                "states shallower than this can be missed; "
+                                "clearance_cpu_seconds s: the measuring inside the run, part of "
+                                "stats.cpu_seconds; crossings: designed "
                                 "front-view crossings at rest and how many changed over/under "
                                 "order at the end"},
                                {"params",
@@ -580,11 +584,13 @@ void run(const KnitArgs& args) {
                                args.step_history ? static_cast<RunObserver*>(&steps) : &recorder,
                                kClearanceResample);
     clearance.observe(t0, x.data(), true);
+    const double measure_cpu_before = clearance.cpu_seconds();
     try {
       stats = run_to_equilibrium(model.network, *integ, opt, x, v, &clearance, t0);
     } catch (const std::invalid_argument& e) {  // an option the model refuses at the start
       refuse_at_run_start(e, dir, created);
     }
+    measures.measure_cpu_seconds = clearance.cpu_seconds() - measure_cpu_before;
     clearance.observe(stats.t_final, x.data(), true);
     measures.min_clearance = clearance.minimum();
     measures.t_min_clearance = clearance.t_of_minimum();

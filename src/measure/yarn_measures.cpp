@@ -1,6 +1,7 @@
 #include "src/measure/yarn_measures.hpp"
 
 #include <algorithm>
+#include <ctime>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -294,6 +295,7 @@ void ClearanceOverRun::observe(double t, const double* x, bool force) {
     if (!force && moved < tau_ * r) return;
   }
   ++measured_;
+  const std::clock_t cpu_start = std::clock();
   YarnClearance c;
   if (std::all_of(pos_.begin(), pos_.end(), is_finite)) {
     YarnPolylines lines = yarn_polylines(m_, pos_);
@@ -312,6 +314,7 @@ void ClearanceOverRun::observe(double t, const double* x, bool force) {
     c.over_r = std::nan("");
   }
   last_ = pos_;
+  cpu_seconds_ += static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
   if (measured_ > 1 && std::isnan(min_.over_r)) return;  // a non-finite state stays the verdict
   if (measured_ == 1 || std::isnan(c.over_r) || c.over_r < min_.over_r) {
     min_ = c;

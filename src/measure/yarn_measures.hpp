@@ -134,6 +134,9 @@ class ClearanceOverRun final : public RunObserver {
   double amplification() const { return amplification_; }  // A, see above; 0 before 2 states
   // 2 A tau: a dip below minimum() deeper than this would have been measured (see above), in r.
   double resolution_over_r() const { return 2.0 * amplification_ * tau_; }
+  // CPU seconds spent measuring (std::clock, the clock of RunStats::cpu_seconds, which includes
+  // them when the run calls this observer): what to subtract for the integrator's own cost.
+  double cpu_seconds() const { return cpu_seconds_; }
 
  private:
   const KnitModel& m_;
@@ -146,6 +149,7 @@ class ClearanceOverRun final : public RunObserver {
   double t_min_ = 0.0;
   double amplification_ = 0.0;
   int measured_ = 0;
+  double cpu_seconds_ = 0.0;
 };
 
 }  // namespace knitsim
