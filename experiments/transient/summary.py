@@ -111,9 +111,10 @@ def case_sections(case, runs, refs, ringing):
         "Error: max over particles of |x − x_ref(t)| (%s) of the state at t (a run with "
         "`run.t_max = t`); inf where the run did not reach t. Status, steps and CPU: the run to "
         "t = %s %s%s.\n\n" % (eu, t(T_last), tu,
-                               "; clearance measurements: the yarn clearance measured by `knitsim "
-                               "knit` within that run, whose CPU is in the run's" if clearance
-                               else "")
+                               "; CPU: the integrator's, the run's less the yarn clearance "
+                               "measuring `knitsim knit` does within it (clearance measurements: "
+                               "their count; runs.csv run_cpu_seconds, clearance_cpu_seconds)"
+                               if clearance else "")
         + md_table(["integrator", "setting"] + ["error at %s %s (%s)" % (t(T), tu, eu)
                                                 for T in times]
                    + ["largest error (%s)" % eu, "status", "steps"]
