@@ -130,54 +130,48 @@ PatternMemo<SpringNetwork::StiffnessLayout>& layout_memo() {
 }
 
 // The layout of springs with these free ends (2 per spring) and stencils with these (4 per
-// stencil) among `free_count` free particles.
+// stencil) among `free_count` free particles. Each element (a spring or a stencil) couples
+// every ordered pair of its free ends by a 3x3 block: a spring's is full, a stencil's diagonal.
 SpringNetwork::StiffnessLayout build_layout(int free_count, std::vector<int> ends,
                                             std::vector<int> stencil_ends) {
   SpringNetwork::StiffnessLayout layout;
-  const size_t springs = ends.size() / 2, stencils = stencil_ends.size() / 4;
-  // 3x3 blocks over the pairs of free ends: the springs' first, then the stencils'.
-  std::vector<std::pair<int, int>> pairs;
-  pairs.reserve(4 * springs + 16 * stencils);
-  for (size_t si = 0; si < springs; ++si)
-    for (int r : {ends[2 * si], ends[2 * si + 1]})
-      for (int c : {ends[2 * si], ends[2 * si + 1]})
-        if (r >= 0 && c >= 0) pairs.emplace_back(r, c);
-  for (size_t si = 0; si < stencils; ++si)
-    for (int i = 0; i < 4; ++i)
-      for (int j = 0; j < 4; ++j) {
-        const int r = stencil_ends[4 * si + i], c = stencil_ends[4 * si + j];
-        if (r >= 0 && c >= 0) pairs.emplace_back(r, c);
-      }
+  std::vector<std::pair<int, int>> pairs;  // the pairs of free ends, element by element
+  pairs.reserve(2 * ends.size() + 4 * stencil_ends.size());
+  auto add_pairs = [&](const std::vector<int>& el_ends, int k) {
+    for (std::size_t first = 0; first < el_ends.size(); first += k)
+      for (int i = 0; i < k; ++i)
+        for (int j = 0; j < k; ++j) {
+          const int r = el_ends[first + i], c = el_ends[first + j];
+          if (r >= 0 && c >= 0) pairs.emplace_back(r, c);
+        }
+  };
+  add_pairs(ends, 2);
+  add_pairs(stencil_ends, 4);
   std::vector<int> pair_entry;
   const CscPattern nodes = make_csc_pattern(free_count, free_count, std::move(pairs),
                                             /*with_diagonal=*/true, &pair_entry);
   layout.pattern = expand_node_pattern(nodes);
-  layout.slots.assign(springs * 36, -1);
-  int next_pair = 0;  // the pairs in the order listed above
-  for (size_t si = 0; si < springs; ++si) {
-    const int* end = &ends[2 * si];
-    for (int br = 0; br < 2; ++br)
-      for (int bc = 0; bc < 2; ++bc) {
-        if (end[br] < 0 || end[bc] < 0) continue;
-        const int e = pair_entry[next_pair++];
-        for (int q = 0; q < 3; ++q)
+  // Per element, k x k blocks (i, j) of 9 value positions (3 p + q), or of 3 (p) if diagonal;
+  // -1 where an end is pinned or absent.
+  int next_pair = 0;  // the pairs in the order added above
+  auto place = [&](const std::vector<int>& el_ends, int k, bool diagonal, std::vector<int>& slots) {
+    const int per_block = diagonal ? 3 : 9;
+    slots.assign(el_ends.size() * k * per_block, -1);
+    for (std::size_t el = 0; el < el_ends.size() / k; ++el) {
+      const int* end = &el_ends[el * k];
+      for (int i = 0; i < k; ++i)
+        for (int j = 0; j < k; ++j) {
+          if (end[i] < 0 || end[j] < 0) continue;
+          const int e = pair_entry[next_pair++];
+          int* block = &slots[((el * k + i) * k + j) * per_block];
           for (int p = 0; p < 3; ++p)
-            layout.slots[si * 36 + (2 * br + bc) * 9 + 3 * p + q] =
-                node_block_entry(nodes, e, end[bc], p, q);
-      }
-  }
-  layout.stencil_slots.assign(stencils * 48, -1);
-  for (size_t si = 0; si < stencils; ++si) {
-    const int* end = &stencil_ends[4 * si];
-    for (int i = 0; i < 4; ++i)
-      for (int j = 0; j < 4; ++j) {
-        if (end[i] < 0 || end[j] < 0) continue;
-        const int e = pair_entry[next_pair++];
-        for (int p = 0; p < 3; ++p)
-          layout.stencil_slots[si * 48 + (4 * i + j) * 3 + p] =
-              node_block_entry(nodes, e, end[j], p, p);
-      }
-  }
+            for (int q = diagonal ? p : 0; q < (diagonal ? p + 1 : 3); ++q)
+              block[diagonal ? p : 3 * p + q] = node_block_entry(nodes, e, end[j], p, q);
+        }
+    }
+  };
+  place(ends, 2, /*diagonal=*/false, layout.slots);
+  place(stencil_ends, 4, /*diagonal=*/true, layout.stencil_slots);
   layout.free_count = free_count;
   layout.ends = std::move(ends);
   layout.stencil_ends = std::move(stencil_ends);
