@@ -248,6 +248,12 @@ void KnitParams::validate() const {
     bad("knit.stabiliser", stabiliser_ratio, "must be in [0, 1]");
   if (!(bending_ratio >= 0.0 && bending_ratio <= 10.0))
     bad("knit.bending", bending_ratio, "must be in [0, 10]");
+  if (!(contact_ratio >= 0.0 && contact_ratio <= 100.0))
+    bad("knit.contact", contact_ratio, "must be in [0, 100]");
+  if (contact_ratio > 0.0 && bending_ratio > 0.0 && !mechanism())
+    bad("knit.bending", bending_ratio,
+        "must be 0 with knit.contact > 0 (the contact keeps the chart in its plane; set "
+        "knit.contact=0 to bend it out of the plane)");
   if (max_points < 1) bad("max_points", static_cast<double>(max_points), "must be >= 1");
 }
 
@@ -421,14 +427,25 @@ KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
   if (p.gravity)
     spec.residual_force_scale = std::min(spec.residual_force_scale, total_mass / count * g);
 
-  return KnitModel{chart,
-                   p,
-                   std::move(points),
-                   std::move(loops),
-                   std::move(kinds),
-                   std::move(point_at),
-                   std::move(loop_at),
-                   SpringNetwork(std::move(spec))};
+  KnitModel m{chart,
+              p,
+              std::move(points),
+              std::move(loops),
+              std::move(kinds),
+              std::move(point_at),
+              std::move(loop_at),
+              SpringNetwork(std::move(spec)),
+              nullptr};
+  if (p.yarn_contact()) {
+    YarnContactSpec contact;
+    contact.points = knit_contact_points(m);
+    contact.touching = r;
+    contact.core = 0.9 * r;
+    contact.stiffness = p.contact_ratio * p.wale_stiffness;
+    contact.same_yarn_gap = kSameYarnGap * r;
+    m.contact = std::make_shared<ContactNetwork>(m.network, std::move(contact));
+  }
+  return m;
 }
 
 std::vector<LoopTypeValues> type_value_points(const KnitModel& m,
@@ -484,6 +501,109 @@ std::vector<CurveSamples> course_centerlines(const KnitModel& m, const std::vect
     const int intervals = static_cast<int>(c.control.size()) - 1;
     out.push_back(sample_curve(c, samples_per_point * intervals + 1, Spacing::ArcLength));
   }
+  return out;
+}
+
+namespace {
+
+// C(u) of an interpolated (non-rational: weights 1) curve by de Boor's algorithm on the stack:
+// the measure samples ~100k points per state of a 40 x 40 chart, and evaluate() also forms
+// two derivatives. Equal to evaluate(curve, u).point to round-off.
+Vec3 point_on(const NurbsCurve& c, double u) {
+  const int p = c.degree;
+  u = std::min(std::max(u, c.u_min()), c.u_max());
+  const int s = find_span(static_cast<int>(c.control.size()), p, c.knots, u);
+  Vec3 d[kMaxNurbsDegree + 1];
+  for (int j = 0; j <= p; ++j) d[j] = c.control[s - p + j];
+  for (int r = 1; r <= p; ++r)
+    for (int j = p; j >= r; --j) {
+      const int i = s - p + j;
+      const double span = c.knots[i + p - r + 1] - c.knots[i];
+      const double alpha = span == 0.0 ? 0.0 : (u - c.knots[i]) / span;
+      d[j] = (1.0 - alpha) * d[j - 1] + alpha * d[j];
+    }
+  return d[p];
+}
+
+}  // namespace
+
+YarnPolylines yarn_polylines(const KnitModel& m, const std::vector<Vec3>& positions,
+                             int samples_per_interval) {
+  if (samples_per_interval < 1)
+    throw std::invalid_argument("yarn_polylines: samples_per_interval must be >= 1");
+  YarnPolylines out;
+  out.samples_per_interval = samples_per_interval;
+  for (const std::vector<Vec3>& yarn : course_yarn_points(m, positions)) {
+    const NurbsCurve curve = interpolate_cubic(yarn, kYarnParametrization);
+    const std::vector<double> ubar = interpolation_parameters(yarn, kYarnParametrization);
+    std::vector<Vec3> v;
+    v.reserve(samples_per_interval * (yarn.size() - 1) + 1);
+    for (size_t k = 0; k + 1 < yarn.size(); ++k)
+      for (int s = 0; s < samples_per_interval; ++s)
+        v.push_back(point_on(curve, ubar[k] + (ubar[k + 1] - ubar[k]) * s / samples_per_interval));
+    v.push_back(point_on(curve, ubar.back()));
+    std::vector<double> arc(v.size(), 0.0);
+    for (size_t k = 1; k < v.size(); ++k) arc[k] = arc[k - 1] + norm(v[k] - v[k - 1]);
+    out.vertices.push_back(std::move(v));
+    out.arc.push_back(std::move(arc));
+  }
+  return out;
+}
+
+std::vector<ContactPoint> knit_contact_points(const KnitModel& m) {
+  const int W = m.chart.wales, C = m.chart.courses;
+  const double w = m.params.wale_spacing(), h = m.params.course_spacing();
+  // Per wale, its existing levels, ascending (level 0 and level C always exist).
+  std::vector<std::vector<int>> levels(W);
+  for (int L = 0; L <= C; ++L)
+    for (int i = 0; i < W; ++i)
+      if (m.point(i, L) >= 0) levels[i].push_back(L);
+  // Wale i's two points bracketing height y (the lowest or highest two beyond its ends), and the
+  // weight of the upper one.
+  auto bracket = [&](int i, double y, int& lower, int& upper, double& f) {
+    const std::vector<int>& lv = levels[i];
+    const double level = y / h;
+    std::size_t k = std::upper_bound(lv.begin(), lv.end(), level) - lv.begin();
+    k = std::min(std::max<std::size_t>(k, 1), lv.size() - 1);
+    lower = m.point(i, lv[k - 1]);
+    upper = m.point(i, lv[k]);
+    f = (level - lv[k - 1]) / (lv[k] - lv[k - 1]);
+  };
+  const std::vector<Vec3> rest = m.rest_positions();
+  const YarnPolylines lines = yarn_polylines(m, rest);
+  std::vector<ContactPoint> out;
+  for (std::size_t j = 0; j < lines.vertices.size(); ++j)
+    for (std::size_t k = 0; k < lines.vertices[j].size(); ++k) {
+      const Vec3 v = lines.vertices[j][k];
+      ContactPoint p;
+      p.yarn = static_cast<int>(j);
+      p.arc = lines.arc[j][k];
+      int n = 0;
+      auto add = [&](int id, double weight) {
+        for (int q = 0; q < n; ++q)
+          if (p.particles[q] == id) {
+            p.weights[q] += weight;
+            return;
+          }
+        p.particles[n] = id;
+        p.weights[n++] = weight;
+      };
+      const int i0 =
+          W == 1 ? 0 : std::min(std::max(static_cast<int>(std::floor(v.x / w)), 0), W - 2);
+      const double fx = W == 1 ? 0.0 : v.x / w - i0;
+      for (int side = 0; side < (W == 1 ? 1 : 2); ++side) {
+        int lo, hi;
+        double f;
+        bracket(i0 + side, v.y, lo, hi, f);
+        const double column = side == 0 ? 1.0 - fx : fx;
+        add(lo, column * (1.0 - f));
+        add(hi, column * f);
+      }
+      Vec3 at_rest{0.0, 0.0, 0.0};
+      for (int q = 0; q < n; ++q) at_rest = at_rest + p.weights[q] * rest[p.particles[q]];
+      p.offset = v - Vec3{at_rest.x, at_rest.y, 0.0};
+      out.push_back(p);
+    }
   return out;
 }
 

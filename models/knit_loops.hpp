@@ -126,16 +126,27 @@
 // deepest and the upper tucks' legs stay in front of the lower ones' (>= 1.19 r apart). Why these
 // values and not SPEC 2.9's as first written: docs/knit.md, "Rest geometry of tucks and misses".
 //
+// Yarn contact (knit.contact = c > 0; off by default; docs/knit.md, "Yarn contact"): the
+// barrier of models/yarn_contact.hpp between the yarn polylines' rest vertices (below), each
+// carried by the interlacing points around it: its front-view rest position, bilinear in the
+// wale column's points that bracket it (the nearest existing levels above and below, in the two
+// wales either side; linear beyond the chart's edges), so it is affine in at most 4 points and
+// equals the vertex at rest; its depth z stays the rest depth (the chart stays in its plane).
+// Touching distance d = r (the yarn diameter), core d0 = 0.9 r, kappa = c k_w; yarns are one
+// course each, and pieces of one course pair if kSameYarnGap r apart along it.
+//
 // Failure modes: a bad chart or parameters throw std::invalid_argument at set-up (chart
 // messages name row and column). Geometry functions expect positions of every point
 // (length points.size()) and throw std::invalid_argument otherwise; a degenerate
 // configuration (coincident yarn points) throws std::invalid_argument from the NURBS fit.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "models/spring_network.hpp"
+#include "models/yarn_contact.hpp"
 #include "src/core/vec3.hpp"
 #include "src/geometry/nurbs.hpp"
 
@@ -191,6 +202,11 @@ struct KnitParams {
   // the yarn rigidity s stands for, B = b s k_w h^3 / 12 (see "Out of the plane" above). 0 (the
   // default) = off: the chart stays in its plane. Needs the stabiliser (s > 0).
   double bending_ratio = 0.0;
+  // c, dimensionless, in [0, 100]: the yarn contact's barrier stiffness kappa = c k_w (see
+  // "Yarn contact" above). 0 (the default) = off: the contact points do not yet follow the
+  // centreline closely enough to keep it clear (docs/knit.md, "Yarn contact"). Contact needs the
+  // stabiliser and keeps the chart in its plane, so it excludes the out-of-plane bending.
+  double contact_ratio = 0.0;
   long max_points = 4'000'000;  // refuse larger charts before allocating
 
   // Throws std::invalid_argument naming the field by its `knit --set` key (knit.loop_radius,
@@ -201,6 +217,8 @@ struct KnitParams {
   bool mechanism() const { return network == KnitNetwork::Paper || stabiliser_ratio == 0.0; }
   // True when the network has the out-of-plane bending stencils: a stabiliser and b > 0.
   bool out_of_plane_bending() const { return !mechanism() && bending_ratio > 0.0; }
+  // True when the model has yarn contact: a stabiliser and c > 0.
+  bool yarn_contact() const { return !mechanism() && contact_ratio > 0.0; }
   double wale_spacing() const { return 8.0 * loop_radius; }    // w, m
   double course_spacing() const { return 7.0 * loop_radius; }  // h, m
 };
@@ -231,6 +249,11 @@ struct KnitModel {
   std::vector<int> point_at;                // level * wales + wale -> point id, -1 if absent
   std::vector<int> loop_at;                 // course * wales + wale -> loop index, -1 (miss)
   SpringNetwork network;
+  // The network with yarn contact (params.yarn_contact()), else null; system() is what runs.
+  std::shared_ptr<ContactNetwork> contact;
+  const MechanicalSystem& system() const {
+    return contact ? static_cast<const MechanicalSystem&>(*contact) : network;
+  }
 
   int point(int wale, int level) const { return point_at[level * chart.wales + wale]; }
   int loop(int wale, int course) const { return loop_at[course * chart.wales + wale]; }
@@ -269,5 +292,31 @@ std::vector<NurbsCurve> course_curves(const KnitModel& model, const std::vector<
 std::vector<CurveSamples> course_centerlines(const KnitModel& model,
                                              const std::vector<Vec3>& positions,
                                              int samples_per_point = 8);
+
+// Yarn polylines: each course's centreline sampled at S points per interpolation interval,
+// uniformly in the curve parameter between the interval's ends ubar_k, ubar_k+1 (the curve passes
+// through yarn point k at ubar_k): vertex k S + m is at ubar_k + (m / S)(ubar_k+1 - ubar_k), so a
+// vertex's label (course, k S + m) names the same piece of yarn in every state. With S = 8 the
+// polyline lies within ~0.035 r of the curve. The yarn measures (src/measure/yarn_measures.hpp)
+// and the contact points (knit_contact_points) are these vertices.
+constexpr int kYarnSamplesPerInterval = 8;  // S
+// Pieces of one yarn this far apart along it (in r) count as different parts (clearance,
+// contact): a yarn of diameter d = r bent round a circle of radius d/2 comes back within d of
+// itself only after an arc of pi d/2; pi r is twice that, so the neighbouring pieces of one
+// bend never count while a loop's two legs (~20 r apart along the yarn) do.
+constexpr double kSameYarnGap = 3.14159265358979323846;
+
+struct YarnPolylines {
+  int samples_per_interval = kYarnSamplesPerInterval;
+  std::vector<std::vector<Vec3>> vertices;  // per course (bottom first): segment k = k to k+1
+  std::vector<std::vector<double>> arc;     // per course: arc length at each vertex, m
+};
+
+YarnPolylines yarn_polylines(const KnitModel& m, const std::vector<Vec3>& positions,
+                             int samples_per_interval = kYarnSamplesPerInterval);
+
+// The yarn contact's points (see "Yarn contact" above): the rest yarn polylines' vertices, each
+// bilinear in the interlacing points around it; yarn = course, arc = the polyline's rest arc.
+std::vector<ContactPoint> knit_contact_points(const KnitModel& m);
 
 }  // namespace knitsim

@@ -11,7 +11,9 @@
 //      globalised by a trust region on E: a step is accepted if E falls; rho = actual / predicted
 //      fall (quadratic model F.dx - dx.K dx / 2) above 0.75 grows h x4, below 0.25 halves it; a
 //      rejected step (E rises, or C/h + K has a negative pivot) divides h by 4. As h grows the
-//      step becomes Newton's with the exact Hessian, so the end converges quadratically. Near
+//      step becomes Newton's with the exact Hessian, so the end converges quadratically. A step
+//      the model does not admit whole (MechanicalSystem::admissible_step: a contact barrier it
+//      would jump through) is cut to the admitted fraction before the energy test. Near
 //      the minimum E's change drowns in round-off; there a step is accepted if it lowers
 //      ||F||_inf. The first h moves the sheet kFirstMove at most (h F_i / C_i).
 //   3. A converged step (||dx||_inf <= position_tol) at a state where K has negative pivots is a
@@ -226,6 +228,11 @@ class EquilibriumSolver final : public Integrator {
     if (!factor_->factorize(A_) || factor_->negative_pivots() > 0) return {};
     factor_->solve(F_, dx_);
     if (!dx_.allFinite()) return {};
+    // A step the model does not admit whole (it would jump through a contact barrier) is cut to
+    // the admitted fraction; the energy test below then judges the shorter step.
+    const double admit = sys_->admissible_step(t_, x_.data(), dx_.data());
+    if (!(admit > 0.0)) return {};
+    if (admit < 1.0) dx_ *= admit;
     multiply_k(dx_, kdx_);
     const double predicted = F_.dot(dx_) - 0.5 * dx_.dot(kdx_);
     for (int i = 0; i < n_; ++i) trial_[i] = x_[i] + dx_[i];

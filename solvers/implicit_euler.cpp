@@ -10,8 +10,10 @@
 //   values are refilled and refactored every step. Then v_{k+1} = v_k + dv,
 //   x_{k+1} = x_k + h v_{k+1}. Forces and Jacobian are taken at t_{k+1} (moving pins).
 //   First order, L-stable; its fixed point is the exact equilibrium, so large steps are
-//   allowed when only the equilibrium is wanted. Default h = 1 s.
+//   allowed when only the equilibrium is wanted. Default h = 1 s. A step through a barrier of the
+//   model (MechanicalSystem::admissible_step) is shortened to what it admits.
 #include <Eigen/SparseCore>
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <sstream>
@@ -75,7 +77,15 @@ class ImplicitEuler final : public Integrator {
     factor_->solve(b, Eigen::Map<Eigen::VectorXd>(dv_.data(), n_));
     for (int i = 0; i < n_; ++i) {
       v_[i] += dv_[i];
-      x_[i] += h * v_[i];
+      tmp_[i] = h * v_[i];
+    }
+    // A step the model does not admit whole (it would jump through a contact barrier) moves the
+    // admitted fraction, its velocities scaled alike: an inelastic stop at the barrier.
+    const double admit = sys_->admissible_step(t1, x_.data(), tmp_.data());
+    const double f = admit < 1.0 ? std::max(0.0, admit) : 1.0;
+    for (int i = 0; i < n_; ++i) {
+      v_[i] *= f;
+      x_[i] += f * tmp_[i];
     }
     t_ = t1;
     ++steps_;

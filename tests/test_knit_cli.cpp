@@ -204,7 +204,14 @@ TEST_CASE("knitsim knit: bad input exits 2 with one line and writes nothing") {
        "knit.bending = -1: must be in [0, 10]"},
       {"--chart '" + (tmp / "good.chart").string() +
            "' --set knit.network=paper --set knit.bending=1",
-       "paper 2's network has no stabiliser and no bending"},
+       "paper 2's network has no stabiliser, bending or contact"},
+      {"--chart '" + (tmp / "good.chart").string() +
+           "' --set knit.network=paper --set knit.contact=1",
+       "paper 2's network has no stabiliser, bending or contact"},
+      {"--chart '" + (tmp / "good.chart").string() + "' --set knit.contact=1 --set knit.bending=1",
+       "knit.bending = 1: must be 0 with knit.contact > 0"},
+      {"--chart '" + (tmp / "good.chart").string() + "' --set knit.contact=200",
+       "knit.contact = 200: must be in [0, 100]"},
       {"--chart '" + (tmp / "good.chart").string() + "' --integrator nope", "--integrator = nope"},
       {"--chart '" + (tmp / "good.chart").string() + "' --newton-solver lu",
        "--newton-solver: lu not in {klu,ldl,cg-ldl}"},

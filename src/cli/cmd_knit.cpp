@@ -123,6 +123,7 @@ std::vector<SetKey> set_keys(KnitParams& p, IntegratorOptions& o) {
           {"knit.areal_density", &p.areal_density},
           {"knit.stabiliser", &p.stabiliser_ratio},
           {"knit.bending", &p.bending_ratio},
+          {"knit.contact", &p.contact_ratio},
           {"run.t_max", &o.t_max},
           {"run.equilibrium_tol", &o.equilibrium_tol}};
 }
@@ -131,8 +132,8 @@ std::vector<SetKey> set_keys(KnitParams& p, IntegratorOptions& o) {
 constexpr const char* kNetworkKey = "knit.network";
 
 // Applies "key=value" overrides; throws std::invalid_argument naming the bad --set.
-// knit.network = paper with an explicit knit.stabiliser or knit.bending > 0 is refused (the
-// paper's network has neither).
+// knit.network = paper with an explicit knit.stabiliser, knit.bending or knit.contact > 0 is
+// refused (the paper's network has none of them).
 void apply_sets(const std::vector<std::string>& sets, KnitParams& p, IntegratorOptions& o) {
   const std::vector<SetKey> keys = set_keys(p, o);
   bool stabiliser_given = false;
@@ -143,7 +144,8 @@ void apply_sets(const std::vector<std::string>& sets, KnitParams& p, IntegratorO
       p.network = parse_knit_network(eq == std::string::npos ? "" : s.substr(eq + 1));
       continue;
     }
-    stabiliser_given = stabiliser_given || key == "knit.stabiliser" || key == "knit.bending";
+    stabiliser_given = stabiliser_given || key == "knit.stabiliser" || key == "knit.bending" ||
+                       key == "knit.contact";
     const SetKey* found = nullptr;
     for (const SetKey& k : keys)
       if (key == k.name) found = &k;
@@ -166,10 +168,10 @@ void apply_sets(const std::vector<std::string>& sets, KnitParams& p, IntegratorO
     *found->field = v;
   }
   if (p.network == KnitNetwork::Paper && stabiliser_given &&
-      (p.stabiliser_ratio > 0.0 || p.bending_ratio > 0.0))
+      (p.stabiliser_ratio > 0.0 || p.bending_ratio > 0.0 || p.contact_ratio > 0.0))
     throw std::invalid_argument(
-        "--set knit.stabiliser or knit.bending with knit.network = paper: paper 2's network has "
-        "no stabiliser and no bending (drop one of them)");
+        "--set knit.stabiliser, knit.bending or knit.contact with knit.network = paper: paper 2's "
+        "network has no stabiliser, bending or contact (drop one of them)");
 }
 
 // What a knit run integrates, as SavedRun::model (--continue): the chart, one string of stitch
@@ -303,12 +305,15 @@ std::string centerlines_vtk(const std::string& title, const std::vector<CurveSam
 
 // "stabilised network (s 0.1)" or "paper 2's network (a mechanism)".
 std::string network_label(const KnitParams& p) {
-  return p.mechanism() ? "paper 2's network (a mechanism)"
-                       : "stabilised network (s " + format_number(p.stabiliser_ratio, 3) +
-                             (p.out_of_plane_bending()
-                                  ? ", out-of-plane bending b " + format_number(p.bending_ratio, 3)
-                                  : std::string()) +
-                             ")";
+  return p.mechanism()
+             ? "paper 2's network (a mechanism)"
+             : "stabilised network (s " + format_number(p.stabiliser_ratio, 3) +
+                   (p.out_of_plane_bending()
+                        ? ", out-of-plane bending b " + format_number(p.bending_ratio, 3)
+                        : std::string()) +
+                   (p.yarn_contact() ? ", yarn contact c " + format_number(p.contact_ratio, 3)
+                                     : std::string()) +
+                   ")";
 }
 
 // Front view of the centrelines, courses in alternating colours, interlacing points as dots.
@@ -346,6 +351,7 @@ nlohmann::json params_json(const KnitParams& p) {
           {"areal_density", p.areal_density},
           {"stabiliser_ratio", p.stabiliser_ratio},
           {"bending_ratio", p.out_of_plane_bending() ? p.bending_ratio : 0.0},
+          {"contact_ratio", p.yarn_contact() ? p.contact_ratio : 0.0},
           {"network", p.mechanism() ? "paper" : "stabilised"}};
 }
 
@@ -578,7 +584,8 @@ void run(const KnitArgs& args) {
     ProgressLine progress(name + " " + integrator, opt.equilibrium_tol, !args.quiet);
     FrameRecorder recorder(args.frames, &progress);
     recorder.set_dof(model.network.dof());
-    recorder.record(t0, x.data(), model.network.dof(), model.network.static_residual(t0, x.data()));
+    recorder.record(t0, x.data(), model.network.dof(),
+                    model.system().static_residual(t0, x.data()));
     StepLog steps(&recorder);
     ClearanceOverRun clearance(model,
                                args.step_history ? static_cast<RunObserver*>(&steps) : &recorder,
@@ -586,7 +593,7 @@ void run(const KnitArgs& args) {
     clearance.observe(t0, x.data(), true);
     const double measure_cpu_before = clearance.cpu_seconds();
     try {
-      stats = run_to_equilibrium(model.network, *integ, opt, x, v, &clearance, t0);
+      stats = run_to_equilibrium(model.system(), *integ, opt, x, v, &clearance, t0);
     } catch (const std::invalid_argument& e) {  // an option the model refuses at the start
       refuse_at_run_start(e, dir, created);
     }
@@ -672,7 +679,7 @@ void register_knit_command(CLI::App& app) {
                   "Override a parameter, e.g. knit.network=paper (repeatable); keys "
                   "knit.network (stabilised | paper), knit.loop_radius, knit.wale_stiffness, "
                   "knit.course_stiffness, knit.damping, knit.areal_density, knit.stabiliser, "
-                  "knit.bending, run.t_max, run.equilibrium_tol")
+                  "knit.bending, knit.contact, run.t_max, run.equilibrium_tol")
       ->allow_extra_args(false)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_option("--integrator", args->integrator,

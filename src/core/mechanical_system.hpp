@@ -74,6 +74,14 @@ class MechanicalSystem {
   // Equilibrium may only be declared from this time on (e.g. after prescribed pin motion).
   virtual double equilibrium_start_time() const { return 0.0; }
 
+  // The largest fraction in [0, 1] of the step from x to x + dx that the model admits: less
+  // than 1 where the step would jump through a barrier the model keeps (yarn contact,
+  // models/yarn_contact.hpp). The solvers that take whole Newton steps (equilibrium,
+  // implicit-euler) shorten theirs by it. Default 1.
+  virtual double admissible_step(double /*t*/, const double* /*x*/, const double* /*dx*/) const {
+    return 1.0;
+  }
+
   // Position constraint projection for the explicit reference paths (Provot 1995): called
   // after each step; returns true if anything moved. Implicit paths never call it.
   virtual bool project(double /*t*/, double* /*x*/, double* /*v*/) const { return false; }

@@ -152,49 +152,7 @@ int crossing_sign(const YarnPolylines& lines, YarnSegment a, YarnSegment b) {
   return triple_sign(segment_of(lines, a.course, i), segment_of(lines, b.course, k), best);
 }
 
-// C(u) of an interpolated (non-rational: weights 1) curve by de Boor's algorithm on the stack:
-// the measure samples ~100k points per state of a 40 x 40 chart, and evaluate() also forms
-// two derivatives. Equal to evaluate(curve, u).point to round-off.
-Vec3 point_on(const NurbsCurve& c, double u) {
-  const int p = c.degree;
-  u = std::min(std::max(u, c.u_min()), c.u_max());
-  const int s = find_span(static_cast<int>(c.control.size()), p, c.knots, u);
-  Vec3 d[kMaxNurbsDegree + 1];
-  for (int j = 0; j <= p; ++j) d[j] = c.control[s - p + j];
-  for (int r = 1; r <= p; ++r)
-    for (int j = p; j >= r; --j) {
-      const int i = s - p + j;
-      const double span = c.knots[i + p - r + 1] - c.knots[i];
-      const double alpha = span == 0.0 ? 0.0 : (u - c.knots[i]) / span;
-      d[j] = (1.0 - alpha) * d[j - 1] + alpha * d[j];
-    }
-  return d[p];
-}
-
 }  // namespace
-
-YarnPolylines yarn_polylines(const KnitModel& m, const std::vector<Vec3>& positions,
-                             int samples_per_interval) {
-  if (samples_per_interval < 1)
-    throw std::invalid_argument("yarn_polylines: samples_per_interval must be >= 1");
-  YarnPolylines out;
-  out.samples_per_interval = samples_per_interval;
-  for (const std::vector<Vec3>& yarn : course_yarn_points(m, positions)) {
-    const NurbsCurve curve = interpolate_cubic(yarn, kYarnParametrization);
-    const std::vector<double> ubar = interpolation_parameters(yarn, kYarnParametrization);
-    std::vector<Vec3> v;
-    v.reserve(samples_per_interval * (yarn.size() - 1) + 1);
-    for (size_t k = 0; k + 1 < yarn.size(); ++k)
-      for (int s = 0; s < samples_per_interval; ++s)
-        v.push_back(point_on(curve, ubar[k] + (ubar[k + 1] - ubar[k]) * s / samples_per_interval));
-    v.push_back(point_on(curve, ubar.back()));
-    std::vector<double> arc(v.size(), 0.0);
-    for (size_t k = 1; k < v.size(); ++k) arc[k] = arc[k - 1] + norm(v[k] - v[k - 1]);
-    out.vertices.push_back(std::move(v));
-    out.arc.push_back(std::move(arc));
-  }
-  return out;
-}
 
 YarnClearance yarn_clearance(const KnitModel& m, const YarnPolylines& lines,
                              double search_radius_over_r, const YarnClearance* hint) {

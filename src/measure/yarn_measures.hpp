@@ -2,22 +2,13 @@
 // centrelines and the over/under order of the designed crossings. They are read off a state;
 // nothing here enters the dynamics.
 //
-// Measuring polyline. Each course's centreline (the C^2 cubic NURBS through its yarn points,
-// models/knit_loops.hpp) is sampled at S points per interpolation interval, uniformly in the
-// curve parameter between the interval's ends ubar_k, ubar_k+1 (the curve passes through yarn
-// point k at ubar_k): vertex k S + m is at ubar_k + (m / S)(ubar_k+1 - ubar_k). The label of a
-// vertex (course, k S + m) therefore names the same piece of yarn in every state, which is what
-// the crossing check needs; the chord-length parameter is close to arc length, so the pieces
-// are near-uniform in length. With S = 8 the polyline lies within ~0.035 r of the curve (the
-// same sampling density as centerlines.csv).
+// Measuring polyline: the yarn polylines of models/knit_loops.hpp (S = 8 samples per
+// interpolation interval; a vertex's label names the same piece of yarn in every state).
 //
 // Clearance: the smallest segment-to-segment distance (continuous, src/geometry/
 // segment_distance.hpp) between polyline segments of different courses, and between segments
 // of one course whose separation along the yarn (the polyline's arc length from the end of the
-// first to the start of the second) is at least kSameYarnGap r. Why pi r: a yarn of diameter
-// d = r bent round a circle of radius d/2 comes back to within d of itself only after an arc of
-// pi d/2; pi r = pi d is twice that, so neighbouring pieces of one bend are never counted while
-// a loop's two legs (~20 r apart along the yarn) and a float and the loops it passes are.
+// first to the start of the second) is at least kSameYarnGap r (pi r; why: models/knit_loops.hpp).
 // Reported in units of r; pairs further apart than the search radius are not examined, so a
 // clearance equal to the search radius means "at least that".
 // Broad phase: a dense front-view (x, y) grid of cell size >= search radius + longest segment on
@@ -50,18 +41,6 @@
 #include "src/core/vec3.hpp"
 
 namespace knitsim {
-
-constexpr double kSameYarnGap = 3.14159265358979323846;  // in r, see above
-constexpr int kYarnSamplesPerInterval = 8;               // S
-
-struct YarnPolylines {
-  int samples_per_interval = kYarnSamplesPerInterval;
-  std::vector<std::vector<Vec3>> vertices;  // per course (bottom first): segment k = k to k+1
-  std::vector<std::vector<double>> arc;     // per course: arc length at each vertex, m
-};
-
-YarnPolylines yarn_polylines(const KnitModel& m, const std::vector<Vec3>& positions,
-                             int samples_per_interval = kYarnSamplesPerInterval);
 
 struct YarnSegment {
   int course = -1;

@@ -1,0 +1,137 @@
+// Yarn contact: a barrier that keeps yarn centrelines of different yarn parts apart, added to a
+// SpringNetwork as one MechanicalSystem (ContactNetwork). Paper 2 has none (issue 31, item 2;
+// docs/knit.md, "Yarn contact").
+//
+// Contact points. The yarn is represented by points that are affine in the particles, so the
+// barrier has local support and an exact, sparse Jacobian (the knit's NURBS centreline is a
+// global interpolant whose inverse is dense):
+//     p = sum_i w_i x_i,xy + o      (at most 4 particles; o a fixed offset, m)
+// where x_i,xy is particle i's position with its z set to 0: the contact sees the particles' x and
+// y only and each point keeps its own fixed depth o.z. That is the model of a chart that stays
+// in its plane (the knit default: no force has a z component, the interlacing points stay at
+// z = 0); a network whose particles leave the plane must not use it (build_knit refuses contact
+// with knit.bending). Each point carries its yarn's id and its arc length along that yarn at rest.
+//
+// Pairs. Two points interact if they lie on different yarns, or on one yarn at least
+// same_yarn_gap apart along it (neighbouring pieces of one bend never do). Energy of a pair at
+// distance D = |p_a - p_b|, with the gap g = (D - d0) / (d - d0):
+//     E = kappa (d - d0)^2 phi(g),  phi(g) = -(g - 1)^2 ln g  for 0 < g < 1,  0 for g >= 1,
+// the IPC barrier (Li et al. 2020) shifted to a core: no force at or beyond the touching distance
+// d, a repulsion growing without bound as D falls to the core distance d0 < d (E = +inf for
+// D <= d0). phi = phi' = phi'' = 0 at g = 1, so E is C^2 where contact begins.
+// Gradient and Hessian (in p_a - p_b, xy components): B = dE/dD u, and
+//     H = E''(D) u u^T + (E'(D) / D) (I - u u^T),  u = (p_a - p_b) / D,
+// mapped onto the particles by the weights (block (i, j) gets s_i s_j w_i w_j H, s = +1 for a's
+// particles, -1 for b's).
+//
+// Near pairs (a Verlet list): pairs closer than d + skin are listed at a state and reused while
+// no particle has moved more than skin / (2 W) since (W the largest sum_i |w_i| of a point);
+// the list is rebuilt on a front-view (x, y) grid. The sparse pattern is fixed at construction:
+// the network's, plus the particle blocks of every pair closer than pattern_radius at the start.
+// A pair that comes into contact later on particles whose block is not in the pattern still gets
+// its forces and energy; the Jacobian then misses that block (counted: pattern_misses()), which
+// slows Newton but does not change the state reached.
+//
+// Step filter (admissible_step): the largest fraction of a step dx along which no pair's
+// distance falls below d0 + filter_keep (D_start - d0), found exactly (linear motion of two
+// points: a quadratic in the fraction); pairs by their swept boxes on the grid. The equilibrium
+// solver and implicit-euler shorten their steps by it, so no step jumps through the barrier.
+// The SUNDIALS methods have no such hook: a state inside the core gives a non-finite
+// acceleration, which they treat as a recoverable failure (a smaller step).
+//
+// Failure modes: a bad spec (particle out of range, weights not finite, d0 >= d, non-positive
+// kappa) throws std::invalid_argument at construction. Evaluation never throws: a state with a
+// pair at or inside the core gives E = +inf and NaN accelerations for the caller to detect.
+#pragma once
+
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "models/spring_network.hpp"
+
+namespace knitsim {
+
+struct ContactPoint {
+  std::array<int, 4> particles{-1, -1, -1, -1};  // -1 ends the list (1 to 4 particles)
+  std::array<double, 4> weights{};
+  Vec3 offset;       // o, m (its z is the point's depth)
+  int yarn = 0;      // which yarn the point lies on
+  double arc = 0.0;  // arc length along its yarn at rest, m
+};
+
+struct YarnContactSpec {
+  std::vector<ContactPoint> points;
+  double touching = 0.0;        // d, m: no force at or beyond it
+  double core = 0.0;            // d0, m: E -> +inf as D -> d0 (0 < d0 < d)
+  double stiffness = 0.0;       // kappa, N/m
+  double same_yarn_gap = 0.0;   // m: points of one yarn closer than this along it never pair
+  double skin = 0.0;            // m: the near-pair list's margin (0: (d - d0))
+  double pattern_radius = 0.0;  // m: pairs this close at the start have Jacobian blocks (0: 2 d)
+  double filter_keep = 0.2;     // a step keeps at least this fraction of a pair's gap to d0
+};
+
+class ContactNetwork final : public MechanicalSystem {
+ public:
+  ContactNetwork(SpringNetwork network, YarnContactSpec contact);
+
+  // MechanicalSystem
+  int dof() const override { return net_.dof(); }
+  void initial_state(double* x, double* v) const override { net_.initial_state(x, v); }
+  void conservative_acceleration(double t, const double* x, double* a) const override;
+  void constant_acceleration(double t, double* a) const override {
+    net_.constant_acceleration(t, a);
+  }
+  const std::vector<double>& damping_rate() const override { return net_.damping_rate(); }
+  const std::vector<double>& mass() const override { return net_.mass(); }
+  const CscPattern& stiffness_pattern() const override { return pattern_; }
+  void stiffness_values(double t, const double* x, double* values) const override;
+  double static_residual(double t, const double* x) const override;
+  double residual_roundoff(double t, const double* x) const override {
+    return net_.residual_roundoff(t, x);
+  }
+  double equilibrium_start_time() const override { return net_.equilibrium_start_time(); }
+  bool free_floating() const override { return net_.free_floating(); }
+  bool project(double t, double* x, double* v) const override { return net_.project(t, x, v); }
+  double potential_energy(double t, const double* x) const override;
+  double admissible_step(double t, const double* x, const double* dx) const override;
+  std::string describe() const override;
+
+  const SpringNetwork& network() const { return net_; }
+  const YarnContactSpec& contact() const { return spec_; }
+  // Contact energy alone at (t, x), J (+inf inside a core).
+  double contact_energy(double t, const double* x) const;
+  // Smallest distance between two pairing points at (t, x), m (closer than d + skin; else
+  // +inf), and how many pairs are in contact (closer than d).
+  double min_distance(double t, const double* x, int* in_contact = nullptr) const;
+  // Pairs in contact whose Jacobian blocks were not all in the pattern, over all evaluations.
+  long pattern_misses() const { return pattern_misses_; }
+  long list_rebuilds() const { return rebuilds_; }
+
+ private:
+  struct Pair {
+    int a, b;
+  };
+  void positions(double t, const double* x) const;  // particles, then points, into pos_, pts_
+  void refresh_pairs() const;                       // the near-pair list at pos_, if stale
+  bool pairs_of(double t, const double* x) const;   // positions + list; false if not finite
+  bool may_pair(int a, int b) const;
+  // Barrier energy and its first two derivatives in D.
+  void barrier(double D, double& e, double& de, double& d2e) const;
+  int block_entry(int fr, int fc) const;  // node entry of free particles (fr, fc), or -1
+
+  SpringNetwork net_;
+  YarnContactSpec spec_;
+  double reach_ = 0.0;          // d + skin
+  double wmax_ = 1.0;           // the largest sum |w| of a point
+  CscPattern nodes_;            // the free particles' block pattern
+  CscPattern pattern_;          // nodes_ expanded to 3 x 3 blocks
+  std::vector<int> net_entry_;  // per value of the network's pattern, its place in pattern_
+  mutable std::vector<Vec3> pos_, pts_, listed_at_;
+  mutable std::vector<Pair> pairs_;
+  mutable std::vector<double> net_values_, force_;
+  mutable long pattern_misses_ = 0, rebuilds_ = 0;
+};
+
+}  // namespace knitsim

@@ -1,0 +1,236 @@
+// Yarn contact (models/yarn_contact.hpp; knit.contact): the contact points at rest, forces and
+// Jacobian against finite differences, the barrier's core, the step filter and the solvers that
+// use it, and the keys' refusals.
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "models/knit_loops.hpp"
+#include "models/yarn_contact.hpp"
+#include "solvers/integrator.hpp"
+#include "src/core/jacobian_check.hpp"
+#include "tests/test_files.hpp"
+
+using namespace knitsim;
+using knitsim::test::chart_file;
+
+namespace {
+
+KnitParams with_contact(double c = 1.0) {
+  KnitParams p;
+  p.contact_ratio = c;
+  return p;
+}
+
+KnitModel chart_model(const std::string& name, KnitParams p) {
+  return build_knit(parse_knit_chart(chart_file(name)), p);
+}
+
+// single_tuck relaxed with contact by cvode-bdf: a state where pairs are in contact.
+std::vector<double> tuck_in_contact(const KnitModel& m) {
+  std::vector<double> x, v;
+  const RunStats s = run_to_equilibrium(m.system(), "cvode-bdf", IntegratorOptions{}, x, v);
+  REQUIRE(s.status == RunStatus::Equilibrium);
+  return x;
+}
+
+}  // namespace
+
+TEST_CASE("yarn contact: the points are the rest polylines' vertices, affine in the points",
+          "[contact]") {
+  for (const char* chart : {"plain_jersey.chart", "single_tuck.chart", "several_misses.chart"}) {
+    INFO(chart);
+    const KnitModel m = chart_model(chart, with_contact());
+    REQUIRE(m.contact != nullptr);
+    const std::vector<Vec3> rest = m.rest_positions();
+    const YarnPolylines lines = yarn_polylines(m, rest);
+    const std::vector<ContactPoint>& pts = m.contact->contact().points;
+    std::size_t k = 0;
+    double worst = 0.0, weight_error = 0.0;
+    for (std::size_t j = 0; j < lines.vertices.size(); ++j)
+      for (std::size_t v = 0; v < lines.vertices[j].size(); ++v, ++k) {
+        REQUIRE(k < pts.size());
+        const ContactPoint& p = pts[k];
+        CHECK(p.yarn == static_cast<int>(j));
+        Vec3 s = p.offset;
+        double sum = 0.0;
+        for (int i = 0; i < 4 && p.particles[i] >= 0; ++i) {
+          s.x += p.weights[i] * rest[p.particles[i]].x;
+          s.y += p.weights[i] * rest[p.particles[i]].y;
+          sum += p.weights[i];
+        }
+        worst = std::max(worst, norm(s - lines.vertices[j][v]));
+        weight_error = std::max(weight_error, std::abs(sum - 1.0));  // translations carried
+      }
+    CHECK(k == pts.size());
+    CHECK(worst <= 1e-12 * m.params.loop_radius);
+    CHECK(weight_error <= 1e-12);
+  }
+}
+
+TEST_CASE("yarn contact: plain jersey stays exactly at rest, no pair in contact", "[contact]") {
+  const KnitModel m = chart_model("plain_jersey.chart", with_contact());
+  std::vector<double> x0(m.system().dof()), v0(m.system().dof());
+  m.system().initial_state(x0.data(), v0.data());
+  int touching = -1;
+  CHECK(m.contact->min_distance(0.0, x0.data(), &touching) > m.params.loop_radius);
+  CHECK(touching == 0);
+  CHECK(m.contact->contact_energy(0.0, x0.data()) == 0.0);
+  for (const char* integrator : {"cvode-bdf", "equilibrium", "verlet"}) {
+    INFO(integrator);
+    std::vector<double> x, v;
+    const RunStats s = run_to_equilibrium(m.system(), integrator, IntegratorOptions{}, x, v);
+    CHECK(s.status == RunStatus::Equilibrium);
+    CHECK(x == x0);
+  }
+}
+
+TEST_CASE("yarn contact: forces are -grad E and the Jacobian is exact, pairs in contact",
+          "[contact]") {
+  const KnitModel m = chart_model("single_tuck.chart", with_contact());
+  std::vector<double> x = tuck_in_contact(m);
+  const double r = m.params.loop_radius;
+  // Off the equilibrium (F != 0), still outside every core.
+  std::mt19937 shake(3);
+  std::uniform_real_distribution<double> jitter(-0.01 * r, 0.01 * r);
+  for (double& xi : x) xi += jitter(shake);
+  int touching = 0;
+  const double dmin = m.contact->min_distance(0.0, x.data(), &touching);
+  REQUIRE(touching > 0);  // the barrier acts here
+  CHECK(dmin > 0.9 * r);  // outside its core
+  const JacobianCheck jc = check_stiffness_jacobian(m.system(), 0.0, x.data(), 1e-9);
+  INFO("worst (" << jc.worst_row << ", " << jc.worst_col << "): " << jc.worst_analytic << " vs "
+                 << jc.worst_fd);
+  CHECK(jc.max_relative_error < 1e-5);
+  CHECK_FALSE(jc.outside_pattern);
+  // F = -dE/dx along random directions (central differences of the total energy).
+  const MechanicalSystem& sys = m.system();
+  const int n = sys.dof();
+  std::vector<double> a(n), dir(n), xp(x), xm(x);
+  sys.conservative_acceleration(0.0, x.data(), a.data());
+  std::mt19937 rng(7);
+  std::normal_distribution<double> gauss;
+  for (int trial = 0; trial < 4; ++trial) {
+    for (double& d : dir) d = gauss(rng);
+    const double eps = 1e-4 * r;
+    double slope = 0.0;  // F . dir
+    for (int i = 0; i < n; ++i) {
+      xp[i] = x[i] + eps * dir[i];
+      xm[i] = x[i] - eps * dir[i];
+      slope += sys.mass()[i] * a[i] * dir[i];
+    }
+    const double fd =
+        -(sys.potential_energy(0.0, xp.data()) - sys.potential_energy(0.0, xm.data())) /
+        (2.0 * eps);
+    INFO("F.dir " << slope << ", -dE/ds " << fd);
+    CHECK(std::abs(slope) > 0.0);
+    CHECK(std::abs(fd - slope) <= 1e-5 * std::abs(slope));
+  }
+}
+
+TEST_CASE("yarn contact: inside the core the energy is infinite and forces are not finite",
+          "[contact]") {
+  // Two points of different yarns on single particles, pushed together along x.
+  SpringNetworkSpec spec;
+  spec.positions = {{0.0, 0.0, 0.0}, {2.0, 0.0, 0.0}};
+  spec.masses = {1.0, 1.0};
+  spec.springs = {{0, 1, 2.0, 1.0}};
+  spec.gravity = {0.0, 0.0, 0.0};
+  spec.residual_force_scale = 1.0;
+  YarnContactSpec c;
+  ContactPoint p0, p1;
+  p0.particles = {0, -1, -1, -1};
+  p0.weights = {1.0, 0.0, 0.0, 0.0};
+  p0.yarn = 0;
+  p1 = p0;
+  p1.particles[0] = 1;
+  p1.yarn = 1;
+  c.points = {p0, p1};
+  c.touching = 1.0;
+  c.core = 0.9;
+  c.stiffness = 10.0;
+  const ContactNetwork net(SpringNetwork(spec), c);
+  std::vector<double> x = {0.0, 0.0, 0.0, 0.95, 0.0, 0.0};
+  CHECK(std::isfinite(net.potential_energy(0.0, x.data())));
+  std::vector<double> a(6);
+  net.conservative_acceleration(0.0, x.data(), a.data());
+  CHECK(a[0] < 0.0);  // pushed apart: particle 0 to -x, particle 1 to +x
+  CHECK(a[3] > 0.0);
+  CHECK(a[1] == 0.0);
+  CHECK(a[2] == 0.0);  // no z force: the contact sees x and y only
+  x[3] = 0.9;
+  CHECK(net.potential_energy(0.0, x.data()) == std::numeric_limits<double>::infinity());
+  net.conservative_acceleration(0.0, x.data(), a.data());
+  CHECK_FALSE(std::isfinite(a[0]));
+  // The step filter: from 1.5 apart, a step to -0.5 (through the other point) is cut where the
+  // distance reaches core + keep (min(D0, d) - core) = 0.92; a step away is whole.
+  x[3] = 1.5;
+  std::vector<double> dx = {0.0, 0.0, 0.0, -2.0, 0.0, 0.0};
+  const double f = net.admissible_step(0.0, x.data(), dx.data());
+  CHECK(f == Approx((1.5 - 0.92) / 2.0).epsilon(1e-12));
+  dx[3] = 2.0;
+  CHECK(net.admissible_step(0.0, x.data(), dx.data()) == 1.0);
+  // Points of one yarn closer along it than same_yarn_gap never pair.
+  c.points[1].yarn = 0;
+  c.points[1].arc = 0.5;
+  c.same_yarn_gap = 1.0;
+  const ContactNetwork one_yarn(SpringNetwork(spec), c);
+  x[3] = 0.5;
+  CHECK(one_yarn.contact_energy(0.0, x.data()) == 0.0);
+}
+
+TEST_CASE("yarn contact: the step filter keeps every pair outside the core", "[contact]") {
+  const KnitModel m = chart_model("single_tuck.chart", with_contact());
+  const std::vector<double> x = tuck_in_contact(m);
+  const double core = m.contact->contact().core;
+  const int n = m.system().dof();
+  std::mt19937 rng(11);
+  std::normal_distribution<double> gauss;
+  int cut = 0;
+  for (int trial = 0; trial < 20; ++trial) {
+    std::vector<double> dx(n), y(n);
+    for (double& d : dx) d = 3.0 * m.params.loop_radius * gauss(rng);
+    const double f = m.system().admissible_step(0.0, x.data(), dx.data());
+    REQUIRE(f >= 0.0);
+    REQUIRE(f <= 1.0);
+    cut += f < 1.0;
+    // Along the admitted part of the step no pair reaches the core (sampled finely).
+    for (int s = 1; s <= 16; ++s) {
+      for (int i = 0; i < n; ++i) y[i] = x[i] + f * s / 16.0 * dx[i];
+      CHECK(m.contact->min_distance(0.0, y.data()) > core);
+    }
+  }
+  CHECK(cut > 0);  // random steps of 3 r do hit the barrier
+}
+
+TEST_CASE("yarn contact: the equilibrium solver and implicit-euler stay outside the core",
+          "[contact]") {
+  const KnitModel m = chart_model("single_tuck.chart", with_contact());
+  for (const char* integrator : {"equilibrium", "implicit-euler"}) {
+    INFO(integrator);
+    IntegratorOptions opt;
+    if (std::string(integrator) == "implicit-euler") opt.dt = 1e-5;
+    std::vector<double> x, v;
+    const RunStats s = run_to_equilibrium(m.system(), integrator, opt, x, v);
+    INFO(s.message);
+    CHECK(s.status == RunStatus::Equilibrium);
+    CHECK(m.contact->min_distance(0.0, x.data()) > m.contact->contact().core);
+  }
+}
+
+TEST_CASE("yarn contact: refused with the paper's network's absence and with bending",
+          "[contact]") {
+  KnitParams p = with_contact();
+  p.bending_ratio = 1.0;
+  CHECK_THROWS_WITH(p.validate(),
+                    Catch::Contains("knit.bending") && Catch::Contains("knit.contact"));
+  p = with_contact(101.0);
+  CHECK_THROWS_WITH(p.validate(), Catch::Contains("knit.contact") && Catch::Contains("[0, 100]"));
+  p = with_contact();
+  p.network = KnitNetwork::Paper;  // paper 2's network has no contact
+  CHECK_FALSE(p.yarn_contact());
+  CHECK(chart_model("single_tuck.chart", p).contact == nullptr);
+  CHECK(chart_model("single_tuck.chart", KnitParams{}).contact == nullptr);  // off by default
+}
