@@ -462,27 +462,35 @@ std::vector<LoopTypeValues> type_value_points(const KnitModel& m,
   return out;
 }
 
+namespace {
+
+// Course j's yarn points (course_yarn_points, one course; positions already checked).
+std::vector<Vec3> course_yarn(const KnitModel& m, const std::vector<Vec3>& positions, int j) {
+  const double r = m.params.loop_radius;
+  const CourseGeometry g = course_geometry(m, positions, j);
+  std::vector<Vec3> yarn;
+  yarn.push_back(g.sinkers[0]);
+  for (int i = 0; i < m.chart.wales; ++i) {
+    const int l = m.loop(i, j);
+    if (l >= 0) {
+      const LoopTypeValues t = loop_type_values(m, g, positions, l);
+      yarn.insert(yarn.end(), t.t.begin() + 1, t.t.end() - 1);  // without the sinkers
+    } else {
+      const Frame& f = g.frames[i];
+      yarn.push_back(f.B - r * f.ey - r * f.n);  // the float behind the missed wale
+    }
+    yarn.push_back(g.sinkers[i + 1]);
+  }
+  return yarn;
+}
+
+}  // namespace
+
 std::vector<std::vector<Vec3>> course_yarn_points(const KnitModel& m,
                                                   const std::vector<Vec3>& positions) {
   check_positions(m, positions);
-  const double r = m.params.loop_radius;
   std::vector<std::vector<Vec3>> yarns(m.chart.courses);
-  for (int j = 0; j < m.chart.courses; ++j) {
-    const CourseGeometry g = course_geometry(m, positions, j);
-    std::vector<Vec3>& yarn = yarns[j];
-    yarn.push_back(g.sinkers[0]);
-    for (int i = 0; i < m.chart.wales; ++i) {
-      const int l = m.loop(i, j);
-      if (l >= 0) {
-        const LoopTypeValues t = loop_type_values(m, g, positions, l);
-        yarn.insert(yarn.end(), t.t.begin() + 1, t.t.end() - 1);  // without the sinkers
-      } else {
-        const Frame& f = g.frames[i];
-        yarn.push_back(f.B - r * f.ey - r * f.n);  // the float behind the missed wale
-      }
-      yarn.push_back(g.sinkers[i + 1]);
-    }
-  }
+  for (int j = 0; j < m.chart.courses; ++j) yarns[j] = course_yarn(m, positions, j);
   return yarns;
 }
 
@@ -527,6 +535,25 @@ Vec3 point_on(const NurbsCurve& c, double u) {
 
 }  // namespace
 
+namespace {
+
+// Course j's yarn polyline (see the header) into v, its arc lengths into arc.
+void course_polyline(const std::vector<Vec3>& yarn, int S, std::vector<Vec3>& v,
+                     std::vector<double>& arc) {
+  const NurbsCurve curve = interpolate_cubic(yarn, kYarnParametrization);
+  const std::vector<double> ubar = interpolation_parameters(yarn, kYarnParametrization);
+  v.clear();
+  v.reserve(S * (yarn.size() - 1) + 1);
+  for (size_t k = 0; k + 1 < yarn.size(); ++k)
+    for (int s = 0; s < S; ++s)
+      v.push_back(point_on(curve, ubar[k] + (ubar[k + 1] - ubar[k]) * s / S));
+  v.push_back(point_on(curve, ubar.back()));
+  arc.assign(v.size(), 0.0);
+  for (size_t k = 1; k < v.size(); ++k) arc[k] = arc[k - 1] + norm(v[k] - v[k - 1]);
+}
+
+}  // namespace
+
 YarnPolylines yarn_polylines(const KnitModel& m, const std::vector<Vec3>& positions,
                              int samples_per_interval) {
   if (samples_per_interval < 1)
@@ -534,76 +561,80 @@ YarnPolylines yarn_polylines(const KnitModel& m, const std::vector<Vec3>& positi
   YarnPolylines out;
   out.samples_per_interval = samples_per_interval;
   for (const std::vector<Vec3>& yarn : course_yarn_points(m, positions)) {
-    const NurbsCurve curve = interpolate_cubic(yarn, kYarnParametrization);
-    const std::vector<double> ubar = interpolation_parameters(yarn, kYarnParametrization);
-    std::vector<Vec3> v;
-    v.reserve(samples_per_interval * (yarn.size() - 1) + 1);
-    for (size_t k = 0; k + 1 < yarn.size(); ++k)
-      for (int s = 0; s < samples_per_interval; ++s)
-        v.push_back(point_on(curve, ubar[k] + (ubar[k + 1] - ubar[k]) * s / samples_per_interval));
-    v.push_back(point_on(curve, ubar.back()));
-    std::vector<double> arc(v.size(), 0.0);
-    for (size_t k = 1; k < v.size(); ++k) arc[k] = arc[k - 1] + norm(v[k] - v[k - 1]);
-    out.vertices.push_back(std::move(v));
-    out.arc.push_back(std::move(arc));
+    out.vertices.emplace_back();
+    out.arc.emplace_back();
+    course_polyline(yarn, samples_per_interval, out.vertices.back(), out.arc.back());
   }
   return out;
 }
 
 std::vector<ContactPoint> knit_contact_points(const KnitModel& m) {
   const int W = m.chart.wales, C = m.chart.courses;
-  const double w = m.params.wale_spacing(), h = m.params.course_spacing();
-  // Per wale, its existing levels, ascending (level 0 and level C always exist).
-  std::vector<std::vector<int>> levels(W);
-  for (int L = 0; L <= C; ++L)
-    for (int i = 0; i < W; ++i)
-      if (m.point(i, L) >= 0) levels[i].push_back(L);
-  // Wale i's two points bracketing height y (the lowest or highest two beyond its ends), and the
-  // weight of the upper one.
-  auto bracket = [&](int i, double y, int& lower, int& upper, double& f) {
-    const std::vector<int>& lv = levels[i];
-    const double level = y / h;
-    std::size_t k = std::upper_bound(lv.begin(), lv.end(), level) - lv.begin();
-    k = std::min(std::max<std::size_t>(k, 1), lv.size() - 1);
-    lower = m.point(i, lv[k - 1]);
-    upper = m.point(i, lv[k]);
-    f = (level - lv[k - 1]) / (lv[k] - lv[k - 1]);
-  };
-  const std::vector<Vec3> rest = m.rest_positions();
-  const YarnPolylines lines = yarn_polylines(m, rest);
+  const double h = 1e-4 * m.params.loop_radius;  // central-difference step, m
+  std::vector<Vec3> pos = m.rest_positions();
   std::vector<ContactPoint> out;
-  for (std::size_t j = 0; j < lines.vertices.size(); ++j)
-    for (std::size_t k = 0; k < lines.vertices[j].size(); ++k) {
-      const Vec3 v = lines.vertices[j][k];
-      ContactPoint p;
-      p.yarn = static_cast<int>(j);
-      p.arc = lines.arc[j][k];
-      int n = 0;
-      auto add = [&](int id, double weight) {
-        for (int q = 0; q < n; ++q)
-          if (p.particles[q] == id) {
-            p.weights[q] += weight;
-            return;
-          }
-        p.particles[n] = id;
-        p.weights[n++] = weight;
-      };
-      const int i0 =
-          W == 1 ? 0 : std::min(std::max(static_cast<int>(std::floor(v.x / w)), 0), W - 2);
-      const double fx = W == 1 ? 0.0 : v.x / w - i0;
-      for (int side = 0; side < (W == 1 ? 1 : 2); ++side) {
-        int lo, hi;
-        double f;
-        bracket(i0 + side, v.y, lo, hi, f);
-        const double column = side == 0 ? 1.0 - fx : fx;
-        add(lo, column * (1.0 - f));
-        add(hi, column * f);
+  std::vector<Vec3> v, vp, vm;
+  std::vector<double> arc, scratch;
+  for (int j = 0; j < C; ++j) {
+    course_polyline(course_yarn(m, pos, j), kYarnSamplesPerInterval, v, arc);
+    // The particles course j's yarn depends on: levels j to the highest upper point of its loops.
+    int top = j + 1;
+    for (int i = 0; i < W; ++i)
+      if (m.loop(i, j) >= 0) top = std::max(top, m.points[m.loops[m.loop(i, j)].upper].level);
+    std::vector<int> ids;
+    for (int L = j; L <= std::min(top, C); ++L)
+      for (int i = 0; i < W; ++i)
+        if (m.point(i, L) >= 0) ids.push_back(m.point(i, L));
+    // d vertex / d particle (x, y) by central differences: per vertex, per particle, a 2 x 2.
+    std::vector<std::array<double, 4>> J(v.size() * ids.size());
+    for (std::size_t q = 0; q < ids.size(); ++q)
+      for (int c = 0; c < 2; ++c) {
+        double& coord = c == 0 ? pos[ids[q]].x : pos[ids[q]].y;
+        const double keep = coord;
+        coord = keep + h;
+        course_polyline(course_yarn(m, pos, j), kYarnSamplesPerInterval, vp, scratch);
+        coord = keep - h;
+        course_polyline(course_yarn(m, pos, j), kYarnSamplesPerInterval, vm, scratch);
+        coord = keep;
+        for (std::size_t k = 0; k < v.size(); ++k) {
+          J[k * ids.size() + q][c] = (vp[k].x - vm[k].x) / (2.0 * h);      // d vx / d c
+          J[k * ids.size() + q][2 + c] = (vp[k].y - vm[k].y) / (2.0 * h);  // d vy / d c
+        }
       }
+    // Per vertex the kContactParticles particles of largest |W|; the rest is added to the
+    // largest, so the weights sum to the identity (translations carried exactly).
+    std::vector<int> order(ids.size());
+    for (std::size_t k = 0; k < v.size(); ++k) {
+      const std::array<double, 4>* row = &J[k * ids.size()];
+      auto size = [&](int q) {
+        return row[q][0] * row[q][0] + row[q][1] * row[q][1] + row[q][2] * row[q][2] +
+               row[q][3] * row[q][3];
+      };
+      for (std::size_t q = 0; q < ids.size(); ++q) order[q] = static_cast<int>(q);
+      const std::size_t keep = std::min<std::size_t>(kContactParticles, ids.size());
+      std::partial_sort(order.begin(), order.begin() + keep, order.end(),
+                        [&](int a, int b) { return size(a) > size(b); });
+      ContactPoint p;
+      p.yarn = j;
+      p.arc = arc[k];
+      std::array<double, 4> rest_sum{0.0, 0.0, 0.0, 0.0};
+      for (std::size_t q = 0; q < keep; ++q) {
+        p.particles[q] = ids[order[q]];
+        p.weights[q] = row[order[q]];
+        for (int e = 0; e < 4; ++e) rest_sum[e] += row[order[q]][e];
+      }
+      const std::array<double, 4> identity{1.0, 0.0, 0.0, 1.0};
+      for (int e = 0; e < 4; ++e) p.weights[0][e] += identity[e] - rest_sum[e];
       Vec3 at_rest{0.0, 0.0, 0.0};
-      for (int q = 0; q < n; ++q) at_rest = at_rest + p.weights[q] * rest[p.particles[q]];
-      p.offset = v - Vec3{at_rest.x, at_rest.y, 0.0};
+      for (std::size_t q = 0; q < keep; ++q) {
+        const Vec3& x = pos[p.particles[q]];
+        at_rest.x += p.weights[q][0] * x.x + p.weights[q][1] * x.y;
+        at_rest.y += p.weights[q][2] * x.x + p.weights[q][3] * x.y;
+      }
+      p.offset = v[k] - at_rest;
       out.push_back(p);
     }
+  }
   return out;
 }
 

@@ -81,12 +81,15 @@ ContactNetwork::ContactNetwork(SpringNetwork network, YarnContactSpec contact)
   for (const ContactPoint& p : spec_.points) {
     double w = 0.0;
     int count = 0;
-    for (int i = 0; i < 4 && p.particles[i] >= 0; ++i, ++count) {
-      if (p.particles[i] >= net_.particle_count() || !std::isfinite(p.weights[i]))
-        throw std::invalid_argument(
-            "yarn contact: a point's particle is out of range or its "
-            "weight is not finite");
-      w += std::abs(p.weights[i]);
+    for (int i = 0; i < kContactParticles && p.particles[i] >= 0; ++i, ++count) {
+      if (p.particles[i] >= net_.particle_count())
+        throw std::invalid_argument("yarn contact: a point's particle is out of range");
+      double f2 = 0.0;
+      for (double v : p.weights[i]) {
+        if (!std::isfinite(v)) throw std::invalid_argument("yarn contact: a weight is not finite");
+        f2 += v * v;
+      }
+      w += std::sqrt(f2);
     }
     if (count == 0 || !is_finite(p.offset))
       throw std::invalid_argument("yarn contact: a point has no particle or a non-finite offset");
@@ -109,8 +112,8 @@ ContactNetwork::ContactNetwork(SpringNetwork network, YarnContactSpec contact)
     boxes[k] = around(pts_[k], 0.5 * spec_.pattern_radius);
   overlapping_boxes(boxes, spec_.pattern_radius, [&](int a, int b) {
     if (!may_pair(a, b) || norm(pts_[a] - pts_[b]) >= spec_.pattern_radius) return;
-    for (int i = 0; i < 4 && spec_.points[a].particles[i] >= 0; ++i)
-      for (int j = 0; j < 4 && spec_.points[b].particles[j] >= 0; ++j) {
+    for (int i = 0; i < kContactParticles && spec_.points[a].particles[i] >= 0; ++i)
+      for (int j = 0; j < kContactParticles && spec_.points[b].particles[j] >= 0; ++j) {
         const int fa = net_.free_index(spec_.points[a].particles[i]);
         const int fb = net_.free_index(spec_.points[b].particles[j]);
         if (fa < 0 || fb < 0) continue;
@@ -141,10 +144,11 @@ void ContactNetwork::positions(double t, const double* x) const {
   for (std::size_t k = 0; k < spec_.points.size(); ++k) {
     const ContactPoint& p = spec_.points[k];
     Vec3 s = p.offset;
-    for (int i = 0; i < 4 && p.particles[i] >= 0; ++i) {
+    for (int i = 0; i < kContactParticles && p.particles[i] >= 0; ++i) {
       const Vec3& q = pos_[p.particles[i]];
-      s.x += p.weights[i] * q.x;
-      s.y += p.weights[i] * q.y;
+      const std::array<double, 4>& W = p.weights[i];
+      s.x += W[0] * q.x + W[1] * q.y;
+      s.y += W[2] * q.x + W[3] * q.y;
     }
     pts_[k] = s;
   }
@@ -225,16 +229,17 @@ double ContactNetwork::min_distance(double t, const double* x, int* in_contact) 
 
 namespace {
 
-// Adds F (a force on point p, x and y) to the free particles of p, times `sign`, divided by their
-// mass if inv_mass.
+// Adds W_i^T F (F a force on point p, x and y) to p's free particles, divided by their mass if
+// `mass` is given.
 void spread(const ContactPoint& p, const SpringNetwork& net, double fx, double fy, double* out,
             const std::vector<double>* mass) {
-  for (int i = 0; i < 4 && p.particles[i] >= 0; ++i) {
+  for (int i = 0; i < kContactParticles && p.particles[i] >= 0; ++i) {
     const int f = net.free_index(p.particles[i]);
     if (f < 0) continue;
-    const double s = mass ? p.weights[i] / (*mass)[3 * f] : p.weights[i];
-    out[3 * f] += s * fx;
-    out[3 * f + 1] += s * fy;
+    const std::array<double, 4>& W = p.weights[i];
+    const double s = mass ? 1.0 / (*mass)[3 * f] : 1.0;
+    out[3 * f] += s * (W[0] * fx + W[2] * fy);
+    out[3 * f + 1] += s * (W[1] * fx + W[3] * fy);
   }
 }
 
@@ -307,11 +312,16 @@ void ContactNetwork::stiffness_values(double t, const double* x, double* values)
     bool missed = false;
     const ContactPoint* pt[2] = {&spec_.points[pr.a], &spec_.points[pr.b]};
     for (int A = 0; A < 2; ++A)
-      for (int i = 0; i < 4 && pt[A]->particles[i] >= 0; ++i) {
+      for (int i = 0; i < kContactParticles && pt[A]->particles[i] >= 0; ++i) {
         const int fr = net_.free_index(pt[A]->particles[i]);
         if (fr < 0) continue;
+        const std::array<double, 4>& Wi = pt[A]->weights[i];
+        // Wi^T H, 2 x 2
+        const double G[2][2] = {
+            {Wi[0] * H[0][0] + Wi[2] * H[1][0], Wi[0] * H[0][1] + Wi[2] * H[1][1]},
+            {Wi[1] * H[0][0] + Wi[3] * H[1][0], Wi[1] * H[0][1] + Wi[3] * H[1][1]}};
         for (int B = 0; B < 2; ++B)
-          for (int j = 0; j < 4 && pt[B]->particles[j] >= 0; ++j) {
+          for (int j = 0; j < kContactParticles && pt[B]->particles[j] >= 0; ++j) {
             const int fc = net_.free_index(pt[B]->particles[j]);
             if (fc < 0) continue;
             const int e_node = nodes_.find(fr, fc);
@@ -319,12 +329,13 @@ void ContactNetwork::stiffness_values(double t, const double* x, double* values)
               missed = true;
               continue;
             }
-            // dF_r/dx_c = -s_r s_c w_r w_c H; the Jacobian row is divided by r's mass.
-            const double f =
-                -(A == B ? 1.0 : -1.0) * pt[A]->weights[i] * pt[B]->weights[j] / m[3 * fr];
+            const std::array<double, 4>& Wj = pt[B]->weights[j];
+            // dF_r/dx_c = -s_r s_c Wi^T H Wj; the Jacobian row is divided by r's mass.
+            const double f = -(A == B ? 1.0 : -1.0) / m[3 * fr];
             for (int p = 0; p < 2; ++p)
               for (int q = 0; q < 2; ++q)
-                values[node_block_entry(nodes_, e_node, fc, p, q)] += f * H[p][q];
+                values[node_block_entry(nodes_, e_node, fc, p, q)] +=
+                    f * (G[p][0] * Wj[q] + G[p][1] * Wj[2 + q]);
           }
       }
     pattern_misses_ += missed;

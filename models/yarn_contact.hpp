@@ -5,7 +5,7 @@
 // Contact points. The yarn is represented by points that are affine in the particles, so the
 // barrier has local support and an exact, sparse Jacobian (the knit's NURBS centreline is a
 // global interpolant whose inverse is dense):
-//     p = sum_i w_i x_i,xy + o      (at most 4 particles; o a fixed offset, m)
+//     p = sum_i W_i x_i,xy + o      (at most 8 particles, W_i 2 x 2; o a fixed offset, m)
 // where x_i,xy is particle i's position with its z set to 0: the contact sees the particles' x and
 // y only and each point keeps its own fixed depth o.z. That is the model of a chart that stays
 // in its plane (the knit default: no force has a z component, the interlacing points stay at
@@ -21,11 +21,12 @@
 // D <= d0). phi = phi' = phi'' = 0 at g = 1, so E is C^2 where contact begins.
 // Gradient and Hessian (in p_a - p_b, xy components): B = dE/dD u, and
 //     H = E''(D) u u^T + (E'(D) / D) (I - u u^T),  u = (p_a - p_b) / D,
-// mapped onto the particles by the weights (block (i, j) gets s_i s_j w_i w_j H, s = +1 for a's
-// particles, -1 for b's).
+// mapped onto the particles by the weights (force W_i^T (-B) on a's particle i; block (i, j) of
+// d^2E/dx^2 gets s_i s_j W_i^T H W_j, s = +1 for a's particles, -1 for b's).
 //
 // Near pairs (a Verlet list): pairs closer than d + skin are listed at a state and reused while
-// no particle has moved more than skin / (2 W) since (W the largest sum_i |w_i| of a point);
+// no particle has moved more than skin / (2 sqrt(2) W) since (W the largest sum_i |W_i|_F of a
+// point);
 // the list is rebuilt on a front-view (x, y) grid. The sparse pattern is fixed at construction:
 // the network's, plus the particle blocks of every pair closer than pattern_radius at the start.
 // A pair that comes into contact later on particles whose block is not in the pattern still gets
@@ -53,9 +54,12 @@
 
 namespace knitsim {
 
+constexpr int kContactParticles = 8;  // particles a contact point may depend on
+
 struct ContactPoint {
-  std::array<int, 4> particles{-1, -1, -1, -1};  // -1 ends the list (1 to 4 particles)
-  std::array<double, 4> weights{};
+  std::array<int, kContactParticles> particles{-1, -1, -1, -1, -1, -1, -1, -1};  // -1 ends
+  // Per particle a 2 x 2 matrix W_i (row-major: xx, xy, yx, yy), dimensionless.
+  std::array<std::array<double, 4>, kContactParticles> weights{};
   Vec3 offset;       // o, m (its z is the point's depth)
   int yarn = 0;      // which yarn the point lies on
   double arc = 0.0;  // arc length along its yarn at rest, m
