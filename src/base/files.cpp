@@ -74,8 +74,8 @@ namespace {
 
 // An existing --out folder is reused only by the command that wrote it: its manifest.json
 // naming another command (e.g. a fit's folder given to drape) means results this run would
-// overwrite or leave mixed with its own. Folders without a manifest, or whose manifest
-// predates the "command" field, are reused as before.
+// overwrite or leave mixed with its own. Folders without a manifest, or whose manifest has no
+// "command" field, are reused.
 void refuse_other_commands_folder(const fs::path& dir, const std::string& requested) {
   std::error_code ec;
   const fs::path path = dir / "manifest.json";

@@ -65,8 +65,8 @@ void remove_stale_output(const std::filesystem::path& file);
 // The name of the lock file make_output_dir keeps in every output folder.
 inline constexpr const char* kOutputLockFile = ".knitsim-lock";
 
-// Removes `dir` if `created` and it holds nothing but its lock file: for bad input found only once the run
-// starts (an integrator option the model refuses), so that nothing is left behind.
+// Removes `dir` if `created` and it holds nothing but its lock file: for bad input found only
+// once the run starts (an integrator option the model refuses), so that nothing is left behind.
 void remove_if_unused(const std::filesystem::path& dir, bool created);
 
 // Reads an input file named on the command line (scene, chart, target) into `text`. Returns

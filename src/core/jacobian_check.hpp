@@ -2,8 +2,9 @@
 // GradientChecker idea): every column j is compared with the central difference
 //   (a_c(x + h_j e_j) - a_c(x - h_j e_j)) / (2 h_j),   h_j = step x max(1, |x_j|),
 // entry by entry, with error |analytic - fd| / max(column scale, |analytic|), the column
-// scale being max |fd| over the column (the diagonal block dominates each column). Entries outside the pattern must be ~0 in the finite differences. O(n) RHS calls:
-// for tests and diagnostics, not hot loops.
+// scale being max |fd| over the column (the diagonal block dominates each column). Entries
+// outside the pattern must be ~0 in the finite differences. O(n) RHS calls: for tests and
+// diagnostics, not hot loops.
 #pragma once
 
 #include "src/core/mechanical_system.hpp"

@@ -25,7 +25,7 @@ CscPattern make_csc_pattern(int rows, int cols, std::vector<std::pair<int, int>>
       throw std::logic_error("make_csc_pattern: entry outside the matrix");
   // Bucket the pairs by column (counting sort), then keep each row once per column (a marker
   // per row) and sort the column's few distinct rows: O(entries + sum of k log k over columns),
-  // where one comparison sort of all pairs cost ~20 % of a fit's CPU (perf, repro quick).
+  // not one comparison sort of all pairs, since every drape of a fit builds its patterns.
   std::vector<int> start(cols + 1, 0);
   for (const auto& e : entries) ++start[e.second + 1];
   for (int j = 0; j < cols; ++j) start[j + 1] += start[j];
