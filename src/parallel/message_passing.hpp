@@ -2,8 +2,9 @@
 // interface so that Open MPI is mapped only into a process that an MPI launcher started.
 // mpi_module.cpp implements it on MPI and is built as a shared module (libknitsim_mpi.so, next
 // to knitsim in the build folder) that work_units.cpp loads with dlopen when ProcessGroup sees an
-// MPI launcher's environment. Linked into every binary, Open MPI (libmpi, open-rte, open-pal,
-// hwloc, libevent, ...) cost every run ~4 ms of the dynamic loader's time.
+// MPI launcher's environment. Linked into every binary, Open MPI and its libraries (libmpi,
+// open-rte, open-pal, hwloc, libevent, ...) would add to every run's start-up
+// (experiments/benchmark/README.md, "Process start").
 // Internal to src/parallel.
 #pragma once
 

@@ -298,7 +298,7 @@ class Collector {
     record(m.at(0).get<int>(), serialise(m.at(1)));
   }
 
-  int recorded() const { return recorded_; }  // units recorded in this session
+  int recorded() const { return recorded_; }  // units recorded by this call, every rank's
   std::vector<json> take() { return std::move(results_); }
 
  private:
