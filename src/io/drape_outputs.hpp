@@ -30,14 +30,15 @@ nlohmann::json drape_summary(const Scene& scene, const DrapeResult& result);
 
 // Writes into `dir` (which must exist): summary.json, nodes.csv (id,i,j,x,y,z,pinned; all
 // particles at t_final, m), drape.vtk (the grid's quads, point data `pinned` and
-// `displacement` = position - rest position, m), drape.png (render_mesh_png, oblique view) and
-// manifest.json (options: scene, integrator, params, run options), and state.json
-// (write_run_state: the integrated unknowns at t_final; omitted if not finite).
-// Writes summary.json, nodes.csv, drape.vtk, drape.png, and edges.csv (the measured edges,
-// SPEC 2.5) when the final state is finite. With `target` (the measured edges of the matching
-// target scene, e.g. fit_target_scene(...)), summary.json also gets `objective` (Eq. 5, %) and
-// the per-edge coefficients of both, and target_edges.csv is written. picture = false skips
-// drape.png (`--no-pictures`: the rendering costs about as much as a four_corner solve).
+// `displacement` = position - rest position, m), state.json (write_run_state: the integrated
+// unknowns at t_final; omitted if not finite), manifest.json (options: scene, integrator,
+// params, run options), edges.csv (the measured edges, SPEC 2.5) when the final state is finite
+// and measurable (else summary.json's `edges_error` says why), and drape.png (render_mesh_png,
+// oblique view) unless picture = false (`--no-pictures`, for sweeps: docs/performance.md).
+// With `target` (the measured edges of the matching target scene, e.g. fit_target_scene(...)),
+// summary.json also gets `objective` (Eq. 5, %) and the per-edge coefficients of both, and
+// target_edges.csv is written. edges.csv, target_edges.csv and drape.png, when not written, are
+// removed from a reused folder (remove_stale_output).
 void write_drape_outputs(const std::filesystem::path& dir, const Scene& scene,
                          const DrapeResult& result, const std::vector<EdgeFit>* target = nullptr,
                          bool picture = true);

@@ -10,7 +10,8 @@
 #include "src/render/render.hpp"
 
 // KNITSIM_GIT_COMMIT: the commit this binary was built from (generated at every build by
-// src/io/git_commit.cmake); the rest set by CMakeLists.txt on this file only (configure-time facts).
+// src/io/git_commit.cmake); the rest set by CMakeLists.txt on this file only (configure-time
+// facts).
 #if __has_include("knitsim_git_commit.hpp")
 #include "knitsim_git_commit.hpp"
 #endif

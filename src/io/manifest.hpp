@@ -8,7 +8,7 @@ namespace knitsim {
 
 // "knitsim <version> (commit <hash>, <build type>)", for --version.
 std::string version_string();
-// manifest.json: program and version, git commit (at configure time), build type, command
+// manifest.json: program and version, git commit (at build time), build type, command
 // (command_name()) and command line, `options` as given, library versions (SUNDIALS, Eigen, cairo,
 // toml++, CLI11, nlohmann-json, SuiteSparse, MPI), compiler, UTC creation time. No host or user
 // names.

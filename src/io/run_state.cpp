@@ -15,8 +15,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// state.json's "format": bump the number if the layout changes (1: drape only, with the
-// integrator, step and parameters in summary.json).
+// state.json's "format": bump the number if the layout changes.
 constexpr const char* kRunStateFormat = "knitsim run state 2";
 
 bool all_finite(const std::vector<double>& a) {
@@ -41,9 +40,9 @@ void write_run_state(const fs::path& dir, const SavedRun& saved) {
 
 namespace {
 
-// The fields of to_json(DrapeParams) whose --set key is not "model.<field>". Older state files
-// keyed them "model.<field>" too (and a refusal then named a key --set does not know);
-// parse_run_state renames those.
+// The fields of to_json(DrapeParams) whose --set key is not "model.<field>". parse_run_state
+// also reads them keyed "model.<field>" (state files of earlier builds) and renames them, so
+// that a refusal names the key --set knows.
 const std::vector<std::pair<std::string, std::string>>& drape_fields_set_elsewhere() {
   static const std::vector<std::pair<std::string, std::string>> fields = {
       {"width", "fabric.width"},
@@ -86,7 +85,7 @@ SavedRun parse_run_state(const std::string& text, const std::string& command) {
                                   ": must be >= 0 s and finite");
     saved.model = state.at("model");
     if (!saved.model.is_object()) throw std::invalid_argument("model is not an object");
-    if (command == "drape")  // an older file's keys: "model.width" for fabric.width, ...
+    if (command == "drape")  // an earlier build's keys: "model.width" for fabric.width, ...
       for (const auto& [field, set_key] : drape_fields_set_elsewhere()) {
         const auto old = saved.model.find("model." + field);
         if (old == saved.model.end() || saved.model.contains(set_key)) continue;
