@@ -73,7 +73,7 @@ const std::array<const char*, kDrapeGenes>& drape_gene_names();
 struct DrapeFitOptions {
   DrapeFitBounds bounds;
   IcaOptions ica;          // budget, seed, jobs (defaults: paper 1's Taguchi-best settings)
-  std::string integrator;  // registry name; empty = default_integrator() (cvode-bdf)
+  std::string integrator;  // registry name; empty = default_integrator()
 
   // bounds.validate(), ica.validate(), and the integrator name (std::invalid_argument).
   void validate() const;

@@ -316,7 +316,7 @@ class Ica {
   int start();
   int restore(const IcaState& state);
   void save(int decade) const;
-  double wall_seconds() const {  // of this run, over all its sessions
+  double wall_seconds() const {  // of this run, over every process of a resumed run
     return earlier_wall_seconds_ +
            std::chrono::duration<double>(std::chrono::steady_clock::now() - session_start_).count();
   }
@@ -354,7 +354,7 @@ class Ica {
   std::vector<Empire> empires_;
   std::vector<IcaDecade> history_;
   std::chrono::steady_clock::time_point session_start_ = std::chrono::steady_clock::now();
-  double earlier_wall_seconds_ = 0.0;  // of the sessions before a resume
+  double earlier_wall_seconds_ = 0.0;  // of the processes before a resume
 };
 
 void Ica::create_empires() {

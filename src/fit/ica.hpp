@@ -49,14 +49,10 @@
 //  8. Collapse: an empire left without colonies is removed; its imperialist becomes a colony
 //     of the empire that won step 7.
 //  9. Stop after `decades` decades, or (stop_when_one_empire) when one empire is left at the
-//     end of a decade. Measured: with 2 imperialists (Table 1's C1, the default) the weak
-//     empire usually collapses in decade 1-3, so that rule ends a default run after 48-94
-//     evaluations; stop_when_one_empire = false runs all decades (the original code's default;
-//     it also competes in only 11 % of the decades, so its weak empires live longer). An L27
-//     study on rastrigin (D = 10, 3 seeds per run) finds C3 (10 imperialists) best under the
-//     stop rule, but A3 B3 C1 D3 E1 F1 G1 without it -- close to paper 1's A3 B3 C1 D2 E1 F2
-//     G2: the paper's runs most likely did not stop early. Hence the default here runs all
-//     decades; `--stop-one-empire` (knitsim optimize) restores the literal rule.
+//     end of a decade. The default runs all decades, as the original code does: with 2
+//     imperialists the literal rule ends a run within a few decades, and the paper's
+//     Taguchi-best levels are those found without it (docs/fitting.md, "The ICA's stop rule").
+//     `--stop-one-empire` restores the literal rule.
 // Evaluations: countries initially, then every colony once per decade (countries - empires,
 // growing as empires collapse).
 // Bounds: every new or moved position is clipped to the box. Categorical genes (e.g. the
@@ -126,7 +122,7 @@ struct IcaState {
   bool found = false;          // some evaluation succeeded
   double best_cost = 0.0;      // best successful cost so far (meaningful when found)
   std::vector<double> best_x;  // its point (the first failed point while !found)
-  double wall_seconds = 0.0;   // wall time spent so far, summed over interrupted sessions
+  double wall_seconds = 0.0;   // wall time spent so far, over every process of a resumed run
 };
 
 struct IcaOptions {

@@ -1,5 +1,5 @@
-// Equilibrium sensitivities of a drape (issue 7): how the measured edge coefficients move with
-// the model parameters, from one sparse factorisation at the reached equilibrium.
+// Equilibrium sensitivities of a drape: how the measured edge coefficients move with the model
+// parameters, from one sparse factorisation at the reached equilibrium.
 //
 // The equilibrium x*(p) of the free particles satisfies F(x*, p) = F_spring + M g = 0 (N), so
 //     K dx*/dp = -dF/dp,      K = dF/dx (symmetric 3n x 3n, the model's stiffness pattern with

@@ -14,9 +14,9 @@ namespace knitsim {
 namespace {
 
 constexpr double kRtol = 1e-8;  // the fit's tolerance (src/fit/drape_fit.hpp)
-// Absolute tolerance of the twin, m and m/s. At the drape default 1e-9 the twin two_corner
-// drape of sample 2 stalled at a static residual just above equilibrium_tol until t_max (BDF's
-// corrector floor); 1e-10 settles every sample.
+// Absolute tolerance of the twin, m and m/s: below the drape default, at which BDF's corrector
+// floor can hold a drape just above equilibrium_tol until t_max (paper_repro/data/README.md,
+// "Tolerances").
 constexpr double kAtol = 1e-10;
 constexpr int kRefinement = 3;  // cross: spacing L0 / 3
 constexpr double kMmToM = 1e-3;
@@ -148,8 +148,7 @@ Scene synthetic_scene(const PaperSample& sample, SyntheticSet set, const std::st
     p.natural_length = sample.natural_length / kRefinement;
     p.damping = sample.damping / (kRefinement * kRefinement);
     // The static residual is normalised by the mean particle weight, 9x smaller here, so the
-    // absolute tolerance is the drape default / 9 (at 1e-9, samples 1 and 4 stalled on
-    // two_corner; at kAtol / 9 sample 8's two_corner ran for minutes without settling).
+    // absolute tolerance is the drape default / 9 (paper_repro/data/README.md, "Tolerances").
     scene.options.atol = IntegratorOptions{}.atol / (kRefinement * kRefinement);
     if (p.cells() != kRefinement * n)
       throw std::logic_error("synthetic_scene: cross grid has " + std::to_string(p.cells()) +
@@ -175,9 +174,8 @@ std::string synthetic_target_file(SyntheticSet set, int sample) {
 }
 
 std::string synthetic_target_title(SyntheticSet set, int sample) {
-  // A file format's fixed first line, not a pointer into the tree (the header is now
-  // src/fit/synthetic_targets.hpp): every target file written so far carries it, and repro
-  // compares it byte for byte.
+  // A file format's fixed first line, kept byte for byte: every committed target file carries
+  // it and repro compares it, so the path in it names the format, not a file of the tree.
   return std::string("Synthetic target (SPEC 2.8, src/synthetic_targets.hpp): ") + to_string(set) +
          ", sample " + std::to_string(sample) +
          " of paper 1 (Mozafary & Payvandy 2017, Tables 2 and 4).";

@@ -18,16 +18,14 @@
 //           and the finer sheet drapes differently -- the model error the fit has to absorb.
 //           Damping c/9: the damper acts per particle and the particle mass falls by 9
 //           (interior mass rho_A h^2), so c/m, the damping rate of every mode, is unchanged; the
-//           equilibrium does not depend on c anyway. Run option atol 1e-9 / 9 (1.1e-10): the
-//           static residual is normalised by the mean particle weight, 9x smaller, and with
-//           atol 1e-9 the two_corner drapes of samples 1 and 4 stalled just above
-//           equilibrium_tol (1e-8).
-// Run options: cvode-bdf, rtol 1e-8; atol 1e-10 for the twin (at the drape default 1e-9 the
-// twin two_corner drape of sample 2 stalls at a residual just above 1e-8 until t_max).
-// Both scenes (four_corner and two_corner) are simulated to equilibrium from the flat state
-// (run_drape, cvode-bdf, rtol 1e-8, the scene's equilibrium_tol 1e-8), their edges are measured
-// with measure_edges (src/measure/measurement.hpp: the same normalisation as any simulation), and noise
-// is added to every edge point, the pinned corners included:
+//           equilibrium does not depend on c anyway. Run option atol = the drape default / 9
+//           (1.1e-10): the static residual is normalised by the mean particle weight, 9x
+//           smaller.
+// Both scenes (four_corner and two_corner) are simulated on the whole sheet to equilibrium from
+// the flat state (run_drape, cvode-bdf, rtol 1e-8, atol 1e-10 for the twin, the scene's
+// equilibrium_tol 1e-8; why these tolerances: paper_repro/data/README.md, "Tolerances"), their
+// edges are measured with measure_edges (src/measure/measurement.hpp: the same normalisation as
+// any simulation), and noise is added to every edge point, the pinned corners included:
 //   each of the two camera-plane coordinates of a point gets, per photo, an independent
 //   Gaussian error of sigma = noise_mm (default 0.5 mm); a point is the mean of `photos`
 //   (default 5, the paper's 5 repeats) photos, so its error has sigma / sqrt(photos).
@@ -45,8 +43,8 @@
 // then the `photos` draws of d. Deterministic: same (sample, set, options) -> the same numbers,
 // bit for bit, with the same build (compiler, libm, SUNDIALS/KLU); on another platform the
 // drape itself may differ in the last digits (within rtol).
-// Cost (paper_repro/data/README.md): a twin target is ~1 s CPU, a cross target
-// tens of seconds (9x the particles).
+// Cost: a cross target integrates 9x the particles of a twin (run times:
+// paper_repro/data/README.md).
 #pragma once
 
 #include <string>
