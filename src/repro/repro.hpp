@@ -113,9 +113,9 @@ struct ReproOptions {
   // model.symmetry of every four_corner fit and drape (none | quarter | eighth): the ICA and LM
   // fits are all on four_corner (Table 6 evaluates their parameters on two_corner, which stays
   // whole), and the eighth is the exact restriction of the full equations to the symmetric
-  // states the scene reaches (models/mirror_reduced.hpp). Default eighth: about a fifth of the
-  // whole sheet's CPU for the same fits up to the lottery of failed evaluations
-  // (paper_repro/README.md, "The eighth").
+  // states the scene reaches (models/mirror_reduced.hpp). Default eighth: the same fits for a
+  // fraction of the whole sheet's CPU, up to the lottery of failed evaluations
+  // (paper_repro/README.md, "The eighth", has the figures).
   DrapeSymmetry four_corner_symmetry = DrapeSymmetry::Eighth;
   double rtol = 1e-8;  // of every drape (as knitsim fit, src/fit/drape_fit.hpp)
   // Committed targets <dir>/<set>_sample<s>.csv; a missing file is generated in memory with
@@ -144,7 +144,7 @@ std::string repro_integrator(const ReproOptions& o);
 //   paper: the paper's protocol: samples 1-9, twin and cross, 10 runs per sample at the
 //          Taguchi-best ICA settings (25 countries, 2 imperialists, 40 decades, beta 1,
 //          gamma 0.1, revolution 0.3, xi 0.15), Taguchi with Table 1's levels, 3 replicates.
-//   quick: a few minutes on 2 cores: the same 9 samples and 2 sets, but 2 runs per sample of
+//   quick: what ./run.sh runs: the same 9 samples and 2 sets, but 2 runs per sample of
 //          10 countries x 6 decades (~58 drapes per run instead of ~945); Taguchi with 1
 //          replicate and factor A's decades 1/2/4 instead of 10/20/40 (other factors as Table 1).
 // Both: the ICA only (optimizers); LM, when chosen, at the DrapeLmOptions defaults.
