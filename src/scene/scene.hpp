@@ -10,8 +10,9 @@
 //            symmetry (none|half|quarter|eighth: integrate one half of the grid, or one
 //            quarter or eighth of four_corner, unfolded after)
 //   [pins]   layout (four_corner|two_corner), span (fraction of the width), move_time (s)
-//   [run]    t_max (s), equilibrium_tol (static residual below which the stop is tested,
-//            dimensionless), position_tol (m: the stop in positions, solvers/equilibrium_check.hpp)
+//   [run]    t_max (s), equilibrium_tol (static residual, dimensionless: the stop where the
+//            stiffness is singular), position_tol (m: the stop in positions; both
+//            solvers/integrator.hpp)
 // Line 2 of a scene file is a comment that describes it in one line (`knitsim list scenes`).
 //
 // Failure modes: every bad input throws std::invalid_argument with one line naming the key as
@@ -35,7 +36,8 @@
 namespace knitsim {
 
 // The built-in scene files as (name, TOML text), compiled into the binary from
-// models/scenes/*.toml by src/scene/embed_scenes.cmake (defined in the generated builtin_scenes.cpp).
+// models/scenes/*.toml by src/scene/embed_scenes.cmake (defined in the generated
+// builtin_scenes.cpp).
 const std::vector<std::pair<std::string, std::string>>& builtin_scenes();
 
 struct Scene {
@@ -89,9 +91,9 @@ std::string scene_description(const std::string& toml_text);
 // The integrator of drape, fit, repro and demo's first row: `equilibrium`, the solver for the
 // state the damped dynamics reach (solvers/equilibrium_solver.cpp).
 std::string default_integrator();
-// The knit model's: cvode-bdf. Paper 2's network is a mechanism (its stiffness is singular), on
-// which the overdamped flow crawls along the zero modes: the 40 x 40 tuck chart took 100 s CPU
-// by `equilibrium` against 10 s by cvode-bdf.
+// The knit model's: cvode-bdf, which keeps a flat chart in its plane; on paper 2's network (a
+// mechanism, its stiffness singular) the overdamped flow of `equilibrium` crawls along the zero
+// modes (docs/knit.md, "Out-of-plane bending").
 std::string default_knit_integrator();
 
 // One drape run and the quantities every report of it shows.
