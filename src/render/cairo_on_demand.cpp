@@ -1,10 +1,11 @@
 // The cairo functions src/render draws with, loaded on the first picture
 // (src/core/on_demand.hpp). Linked at start-up, cairo and its dependencies (pixman, fontconfig,
-// freetype, libpng, X11/xcb, ...: ~20 libraries) cost every run ~5 ms of the dynamic loader's
-// time, pictures or not. render.cpp and plot.cpp call cairo as before; these forwarders, of
-// cairo.h's names and prototypes, load libcairo.so.2 on first call, the library the dynamic
-// linker would have linked, so the pictures are byte for byte the same.
-// A function render.cpp or plot.cpp starts to use must be added here (the link fails until it is).
+// freetype, libpng, X11/xcb, ...) would add to every run's start-up, pictures or not
+// (experiments/benchmark/README.md, "Process start"). render.cpp and plot.cpp call cairo by its
+// own names; these forwarders, of cairo.h's names and prototypes, load libcairo.so.2 on first
+// call, the library the dynamic linker would have linked, so the pictures are the same byte for
+// byte. A function render.cpp or plot.cpp starts to use must be added here (the link fails
+// until it is).
 #include <cairo.h>
 
 #include "src/core/on_demand.hpp"

@@ -87,16 +87,15 @@ void render_mesh_png(const std::string& path, const MeshScene& mesh, const Rende
 // round ends: dark outline, body shaded by the segment's angle to the light and dimmed with
 // distance, a lighter highlight band), rasterised with a z-buffer on the capsule's surface
 // (depth = centreline depth + sqrt(R^2 - d^2) at distance d from it) with 2 x 2 samples per
-// pixel: where yarns cross the nearer one is on top sample by
-// sample, and the pieces of a yarn join without seams. The cost is linear in segments times
-// their area in pixels (~0.1 s for 100k segments on 1000 x 760), with no per-segment drawing
-// calls. Markers as small dots on top.
+// pixel: where yarns cross the nearer one is on top sample by sample, and the pieces of a yarn
+// join without seams. The cost is linear in segments times their area in pixels, with no
+// per-segment drawing calls. Markers as small dots on top.
 void render_strokes_png(const std::string& path, const std::vector<Stroke>& strokes,
                         const std::vector<Vec3>& markers, const RenderView& view);
 
 // The version of the drawing library (cairo), for manifests: that of the cairo headers the
 // binary was built with (libcairo2-dev requires the same libcairo2), since cairo is loaded only
-// when a picture is drawn (render/cairo_on_demand.cpp).
+// when a picture is drawn (src/render/cairo_on_demand.cpp).
 std::string render_library_version();
 
 }  // namespace knitsim
