@@ -2,11 +2,12 @@
 //
 // CHOLMOD's supernodal back end (solvers/symmetric_factor.hpp, from 33 000 unknowns) is the only
 // caller of BLAS in knitsim. Linked at start-up, the BLAS (Debian's OpenBLAS with libgfortran)
-// cost every run ~5 ms of the dynamic loader's time, so CHOLMOD is linked statically and the
-// twelve routines its supernodal code calls are defined here: each loads libblas.so.3 or
-// liblapack.so.3 on its first call and forwards to the routine of that name there. These are
-// the libraries the dynamic linker would have chosen (Debian's alternatives: OpenBLAS from
-// libopenblas0-serial, which run.sh installs), so the factorisations are the same.
+// would add to every run's start-up (experiments/benchmark/README.md, "Process start"), so
+// CHOLMOD is linked statically and the twelve routines its supernodal code calls are defined
+// here: each loads libblas.so.3 or liblapack.so.3 on its first call and forwards to the routine
+// of that name there. These are the libraries the dynamic linker would have chosen (Debian's
+// alternatives: OpenBLAS from libopenblas0-serial, which run.sh installs), so the
+// factorisations are the same.
 // Prototypes are CHOLMOD's own (cholmod_blas.h), so a mismatch does not compile.
 extern "C" {
 #include <cholmod_blas.h>

@@ -212,9 +212,9 @@ std::shared_ptr<const Symbolic> analyse_pattern(const Eigen::SparseMatrix<double
 
 // The analyses of the latest patterns, memoised: a fit or a study builds the same few grids
 // (size x topology x reduction) for thousands of drapes, and on a fit's drape the analysis (AMD,
-// elimination tree) cost about as much as the reduced solve (perf of `knitsim fit`). The result
-// is a function of the pattern alone, so a hit factorises bit for bit as a fresh analysis, on
-// any thread. At most 32 MB of integers; the oldest entry goes first.
+// elimination tree) costs about as much as the reduced solve. The result is a function of the
+// pattern alone, so a hit factorises bit for bit as a fresh analysis, on any thread. At most
+// 32 MB of integers; the oldest entry goes first.
 PatternMemo<BlockLdlt::Symbolic>& symbolic_memo() {
   static PatternMemo<BlockLdlt::Symbolic> memo(std::size_t{1} << 23);
   return memo;
@@ -285,8 +285,8 @@ bool BlockLdlt::factorize(const Eigen::SparseMatrix<double>& S) {
 // Padded groups (Uniform false) enter as identity rows and columns: their entries of L stay
 // exactly 0 and their pivots 1, so the real unknowns' arithmetic is that of the unpadded
 // matrix. Uniform (every group 3, the spring networks) is the same loop with the sizes known at
-// compile time: with them read at run time the four_corner factorisations execute 5.5 % more
-// instructions (65.5 vs 69.1 M, 1.1 % of the run; callgrind, same results bit for bit).
+// compile time, which the compiler unrolls (docs/numerics.md, "Linear algebra", has the
+// measurement); the results are the same bit for bit.
 template <bool Uniform>
 bool BlockLdlt::factorize_blocks(const double* s) {
   const Symbolic& sym = *sym_;

@@ -13,8 +13,8 @@
 // 6 rigid-body modes in K's null space; they are factored out by holding 6 gauge dofs (where
 // the modes are independent) fixed in K, the forces and the Newton correction, so a free knit
 // chart is certified on its deformations. Where K is still singular (mechanism modes: its
-// smallest eigenvalue within n eps ||K||_inf of 0) the static residual decides, as before, and
-// the certificate is inconclusive.
+// smallest eigenvalue within n eps ||K||_inf of 0) the static residual decides
+// (equilibrium_threshold, solvers/integrator.hpp), and the certificate is inconclusive.
 #pragma once
 
 #include <Eigen/SparseCore>

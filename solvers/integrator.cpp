@@ -277,8 +277,8 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
   note_reference(t0, x.data(), v.data());
   // Steps taken while the pins moved: a run that crossed the motion in fewer than
   // kMotionSteps did not follow the pins' path, so its reference is not the dynamics' energy
-  // (implicit-euler at dt 1e4 s over two_corner_slack's 100 s move: 1.7e6 J against the
-  // dynamics' 0.011 J) and the energy check cannot certify its end state.
+  // (docs/equilibrium.md, "The certificate and the energy check", has an example) and the
+  // energy check cannot certify its end state.
   long motion_steps = 0;
 
   // The stop: a probe of K where the residual is small (equilibrium_check.hpp).
@@ -519,7 +519,7 @@ double stable_dt(const std::string& method, const MechanicalSystem& sys, double 
     return method == "euler" ? euler_limit(w2i, g) : verlet_limit(w2i, g);
   };
   double best = std::numeric_limits<double>::infinity();
-  if (!sharp) {  // dof by dof, as every automatic dt so far: keeps dt_predicted's bits
+  if (!sharp) {  // dof by dof: dt_predicted, the automatic dt, is exactly this bound
     for (int i = 0; i < n; ++i) best = std::min(best, limit(w2[i], gamma[i]));
     return best;
   }

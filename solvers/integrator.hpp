@@ -6,13 +6,13 @@
 //   RunStats s = run_to_equilibrium(model, *integ, opt, x, v);   // out: final state
 //
 // Integrators see only a MechanicalSystem (src/core/mechanical_system.hpp); they never know which
-// model they run. Every run stops by the same criterion (SPEC 2.3): static residual below
-// equilibrium_tol -- or below the model's round-off floor (MechanicalSystem::
-// residual_roundoff) when that is larger, reported in RunStats.message and residual_floor --
-// (checked every `check_every` steps, and only from the model's
-// equilibrium_start_time() on), or at t_max, the
-// step cap, the wall-clock cap or an interrupt request -- and RunStats.status says which. Numerical failure (a
-// SUNDIALS error, a non-finite or runaway state) is a status, never an exception.
+// model they run. Every run stops by the same test (SPEC 2.3; solvers/equilibrium_check.hpp),
+// made every `check_every` steps from the model's equilibrium_start_time() on: the Newton
+// correction ||K^-1 F||_inf below position_tol where the stiffness K is positive definite, or
+// the static residual below equilibrium_threshold() where K is singular; the state that passes
+// is certified and checked in energy (RunStatus). Otherwise a run ends at t_max, the step cap,
+// the wall-clock cap or an interrupt request, and RunStats.status says which. Numerical failure
+// (a SUNDIALS error, a non-finite or runaway state) is a status, never an exception.
 #pragma once
 
 #include <atomic>
@@ -27,25 +27,25 @@ namespace knitsim {
 struct IntegratorOptions {
   // Each field: meaning, units, default. Why a default is what it is: docs/numerics.md,
   // "Options and why their defaults".
-  double rtol = 1e-6;           // relative tolerance of the adaptive methods (knitsim fit: 1e-8)
-  double atol = 1e-9;           // absolute tolerance: m for positions (and m/s for velocities)
-  double velocity_atol = 0.0;   // m/s, absolute tolerance of the velocities; 0 = atol
-  double dt = 0.0;              // s, fixed step of euler, verlet, implicit-euler; 0 = automatic
-  double dt_safety = 0.5;       // fraction of the predicted stability limit when dt = 0
-  int max_order = 0;            // cap on the method order (BDF <= 5, Adams <= 12); 0 = default
-  long max_steps = 500'000'000;  // steps per run at most
-  double t_max = 1e7;           // s, physical end time if no equilibrium first, [1e-9, 1e15]
-  double equilibrium_tol = 1e-8;  // static residual (1) that triggers the stop's test
-  double position_tol = 1e-10;  // m, the stop in positions: Newton correction ||K^-1 F||_inf
+  double rtol = 1e-6;             // relative tolerance of the adaptive methods (knitsim fit: 1e-8)
+  double atol = 1e-9;             // absolute tolerance: m for positions (and m/s for velocities)
+  double velocity_atol = 0.0;     // m/s, absolute tolerance of the velocities; 0 = atol
+  double dt = 0.0;                // s, fixed step of euler, verlet, implicit-euler; 0 = automatic
+  double dt_safety = 0.5;         // fraction of the predicted stability limit when dt = 0
+  int max_order = 0;              // cap on the method order (BDF <= 5, Adams <= 12); 0 = default
+  long max_steps = 500'000'000;   // steps per run at most
+  double t_max = 1e7;             // s, physical end time if no equilibrium first, [1e-9, 1e15]
+  double equilibrium_tol = 1e-8;  // static residual (1) that stops a run where K is singular
+  double position_tol = 1e-10;    // m, the stop in positions: Newton correction ||K^-1 F||_inf
   double max_wall_seconds = 0.0;  // s, wall-clock cap per run; 0 = none
   // Set from outside (the CLI's signal handler) to end the run as Interrupted; read at each
   // residual check. nullptr = none.
   const std::atomic<bool>* interrupt = nullptr;
-  long check_every = 0;          // steps between residual checks; 0 = 1000 explicit, else 1
+  long check_every = 0;           // steps between residual checks; 0 = 1000 (euler, verlet), else 1
   double runaway_position = 1e3;  // m: |x_i| above it counts as a blow-up (Diverged)
-  int max_restarts = 10;         // fresh starts after a recoverable SUNDIALS step failure
-  int krylov_dim = 30;           // cvode-bdf-gmres: Krylov dimension (0 = SUNDIALS' 5)
-  double krylov_eps_lin = 5e-7;  // cvode-bdf-gmres: GMRES tolerance / Newton tolerance
+  int max_restarts = 10;          // most fresh starts per run after recoverable step failures
+  int krylov_dim = 30;            // cvode-bdf-gmres: Krylov dimension (0 = SUNDIALS' 5)
+  double krylov_eps_lin = 5e-7;   // cvode-bdf-gmres: GMRES over Newton tolerance (SUNDIALS': 0.05)
   // Newton systems of cvode-bdf, arkode-dirk, arkode-imex: Klu = sparse LU of I - gamma J;
   // SchurLdl = velocities eliminated, symmetric LDL^T; SchurCgLdl = the same, by CG where the
   // reduced matrix is provably well conditioned (solvers/schur_ldl_solver.hpp). Same systems.
@@ -142,7 +142,7 @@ struct RunStats {
 
 // Adds part's work counters (steps ... err_test_fails, factorisations, ldl_fallbacks) to total's,
 // takes the larger max_order_used and part's factorization if total has none: the counts of a
-// run made of several integrator sessions.
+// run made of several parts (a restarted integrator, a reduction's run then the whole sheet's).
 void add_counters(RunStats& total, const RunStats& part);
 
 struct IntegratorInfo {
@@ -219,12 +219,11 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
                             std::vector<double>& v, RunObserver* observer = nullptr,
                             double t0 = 0.0);
 
-// The static residual run_to_equilibrium accepts as equilibrium at state (t, x): equilibrium_tol,
-// or the residual's round-off floor there (MechanicalSystem::residual_roundoff) where that is
-// larger, but never more than 1e3 x equilibrium_tol (a tolerance is not loosened further: a
-// run asked for the impossible ends at t_max). Costs one pass over the model's springs. Integrators
-// that solve for the equilibrium themselves (static) aim at this, so that they stop where the
-// driver does.
+// The static residual below which run_to_equilibrium accepts a state (t, x) where K is singular:
+// equilibrium_tol, or the residual's round-off floor there (MechanicalSystem::residual_roundoff)
+// where that is larger, but never more than 1e3 x equilibrium_tol (a tolerance is not loosened
+// further: a run asked for the impossible ends at t_max). Costs one pass over the model's
+// springs. Integrators that solve for the equilibrium themselves (static) aim at this.
 double equilibrium_threshold(const MechanicalSystem& sys, double t, const double* x,
                              double equilibrium_tol);
 
@@ -250,10 +249,9 @@ double predict_stable_dt(const std::string& method, const MechanicalSystem& sys,
 // lambda_max(M^-1/2 (-K) M^-1/2), and, where every c_i = gamma_i m_i > 0, by gamma_i times the
 // fastest overdamped relaxation rate, lambda_max(C^-1/2 (-K) C^-1/2) (K = M Ax symmetrised; both
 // by 40 Lanczos steps, top Ritz value plus its residual). The Gershgorin row sum overestimates
-// both on a coupled grid; on the four_corner cases of experiments/stability this estimate is
-// within 2 % of the exact linear limits where predict_stable_dt is up to 1.48x below them. It
-// is an estimate, not a bound (it came out up to 0.6 % above the exact limit there), so the
-// automatic dt keeps predict_stable_dt; explicit runs report both (summary.json).
+// both on a coupled grid. This is an estimate, not a bound (it can come out slightly above the
+// exact limit), so the automatic dt keeps predict_stable_dt; explicit runs report both
+// (summary.json). How close each comes to the exact limits: experiments/stability.
 double estimate_stable_dt(const std::string& method, const MechanicalSystem& sys, double t,
                           const double* x);
 

@@ -2,9 +2,9 @@
 // 2.4) faster than integrating until the residual is tiny.
 //
 // Why not plain Newton: F(x) = 0 has many solutions (saddles, buckled shapes, other fold
-// branches); Newton from the flat state lands on one of those in about a quarter of the
-// cases. The physically reached state is the end of the damped dynamics from the initial
-// state, so `static` follows the dynamics until close to that end, then polishes:
+// branches), and Newton from the flat state often lands on one of those (docs/numerics.md,
+// "Integrators"). The physically reached state is the end of the damped dynamics from the
+// initial state, so `static` follows the dynamics until close to that end, then polishes:
 //
 //   1. Relaxation: cvode-bdf (the same integrator, options and stop rule) from the initial
 //      state, one CVODE step per step(), until the static residual r(x) (SPEC 2.3) falls
@@ -15,10 +15,9 @@
 //          F(x) = M a_c(t, x) = F_spring(x) + M g = 0,   dF/dx = K = M Ax
 //      (symmetric; sparse KLU on the model's stiffness pattern), from the relaxed x.
 //      KINSOL stops at ||F||_inf / F_ref <= target / 2, where F_ref is inferred from r(x) at
-//      the relaxed state (F_ref = max_i |F_i| / r) and target = equilibrium_threshold(), the
-//      residual the driver accepts: equilibrium_tol, or the round-off floor where that is
-//      larger -- aiming below the floor would reject every attempt (a 101 x 101 quarter sheet
-//      at L0 = 5 mm ran to t_max that way). The Newton solution is
+//      the relaxed state (F_ref = max_i |F_i| / r) and target = equilibrium_threshold()
+//      (solvers/integrator.hpp): equilibrium_tol, or the round-off floor where that is larger
+//      -- aiming below the floor would reject every attempt. The Newton solution is
 //      accepted only if r(x*) <= target AND max_i |x*_i - x_i| <=
 //      kMaxNewtonCorrection (1e-3 m): a larger correction means Newton left the basin of
 //      the state the dynamics are heading to (another branch), whatever its residual.
@@ -29,13 +28,8 @@
 //      attempt is made and the dynamics alone finish the run. How a run ended shows in its
 //      final state: velocities are exactly zero only if a polish was accepted (and the run
 //      stopped there); RunStats.nonlin_fails includes the rejected attempts.
-//   Each step() is one relaxation step or one polish attempt.
-//
-// Measured with the defaults: four_corner polishes at the first attempt (r = 7e-4, 2 Newton
-// iterations; 225 steps in all vs 246 for cvode-bdf). On two_corner Newton from r ~ 1e-3,
-// 1e-4 and 1e-5 does not converge within kMaxNewtonIters (not investigated; the hanging
-// sheet has very soft modes); the attempt at r = 1e-7 is accepted, so the gain there is
-// small (889 steps vs 892).
+//   Each step() is one relaxation step or one polish attempt. What it saves, and where it
+//   does not: docs/numerics.md, "Integrators".
 //
 // Counters (fill_stats): those of cvode-bdf summed over the relaxation, plus: steps +=
 // polish attempts; nonlin_iters += Newton iterations; nonlin_fails += rejected or failed
@@ -177,8 +171,8 @@ class StaticRelaxNewton final : public Integrator {
   }
 
  private:
-  // One Newton polish from the relaxed state at time t (residual r0 > target, the residual the
-  // driver accepts: equilibrium_tol, or the round-off floor where that is larger).
+  // One Newton polish from the relaxed state at time t (residual r0 > target, the
+  // equilibrium_threshold: equilibrium_tol, or the round-off floor where that is larger).
   Step polish(double t, double r0, double target) {
     ++attempts_;
     const int n = sys_->dof();

@@ -71,12 +71,13 @@ ContextPtr make_context() {
 
 namespace {
 
-// N_VWrmsNorm for serial vectors, sqrt(sum (x_i w_i)^2 / n), with four partial sums. SUNDIALS'
-// own loop has one accumulator, so each element waits for the previous add (~4 cycles); the
-// integrators call it ~25 times per step (error test, Newton convergence, order selection,
-// stability-limit detection), 15 % of cvode-bdf's CPU on the 40 x 40 knit chart.
-// SUNDIALS' fused vector operations (N_VEnableFusedOps_Serial) stay off: they made four_corner
-// cvode-bdf ~1.5x slower in CPU for the same steps.
+// N_VWrmsNorm for serial vectors, sqrt(sum (x_i w_i)^2 / n), with four partial sums: SUNDIALS'
+// own loop has one accumulator, so each element waits for the previous add, and the integrators
+// call the norm many times per step (error test, Newton convergence, order selection,
+// stability-limit detection). The sum's order differs from SUNDIALS', so the norm may differ
+// from SUNDIALS' own in the last bit. SUNDIALS' fused vector operations
+// (N_VEnableFusedOps_Serial) stay off: they were slower. Figures: docs/numerics.md, "Linear
+// algebra".
 double wrms_norm(N_Vector x, N_Vector w) {
   const long n = N_VGetLength_Serial(x);
   const double* xd = N_VGetArrayPointer(x);
@@ -92,13 +93,12 @@ double wrms_norm(N_Vector x, N_Vector w) {
   return std::sqrt(((s[0] + s[1]) + (s[2] + s[3])) / static_cast<double>(n));
 }
 
-// The element-wise operations of the serial N_Vector, compiled with knitsim's flags. Debian's
-// libsundials 6.4.1 is built without optimisation (-O0: every loop index and operand goes
-// through memory, ~20 instructions per element), and these loops were 27 % of the instructions
-// of a cvode-bdf four_corner drape (callgrind: N_VLinearSum and N_VScale alone 22 %). Each
-// computes exactly what SUNDIALS' own does, case for case (N_VLinearSum's special cases round
-// differently: c (x + y) is not c x + c y), so results are bit-identical; the loops only get
-// compiled properly. z may alias x or y, as in SUNDIALS.
+// The element-wise operations of the serial N_Vector, compiled with knitsim's flags: Debian's
+// libsundials is built without optimisation, and these loops are a large share of an implicit
+// integrator's instructions (docs/numerics.md, "Linear algebra"). Each computes exactly what
+// SUNDIALS' own does, case for case (N_VLinearSum's special cases round differently: c (x + y)
+// is not c x + c y), so results are bit-identical; the loops only get compiled properly. z may
+// alias x or y, as in SUNDIALS.
 long length(N_Vector v) { return N_VGetLength_Serial(v); }
 double* data(N_Vector v) { return N_VGetArrayPointer_Serial(v); }
 

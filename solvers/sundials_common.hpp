@@ -158,10 +158,10 @@ inline double* vec_data(N_Vector v) { return NV_DATA_S(v); }
 void write_csc_pattern(const CscPattern& pattern, SUNMatrix A);
 // A CSC SUNMatrix with `pattern` written once; values zero.
 MatrixPtr make_csc_matrix(const CscPattern& pattern, SUNContext ctx);
-// KLU sparse LU on A (CSC) with AMD fill-reducing ordering: every matrix factored here
-// (I - gamma J and K = M Ax) is structurally symmetric, and AMD needs ~11 % fewer
-// instructions than SUNDIALS' default COLAMD on four_corner with cvode-bdf. The symbolic
-// analysis is done at the first set-up and kept; later set-ups refactor numerically.
+// KLU sparse LU on A (CSC) with AMD fill-reducing ordering, not SUNDIALS' default COLAMD: every
+// matrix factored here (I - gamma J and K = M Ax) is structurally symmetric, which AMD orders
+// with less work (docs/numerics.md, "Linear algebra"). The symbolic analysis is done at the
+// first set-up and kept; later set-ups refactor numerically.
 LinearSolverPtr make_klu(N_Vector y, SUNMatrix A, SUNContext ctx);
 // The Newton linear solver chosen by opt.newton_solver for A = I - gamma J in `fo`'s pattern:
 // KLU, or the symmetric Schur-complement solver (schur_ldl_solver.hpp) factorising with
@@ -219,9 +219,9 @@ VectorPtr make_state(const double* x0, const double* v0, int n, SUNContext ctx);
 
 // The per-component absolute tolerances of y = [x; v] (IntegratorOptions::velocity_atol): the
 // 2n vector [atol (n positions, m); velocity_atol (n velocities, m/s)], or null when
-// velocity_atol is 0 -- then the caller sets the scalar pair (rtol, atol) exactly as before the
-// option existed. For CVodeSVtolerances / ARKStepSVtolerances / ERKStepSVtolerances, which copy
-// the vector (it may be freed right after the call).
+// velocity_atol is 0 -- then the caller sets the scalar pair (rtol, atol). For
+// CVodeSVtolerances / ARKStepSVtolerances / ERKStepSVtolerances, which copy the vector (it may
+// be freed right after the call).
 VectorPtr absolute_tolerances(const IntegratorOptions& opt, int n, SUNContext ctx);
 
 }  // namespace knitsim::sun
