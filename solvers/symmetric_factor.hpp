@@ -1,8 +1,10 @@
-// Sparse factorisation of the symmetric reduced Newton matrices S = M (I + h Gamma) - h^2 K
-// (solvers/schur_matrix.hpp): one pattern, analysed once, factorised numerically at every set-up,
-// then solved against many right-hand sides. Used by implicit-euler, the Schur Newton solver
-// of cvode-bdf / arkode-dirk / arkode-imex (schur_ldl_solver.hpp) and cvode-bdf-gmres's Schur
-// LDL^T preconditioner.
+// Sparse factorisation of the solvers' symmetric matrices in the model's stiffness pattern: the
+// reduced Newton matrices S = M (I + h Gamma) - h^2 K (solvers/schur_matrix.hpp), the
+// equilibrium solver's C / h + K, and K itself. One pattern, analysed once, factorised
+// numerically at every set-up, then solved against many right-hand sides. Used by
+// implicit-euler, the Schur Newton solver of cvode-bdf / arkode-dirk / arkode-imex
+// (schur_ldl_solver.hpp), cvode-bdf-gmres's Schur LDL^T preconditioner, the equilibrium solver,
+// the stop's probe of K (equilibrium_check.hpp) and the fit's sensitivities.
 //
 // Three back ends:
 //   simplicial  Eigen's SimplicialLDLT (AMD ordering, column by column, scalar loops). LDL^T,
