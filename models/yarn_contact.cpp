@@ -245,42 +245,38 @@ void spread(const ContactPoint& p, const SpringNetwork& net, double fx, double f
 
 }  // namespace
 
-void ContactNetwork::conservative_acceleration(double t, const double* x, double* a) const {
-  net_.conservative_acceleration(t, x, a);
-  if (!pairs_of(t, x)) {
-    std::fill(a, a + dof(), std::nan(""));
-    return;
-  }
+template <class OnContact>
+bool ContactNetwork::for_each_contact(double t, const double* x, OnContact on_contact) const {
+  if (!pairs_of(t, x)) return false;
   for (const Pair& pr : pairs_) {
     const Vec3 d = pts_[pr.a] - pts_[pr.b];
     const double D = norm(d);
     if (D >= spec_.touching) continue;
     double e, de, d2e;
     barrier(D, e, de, d2e);
-    if (!std::isfinite(de)) {
-      std::fill(a, a + dof(), std::nan(""));
-      return;
-    }
-    const double fx = -de * d.x / D, fy = -de * d.y / D;  // on a; b gets the opposite
-    spread(spec_.points[pr.a], net_, fx, fy, a, &net_.mass());
-    spread(spec_.points[pr.b], net_, -fx, -fy, a, &net_.mass());
+    if (!std::isfinite(de)) return false;
+    on_contact(pr, d, D, de, d2e);
   }
+  return true;
+}
+
+bool ContactNetwork::add_contact_forces(double t, const double* x, double* out,
+                                        const std::vector<double>* mass) const {
+  return for_each_contact(t, x, [&](const Pair& pr, Vec3 d, double D, double de, double) {
+    const double fx = -de * d.x / D, fy = -de * d.y / D;  // on a; b gets the opposite
+    spread(spec_.points[pr.a], net_, fx, fy, out, mass);
+    spread(spec_.points[pr.b], net_, -fx, -fy, out, mass);
+  });
+}
+
+void ContactNetwork::conservative_acceleration(double t, const double* x, double* a) const {
+  net_.conservative_acceleration(t, x, a);
+  if (!add_contact_forces(t, x, a, &net_.mass())) std::fill(a, a + dof(), std::nan(""));
 }
 
 double ContactNetwork::static_residual(double t, const double* x) const {
   net_.net_force(t, x, force_.data());
-  if (!pairs_of(t, x)) return std::nan("");
-  for (const Pair& pr : pairs_) {
-    const Vec3 d = pts_[pr.a] - pts_[pr.b];
-    const double D = norm(d);
-    if (D >= spec_.touching) continue;
-    double e, de, d2e;
-    barrier(D, e, de, d2e);
-    if (!std::isfinite(de)) return std::nan("");
-    const double fx = -de * d.x / D, fy = -de * d.y / D;
-    spread(spec_.points[pr.a], net_, fx, fy, force_.data(), nullptr);
-    spread(spec_.points[pr.b], net_, -fx, -fy, force_.data(), nullptr);
-  }
+  if (!add_contact_forces(t, x, force_.data(), nullptr)) return std::nan("");
   double worst = 0.0;
   for (int i = 0; i < dof(); i += 3) {
     const double f2 =
@@ -294,52 +290,45 @@ void ContactNetwork::stiffness_values(double t, const double* x, double* values)
   net_.stiffness_values(t, x, net_values_.data());
   std::fill(values, values + pattern_.nnz(), 0.0);
   for (std::size_t k = 0; k < net_values_.size(); ++k) values[net_entry_[k]] = net_values_[k];
-  if (!pairs_of(t, x)) {
-    std::fill(values, values + pattern_.nnz(), std::nan(""));
-    return;
-  }
   const std::vector<double>& m = net_.mass();
-  for (const Pair& pr : pairs_) {
-    const Vec3 d = pts_[pr.a] - pts_[pr.b];
-    const double D = norm(d);
-    if (D >= spec_.touching) continue;
-    double e, de, d2e;
-    barrier(D, e, de, d2e);
-    const double ux = d.x / D, uy = d.y / D, s = de / D;
-    // H (x, y block) = d2e u u^T + (de / D)(I - u u^T)
-    const double H[2][2] = {{d2e * ux * ux + s * (1.0 - ux * ux), (d2e - s) * ux * uy},
-                            {(d2e - s) * ux * uy, d2e * uy * uy + s * (1.0 - uy * uy)}};
-    bool missed = false;
-    const ContactPoint* pt[2] = {&spec_.points[pr.a], &spec_.points[pr.b]};
-    for (int A = 0; A < 2; ++A)
-      for (int i = 0; i < kContactParticles && pt[A]->particles[i] >= 0; ++i) {
-        const int fr = net_.free_index(pt[A]->particles[i]);
-        if (fr < 0) continue;
-        const std::array<double, 4>& Wi = pt[A]->weights[i];
-        // Wi^T H, 2 x 2
-        const double G[2][2] = {
-            {Wi[0] * H[0][0] + Wi[2] * H[1][0], Wi[0] * H[0][1] + Wi[2] * H[1][1]},
-            {Wi[1] * H[0][0] + Wi[3] * H[1][0], Wi[1] * H[0][1] + Wi[3] * H[1][1]}};
-        for (int B = 0; B < 2; ++B)
-          for (int j = 0; j < kContactParticles && pt[B]->particles[j] >= 0; ++j) {
-            const int fc = net_.free_index(pt[B]->particles[j]);
-            if (fc < 0) continue;
-            const int e_node = nodes_.find(fr, fc);
-            if (e_node < 0) {
-              missed = true;
-              continue;
-            }
-            const std::array<double, 4>& Wj = pt[B]->weights[j];
-            // dF_r/dx_c = -s_r s_c Wi^T H Wj; the Jacobian row is divided by r's mass.
-            const double f = -(A == B ? 1.0 : -1.0) / m[3 * fr];
-            for (int p = 0; p < 2; ++p)
-              for (int q = 0; q < 2; ++q)
-                values[node_block_entry(nodes_, e_node, fc, p, q)] +=
-                    f * (G[p][0] * Wj[q] + G[p][1] * Wj[2 + q]);
+  const bool finite =
+      for_each_contact(t, x, [&](const Pair& pr, Vec3 d, double D, double de, double d2e) {
+        const double ux = d.x / D, uy = d.y / D, s = de / D;
+        // H (x, y block) = d2e u u^T + (de / D)(I - u u^T)
+        const double H[2][2] = {{d2e * ux * ux + s * (1.0 - ux * ux), (d2e - s) * ux * uy},
+                                {(d2e - s) * ux * uy, d2e * uy * uy + s * (1.0 - uy * uy)}};
+        bool missed = false;
+        const ContactPoint* pt[2] = {&spec_.points[pr.a], &spec_.points[pr.b]};
+        for (int A = 0; A < 2; ++A)
+          for (int i = 0; i < kContactParticles && pt[A]->particles[i] >= 0; ++i) {
+            const int fr = net_.free_index(pt[A]->particles[i]);
+            if (fr < 0) continue;
+            const std::array<double, 4>& Wi = pt[A]->weights[i];
+            // Wi^T H, 2 x 2
+            const double G[2][2] = {
+                {Wi[0] * H[0][0] + Wi[2] * H[1][0], Wi[0] * H[0][1] + Wi[2] * H[1][1]},
+                {Wi[1] * H[0][0] + Wi[3] * H[1][0], Wi[1] * H[0][1] + Wi[3] * H[1][1]}};
+            for (int B = 0; B < 2; ++B)
+              for (int j = 0; j < kContactParticles && pt[B]->particles[j] >= 0; ++j) {
+                const int fc = net_.free_index(pt[B]->particles[j]);
+                if (fc < 0) continue;
+                const int e_node = nodes_.find(fr, fc);
+                if (e_node < 0) {
+                  missed = true;
+                  continue;
+                }
+                const std::array<double, 4>& Wj = pt[B]->weights[j];
+                // dF_r/dx_c = -s_r s_c Wi^T H Wj; the Jacobian row is divided by r's mass.
+                const double f = -(A == B ? 1.0 : -1.0) / m[3 * fr];
+                for (int p = 0; p < 2; ++p)
+                  for (int q = 0; q < 2; ++q)
+                    values[node_block_entry(nodes_, e_node, fc, p, q)] +=
+                        f * (G[p][0] * Wj[q] + G[p][1] * Wj[2 + q]);
+              }
           }
-      }
-    pattern_misses_ += missed;
-  }
+        pattern_misses_ += missed;
+      });
+  if (!finite) std::fill(values, values + pattern_.nnz(), std::nan(""));
 }
 
 double ContactNetwork::admissible_step(double t, const double* x, const double* dx) const {

@@ -121,6 +121,14 @@ class ContactNetwork final : public MechanicalSystem {
   void refresh_pairs() const;                       // the near-pair list at pos_, if stale
   bool pairs_of(double t, const double* x) const;   // positions + list; false if not finite
   bool may_pair(int a, int b) const;
+  // Calls on_contact(pair, p_a - p_b, D, dE/dD, d2E/dD2) for every pair closer than d at (t, x);
+  // false (stopping) if the state is not finite or a pair is inside its core.
+  template <class OnContact>
+  bool for_each_contact(double t, const double* x, OnContact on_contact) const;
+  // Adds the contact forces at (t, x) to out (divided by the dofs' masses if `mass`); false if
+  // the state is not finite or a pair is inside its core.
+  bool add_contact_forces(double t, const double* x, double* out,
+                          const std::vector<double>* mass) const;
   // Barrier energy and its first two derivatives in D.
   void barrier(double D, double& e, double& de, double& d2e) const;
   int block_entry(int fr, int fc) const;  // node entry of free particles (fr, fc), or -1
