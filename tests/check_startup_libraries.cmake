@@ -1,7 +1,7 @@
 # A knitsim binary names none of the heavy libraries among its NEEDED entries (the shared
 # libraries the dynamic loader maps at every start; docs/architecture.md): not MPI (a module
-# loaded under mpirun), not cairo nor a BLAS (loaded on first use), not SUNDIALS, SuiteSparse or
-# toml++ (linked statically or compiled in). Anything they need comes in through them, so the
+# loaded under mpirun), not cairo, a BLAS, METIS nor libgomp (loaded on first use), not
+# SUNDIALS, SuiteSparse or toml++ (linked statically or compiled in). Anything they need comes in through them, so the
 # binary's own list decides.
 #   cmake -DEXE=<binary> -DOBJDUMP=<objdump> -P tests/check_startup_libraries.cmake
 # ctest runs it on knitsim as startup_libraries, and startup_libraries_catches runs it on the MPI
@@ -18,7 +18,7 @@ if(NOT needed)
   message(FATAL_ERROR "check_startup_libraries: no NEEDED entry in ${EXE} (not a dynamic ELF?)")
 endif()
 set(heavy "libmpi|libopen-rte|libopen-pal|libhwloc|libcairo|libblas|liblapack|libopenblas|"
-          "libgfortran|libsundials|libcholmod|libklu|libtomlplusplus")
+          "libgfortran|libsundials|libcholmod|libklu|libtomlplusplus|libmetis|libgomp")
 string(CONCAT heavy ${heavy})
 set(bad "")
 set(names "")
