@@ -91,19 +91,41 @@ void refuse_other_commands_folder(const fs::path& dir, const std::string& reques
 
 // Takes the advisory lock of `dir` (kOutputLockFile) for the rest of the process, once per
 // folder: the descriptors stay open until exit, when the kernel releases them. Returns false if
-// another process holds it; throws std::invalid_argument if the lock file cannot be made.
+// another process holds it. The lock file is also the probe that the folder takes new files:
+// where it is made here, it is made as every output will be; where it was there already (a
+// reused folder), or this process holds it, the folder's own write permission is asked
+// (faccessat, effective ids). Throws std::invalid_argument("--out SHOWN: cannot write: reason")
+// if the folder takes none, or "cannot lock" if flock fails otherwise than busy.
 bool lock_output_dir(const fs::path& dir, const std::string& shown) {
   static std::mutex mutex;
   static std::map<fs::path, int> held;  // canonical folder -> descriptor of its lock file
+  const auto cannot_write = [&shown](int err) {
+    throw std::invalid_argument("--out " + shown + ": cannot write: " + std::strerror(err));
+  };
+  const auto check_writable = [&] {
+    if (::faccessat(AT_FDCWD, dir.c_str(), W_OK | X_OK, AT_EACCESS) != 0) cannot_write(errno);
+  };
   std::error_code ec;
   fs::path key = fs::canonical(dir, ec);
   if (ec) key = fs::absolute(dir);
   const std::lock_guard<std::mutex> guard(mutex);
-  if (held.count(key)) return true;
+  if (held.count(key)) {
+    check_writable();
+    return true;
+  }
   const fs::path file = dir / kOutputLockFile;
-  const int fd = ::open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-  if (fd < 0)
-    throw std::invalid_argument("--out " + shown + ": cannot write: " + std::strerror(errno));
+  int fd = ::open(file.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  const bool existed = fd < 0 && errno == EEXIST;
+  if (existed) fd = ::open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd < 0) cannot_write(errno);
+  if (existed) {
+    try {
+      check_writable();
+    } catch (...) {
+      ::close(fd);
+      throw;
+    }
+  }
   if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
     const int err = errno;
     ::close(fd);
@@ -140,17 +162,16 @@ fs::path make_output_dir(const std::string& requested, const std::string& stem, 
     fs::create_directories(dir, ec);
     if (ec) throw std::invalid_argument("--out " + requested + ": cannot create: " + ec.message());
   }
-  const fs::path probe = dir / (".knitsim-probe-" + std::to_string(::getpid()));
-  std::ofstream out(probe);
-  const int err = errno;
-  const bool writable = static_cast<bool>(out);
-  out.close();
-  fs::remove(probe, ec);
-  if (!writable) {
+  // The lock file is the probe that the folder is writable (it used to be a probe file of its
+  // own, made and removed: one more file made per run, no more checked).
+  bool locked = false;
+  try {
+    locked = lock_output_dir(dir, dir.string());
+  } catch (const std::invalid_argument&) {
     if (created) fs::remove(dir, ec);
-    throw std::invalid_argument("--out " + dir.string() + ": cannot write: " + std::strerror(err));
+    throw;
   }
-  if (!lock_output_dir(dir, dir.string()))
+  if (!locked)
     throw OutputFolderBusy("--out " + dir.string() +
                            ": in use by another knitsim run (it holds " + kOutputLockFile +
                            "); wait for it to end, or give another folder");

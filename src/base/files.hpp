@@ -36,8 +36,9 @@ void write_file_atomic_with(const std::filesystem::path& path,
 // JSON pretty-printed with 2 spaces and a final newline.
 void write_json_atomic(const std::filesystem::path& path, const nlohmann::json& value);
 
-// The output folder of a command, created and checked writable (a probe file is created and
-// removed) before any work starts.
+// The output folder of a command, created and checked writable (its lock file, below, is made
+// in it; in a folder that has one already, the folder's write permission is asked) before any
+// work starts.
 //   requested empty: a fresh folder out/<stem>-YYYYmmdd-HHMMSS (local time) under the working
 //     directory, with -2, -3, ... appended if that name is taken;
 //   otherwise `requested`, created with its parents if missing; an existing folder is reused
