@@ -15,9 +15,12 @@
 //   1  anything else (an internal error), one line on stderr
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <cstring>
 #include <exception>
 #include <filesystem>
+#include <functional>
 #include <iostream>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #ifdef __GLIBC__
@@ -40,6 +43,34 @@ int fail(int status, std::string message) {
   return status;
 }
 
+// The subcommands and the names they register under.
+struct Command {
+  const char* name;
+  void (*add)(CLI::App&);
+};
+constexpr Command kCommands[] = {
+    {"drape", knitsim::register_drape_command},       {"knit", knitsim::register_knit_command},
+    {"list", knitsim::register_list_command},         {"demo", knitsim::register_demo_command},
+    {"optimize", knitsim::register_optimize_command}, {"taguchi", knitsim::register_taguchi_command},
+    {"fit", knitsim::register_fit_command},           {"targets", knitsim::register_targets_command},
+    {"repro", knitsim::register_repro_command}};
+
+// The application with every subcommand, or only with those `wanted` says. CLI11 builds every
+// option, default and validator of every subcommand it is given (~10 % of a four_corner drape's
+// process), and a run uses one subcommand's: a command line naming one gets that one, plain
+// `knitsim --version` none, anything else (--help, an unknown name) all. A run parses as with
+// all: a subcommand takes its values before any sibling's name is looked at (`drape --out demo`
+// writes into demo/), and a stray word after them is "not expected" either way.
+std::unique_ptr<CLI::App> make_app(const std::function<bool(const Command&)>& wanted) {
+  auto app = std::make_unique<CLI::App>("knitsim: stiff mass-spring models of knitted fabric");
+  app->require_subcommand(1);
+  for (const Command& c : kCommands)
+    if (wanted(c)) c.add(*app);
+  knitsim::require_well_formed_values(*app);
+  app->set_version_flag("--version", knitsim::version_string());
+  return app;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -53,21 +84,22 @@ int main(int argc, char** argv) {
   // MPI_Init/MPI_Finalize when started by mpirun (src/parallel/work_units.hpp); nothing otherwise.
   knitsim::ProcessGroup processes(argc, argv);
   knitsim::set_command_line(argc, argv);
-  CLI::App app{"knitsim: stiff mass-spring models of knitted fabric"};
-  app.require_subcommand(1);
-  knitsim::register_drape_command(app);
-  knitsim::register_knit_command(app);
-  knitsim::register_list_command(app);
-  knitsim::register_demo_command(app);
-  knitsim::register_optimize_command(app);
-  knitsim::register_taguchi_command(app);
-  knitsim::register_fit_command(app);
-  knitsim::register_targets_command(app);
-  knitsim::register_repro_command(app);
-  knitsim::require_well_formed_values(app);
-  app.set_version_flag("--version", knitsim::version_string());
+  const Command* named = nullptr;
+  if (argc > 1)
+    for (const Command& c : kCommands)
+      if (std::strcmp(argv[1], c.name) == 0) named = &c;
+  const bool version_only = argc == 2 && std::strcmp(argv[1], "--version") == 0;
+  std::unique_ptr<CLI::App> made = make_app([&](const Command& c) {
+    return named != nullptr ? &c == named : !version_only;
+  });
+  if (named != nullptr &&
+      made->get_subcommands([&](CLI::App* sub) { return sub->check_name(argv[1]); }).empty()) {
+    named = nullptr;  // registered under another name than kCommands says: treat as unknown
+    made = make_app([](const Command&) { return true; });
+  }
+  CLI::App& app = *made;
   // CLI11 reports an unknown command as "A subcommand is required": name it instead.
-  if (argc > 1 && argv[1][0] != '-') {
+  if (argc > 1 && argv[1][0] != '-' && named == nullptr) {
     std::string names;
     bool known = false;
     for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
