@@ -22,23 +22,22 @@ namespace {
 using metis_idx = std::int32_t;
 }
 
-#define KNITSIM_METIS(NAME)                                                                   \
-  KNITSIM_FORWARD_ON_DEMAND("libmetis.so.5",                                                  \
-                            "CHOLMOD's METIS ordering; Debian package libmetis5", int, NAME, \
-                            (metis_idx * nvtxs, metis_idx * xadj, metis_idx * adjncy,         \
-                             metis_idx * vwgt, metis_idx * options, metis_idx * out1,         \
-                             metis_idx * out2),                                               \
-                            (nvtxs, xadj, adjncy, vwgt, options, out1, out2))
+#define KNITSIM_METIS(NAME)                                                             \
+  KNITSIM_FORWARD_ON_DEMAND(                                                            \
+      "libmetis.so.5", "CHOLMOD's METIS ordering; Debian package libmetis5", int, NAME, \
+      (metis_idx * nvtxs, metis_idx * xadj, metis_idx * adjncy, metis_idx * vwgt,       \
+       metis_idx * options, metis_idx * out1, metis_idx * out2),                        \
+      (nvtxs, xadj, adjncy, vwgt, options, out1, out2))
 
 // METIS_NodeND(nvtxs, xadj, adjncy, vwgt, options, perm, iperm)
 KNITSIM_METIS(METIS_NodeND)
 // METIS_ComputeVertexSeparator(nvtxs, xadj, adjncy, vwgt, options, sepsize, part)
 KNITSIM_METIS(METIS_ComputeVertexSeparator)
 
-#define KNITSIM_GOMP(RETURN, NAME, PARAMS, ARGS)                                            \
-  KNITSIM_FORWARD_ON_DEMAND("libgomp.so.1",                                                 \
-                            "CHOLMOD's OpenMP loops; Debian package libgomp1 (with gcc)", \
-                            RETURN, NAME, PARAMS, ARGS)
+#define KNITSIM_GOMP(RETURN, NAME, PARAMS, ARGS)                                                  \
+  KNITSIM_FORWARD_ON_DEMAND("libgomp.so.1",                                                       \
+                            "CHOLMOD's OpenMP loops; Debian package libgomp1 (with gcc)", RETURN, \
+                            NAME, PARAMS, ARGS)
 
 KNITSIM_GOMP(void, GOMP_parallel,
              (void (*fn)(void*), void* data, unsigned num_threads, unsigned flags),

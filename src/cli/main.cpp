@@ -48,12 +48,15 @@ struct Command {
   const char* name;
   void (*add)(CLI::App&);
 };
-constexpr Command kCommands[] = {
-    {"drape", knitsim::register_drape_command},       {"knit", knitsim::register_knit_command},
-    {"list", knitsim::register_list_command},         {"demo", knitsim::register_demo_command},
-    {"optimize", knitsim::register_optimize_command}, {"taguchi", knitsim::register_taguchi_command},
-    {"fit", knitsim::register_fit_command},           {"targets", knitsim::register_targets_command},
-    {"repro", knitsim::register_repro_command}};
+constexpr Command kCommands[] = {{"drape", knitsim::register_drape_command},
+                                 {"knit", knitsim::register_knit_command},
+                                 {"list", knitsim::register_list_command},
+                                 {"demo", knitsim::register_demo_command},
+                                 {"optimize", knitsim::register_optimize_command},
+                                 {"taguchi", knitsim::register_taguchi_command},
+                                 {"fit", knitsim::register_fit_command},
+                                 {"targets", knitsim::register_targets_command},
+                                 {"repro", knitsim::register_repro_command}};
 
 // The application with every subcommand, or only with those `wanted` says. CLI11 builds every
 // option, default and validator of every subcommand it is given (~10 % of a four_corner drape's
@@ -89,9 +92,8 @@ int main(int argc, char** argv) {
     for (const Command& c : kCommands)
       if (std::strcmp(argv[1], c.name) == 0) named = &c;
   const bool version_only = argc == 2 && std::strcmp(argv[1], "--version") == 0;
-  std::unique_ptr<CLI::App> made = make_app([&](const Command& c) {
-    return named != nullptr ? &c == named : !version_only;
-  });
+  std::unique_ptr<CLI::App> made =
+      make_app([&](const Command& c) { return named != nullptr ? &c == named : !version_only; });
   if (named != nullptr &&
       made->get_subcommands([&](CLI::App* sub) { return sub->check_name(argv[1]); }).empty()) {
     named = nullptr;  // registered under another name than kCommands says: treat as unknown
