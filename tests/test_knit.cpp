@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <random>
@@ -712,4 +713,31 @@ TEST_CASE("knit CSV/VTK numbers read back as the same doubles, integers stay int
   append_integer(text, 1000000);
   append_integer(text, -42);
   CHECK(text == "1000000-42");  // not 1e+06
+}
+
+TEST_CASE("append_general writes printf's %.<digits>g text (drape's nodes.csv, edges.csv, VTK)") {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> mantissa(-1.0, 1.0);
+  std::uniform_int_distribution<int> exponent(-330, 310);
+  std::vector<double> values = {0.0,
+                                -0.0,
+                                0.1,
+                                1e16,
+                                1e17,
+                                1e-5,
+                                9.99999999995e-5,
+                                5e-324,
+                                1.7976931348623157e308,
+                                HUGE_VAL,
+                                -HUGE_VAL,
+                                std::nan("")};
+  for (int k = 0; k < 20000; ++k) values.push_back(std::ldexp(mantissa(rng), exponent(rng)));
+  for (double v : values)
+    for (int digits : {1, 4, 10, 17}) {
+      char expected[64];
+      std::snprintf(expected, sizeof expected, "%.*g", digits, v);
+      std::string text = "x";
+      append_general(text, v, digits);
+      REQUIRE(text == std::string("x") + expected);
+    }
 }

@@ -18,6 +18,12 @@ void append_number(std::string& out, double value) {
   out.append(buf, std::to_chars(buf, buf + sizeof buf, value).ptr);
 }
 
+void append_general(std::string& out, double value, int digits) {
+  char buf[64];  // %.17g: at most 24 characters
+  const auto end = std::to_chars(buf, buf + sizeof buf, value, std::chars_format::general, digits);
+  out.append(buf, end.ptr);
+}
+
 void append_integer(std::string& out, long long value) {
   char buf[24];
   out.append(buf, std::to_chars(buf, buf + sizeof buf, value).ptr);

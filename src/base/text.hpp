@@ -15,6 +15,9 @@ std::string format_number(double value, int digits = 4);
 // Appends the shortest decimal text that reads back as exactly `value` (std::to_chars; several
 // times faster than a stream at precision 17, for large CSV and VTK files).
 void append_number(std::string& out, double value);
+// Appends printf's %.<digits>g text of `value` (std::to_chars in general format, which the
+// standard defines as printf's: the same characters, without a stream's or printf's overhead).
+void append_general(std::string& out, double value, int digits);
 // Appends an integer in decimal.
 void append_integer(std::string& out, long long value);
 

@@ -8,6 +8,8 @@
 #include <set>
 #include <stdexcept>
 
+#include "src/base/text.hpp"
+
 namespace knitsim {
 
 namespace {
@@ -177,14 +179,27 @@ double objective(const std::vector<EdgeFit>& measured, const std::vector<EdgeFit
 void write_edges_csv(const std::vector<EdgeFit>& edges, const std::string& path) {
   std::ofstream out(path);
   if (!out) throw std::runtime_error("cannot write " + path);
-  out.precision(17);
-  out << "edge,kind,index,s,d,coefficient\n";
+  // %.17g, as the stream at precision 17 wrote them, through std::to_chars.
+  std::string text = "edge,kind,index,s,d,coefficient\n";
   for (const EdgeFit& e : edges) {
-    for (size_t k = 0; k < e.points.s.size(); ++k)
-      out << e.name << ",point," << k << ',' << e.points.s[k] << ',' << e.points.d[k] << ",\n";
-    for (size_t i = 0; i < e.coefficients.size(); ++i)
-      out << e.name << ",coeff," << i << ",,," << e.coefficients[i] << '\n';
+    for (size_t k = 0; k < e.points.s.size(); ++k) {
+      text += e.name + ",point,";
+      append_integer(text, static_cast<long long>(k));
+      text += ',';
+      append_general(text, e.points.s[k], 17);
+      text += ',';
+      append_general(text, e.points.d[k], 17);
+      text += ",\n";
+    }
+    for (size_t i = 0; i < e.coefficients.size(); ++i) {
+      text += e.name + ",coeff,";
+      append_integer(text, static_cast<long long>(i));
+      text += ",,,";
+      append_general(text, e.coefficients[i], 17);
+      text += '\n';
+    }
   }
+  out << text;
   out.close();  // buffered text that cannot be written fails here (a full disk)
   if (!out) throw std::runtime_error(std::strerror(errno));  // the caller names the file
 }
