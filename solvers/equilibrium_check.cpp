@@ -84,14 +84,13 @@ StiffnessProbe::StiffnessProbe(const MechanicalSystem& sys,
     : sys_(&sys),
       K_(schur_matrix(sys)),
       factor_(std::make_unique<SymmetricFactor>(which)),
-      ax_(sys.stiffness_pattern().nnz()),
       f_(sys.dof()) {
   factor_->analyze(K_);
 }
 
 StiffnessProbe::~StiffnessProbe() = default;
 
-StiffnessProbe::Result StiffnessProbe::probe(double t, const double* x) {
+StiffnessProbe::Result StiffnessProbe::probe(double t, const double* x, Measure measure) {
   const int n = sys_->dof();
   Result r;
   fill_stiffness(t, x);
@@ -115,6 +114,7 @@ StiffnessProbe::Result StiffnessProbe::probe(double t, const double* x) {
   }
   r.min_eigenvalue = v.dot(K_.selfadjointView<Eigen::Lower>() * v);
   r.singular = !(std::abs(r.min_eigenvalue) > r.threshold);
+  if (measure == Measure::Spectrum) return r;
   // Newton correction and its round-off floor.
   sys_->conservative_acceleration(t, x, f_.data());
   const auto& m = sys_->mass();
@@ -159,8 +159,10 @@ std::vector<double> StiffnessProbe::negative_mode(double t, const double* x) {
 }
 
 void StiffnessProbe::fill_stiffness(double t, const double* x) {
-  sys_->stiffness_values(t, x, ax_.data());
-  fill_flow_values(*sys_, 0.0, ax_.data(), K_);
+  // K's values written in place over the model's (same pattern, entry by entry): no array of
+  // their own, whose pages every probe of a new model would fault in.
+  sys_->stiffness_values(t, x, K_.valuePtr());
+  fill_flow_values(*sys_, 0.0, K_.valuePtr(), K_);
   gauge_.clear();
   if (!sys_->free_floating()) return;
   // Rows and columns of the gauge dofs become those of a stiff support: zero off the diagonal,

@@ -28,7 +28,8 @@ namespace knitsim::detail {
 class SymmetricFactor;
 
 // An n x n matrix with the model's stiffness pattern (values zero); A(h) = C / h + K with
-// C = M Gamma the damping matrix (N s/m), written by fill_flow_values (inv_h = 1 / h; 0 gives K).
+// C = M Gamma the damping matrix (N s/m), written by fill_flow_values (inv_h = 1 / h; 0 gives K;
+// ax, the model's stiffness values, may be A's own values array: entry k is read before written).
 void fill_flow_values(const MechanicalSystem& sys, double inv_h, const double* ax,
                       Eigen::SparseMatrix<double>& A);
 
@@ -49,8 +50,11 @@ class StiffnessProbe {
     double newton_step = 0.0;     // m: ||K^-1 F||_inf
     double newton_floor = 0.0;    // m: ||K^-1 f||_inf, f the forces' round-off, uniform
   };
+  // What probe measures: everything, or K's inertia and smallest eigenvalue only (newton_step
+  // and newton_floor stay 0: the whole-sheet certificate of a reduced drape reads only these).
+  enum class Measure { All, Spectrum };
   // Factorises K at (t, x) and measures it.
-  Result probe(double t, const double* x);
+  Result probe(double t, const double* x, Measure measure = Measure::All);
   // A unit eigenvector of K's most negative eigenvalue after probe() found negative pivots
   // (power iteration on s I - K, s a Gershgorin bound; deterministic), its largest component
   // positive (the documented sign of a saddle escape). Empty if it did not converge.
@@ -70,7 +74,7 @@ class StiffnessProbe {
   const MechanicalSystem* sys_;
   Eigen::SparseMatrix<double> K_;
   std::unique_ptr<SymmetricFactor> factor_;
-  std::vector<double> ax_, f_;
+  std::vector<double> f_;
   std::vector<int> gauge_;
   long factorisations_ = 0;
 };

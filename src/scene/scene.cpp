@@ -401,7 +401,9 @@ void certify_whole_sheet(const Scene& scene, const SpringNetwork& net, Integrato
                          RunObserver* observer, std::vector<double>& x, DrapeResult& r) {
   const double t = r.stats.t_final;
   detail::StiffnessProbe probe(net, scene.options.factorization);
-  const detail::StiffnessProbe::Result p = probe.probe(t, x.data());
+  // Its inertia and smallest eigenvalue: the stop (the Newton correction) was the reduction's.
+  const detail::StiffnessProbe::Result p =
+      probe.probe(t, x.data(), detail::StiffnessProbe::Measure::Spectrum);
   r.whole_sheet_checked = true;
   if (p.factored && !p.singular && p.negative_pivots == 0) {
     r.stats.min_eigenvalue = p.min_eigenvalue;  // the whole sheet's, not the reduction's
