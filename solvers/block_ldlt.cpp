@@ -20,11 +20,25 @@ struct BlockPattern {
   bool empty() const { return rows.empty(); }
 };
 
-// Y -= A B
-inline void sub_product(double* Y, const double* A, const double* B) {
+// Y -= A B. Y overlaps neither A nor B (a work block, a factor block, a copy on the stack):
+// __restrict lets the compiler keep Y in registers instead of storing and reloading each entry
+// between the products (the same operations in the same order; results bit for bit the same).
+inline void sub_product(double* __restrict Y, const double* __restrict A,
+                        const double* __restrict B) {
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c)
       Y[3 * r + c] -= A[3 * r] * B[c] + A[3 * r + 1] * B[3 + c] + A[3 * r + 2] * B[6 + c];
+}
+
+// The solves' block updates, v -= L u and v -= L^T u for a 3 x 3 block L of the factor and
+// two distinct nodes' entries (restrict, as sub_product).
+inline void sub_block_times(double* __restrict v, const double* __restrict l,
+                            const double* __restrict u) {
+  for (int r = 0; r < 3; ++r) v[r] -= l[3 * r] * u[0] + l[3 * r + 1] * u[1] + l[3 * r + 2] * u[2];
+}
+inline void sub_block_transposed_times(double* __restrict v, const double* __restrict l,
+                                       const double* __restrict u) {
+  for (int c = 0; c < 3; ++c) v[c] -= l[c] * u[0] + l[3 + c] * u[1] + l[6 + c] * u[2];
 }
 
 // A pivot block D (symmetric, row-major; its lower triangle is read) as D = l d l^T, l unit
@@ -350,24 +364,20 @@ void BlockLdlt::solve(const double* b, double* x) {
   double* w = work_.data();  // 3 per node, in elimination order
   for (int k = 0; k < nb_; ++k)
     for (int r = 0; r < 3; ++r) w[3 * k + r] = r < sym.size[k] ? b[sym.first[k] + r] : 0.0;
+  // Node j's entries are copied out while its column updates other nodes' (rows li_ > j): the
+  // same operations, without a reload after every store.
   for (int j = 0; j < nb_; ++j) {  // L z = P b
-    const double* wj = &w[3 * j];
-    for (int p = sym.lp[j]; p < sym.lp[j + 1]; ++p) {
-      const double* l = &lx_[9 * static_cast<std::size_t>(p)];
-      double* wr = &w[3 * li_[p]];
-      for (int r = 0; r < 3; ++r)
-        wr[r] -= l[3 * r] * wj[0] + l[3 * r + 1] * wj[1] + l[3 * r + 2] * wj[2];
-    }
+    const double wj[3] = {w[3 * j], w[3 * j + 1], w[3 * j + 2]};
+    for (int p = sym.lp[j]; p < sym.lp[j + 1]; ++p)
+      sub_block_times(&w[3 * li_[p]], &lx_[9 * static_cast<std::size_t>(p)], wj);
   }
   for (int j = 0; j < nb_; ++j)  // D^-1
     apply_pivot_inverse(&pivot_[6 * static_cast<std::size_t>(j)], &w[3 * j]);
   for (int j = nb_ - 1; j >= 0; --j) {  // L^T
-    double* wj = &w[3 * j];
-    for (int p = sym.lp[j]; p < sym.lp[j + 1]; ++p) {
-      const double* l = &lx_[9 * static_cast<std::size_t>(p)];
-      const double* wr = &w[3 * li_[p]];
-      for (int c = 0; c < 3; ++c) wj[c] -= l[c] * wr[0] + l[3 + c] * wr[1] + l[6 + c] * wr[2];
-    }
+    double wj[3] = {w[3 * j], w[3 * j + 1], w[3 * j + 2]};
+    for (int p = sym.lp[j]; p < sym.lp[j + 1]; ++p)
+      sub_block_transposed_times(wj, &lx_[9 * static_cast<std::size_t>(p)], &w[3 * li_[p]]);
+    std::copy(wj, wj + 3, &w[3 * j]);
   }
   for (int k = 0; k < nb_; ++k)
     for (int r = 0; r < sym.size[k]; ++r) x[sym.first[k] + r] = w[3 * k + r];
