@@ -69,6 +69,23 @@ class Run:
         return s.get("stats", s)
 
 
+def integrator_cpu(summary):
+    """The integrator's CPU seconds of a run from its summary.json: the run's cpu_seconds (drape:
+    top level; knit: "stats") less, for the knit, the yarn clearance measuring `knitsim knit`
+    does inside the run (yarn.clearance_cpu_seconds), which the run's figure includes."""
+    summary = summary or {}
+    measuring = (summary.get("yarn") or {}).get("clearance_cpu_seconds", 0.0)
+    return summary.get("stats", summary).get("cpu_seconds", math.nan) - measuring
+
+
+def clearance_columns(summary):
+    """runs.csv's clearance_states and clearance_cpu_seconds: the knit's yarn clearance
+    measurements inside the run and their CPU (empty for a drape)."""
+    yarn = (summary or {}).get("yarn") or {}
+    return dict(clearance_states=yarn.get("clearance_measured_states", ""),
+                clearance_cpu_seconds=yarn.get("clearance_cpu_seconds", ""))
+
+
 BUILD_FIELDS = ("git_commit", "build_type", "compiler", "libraries")
 FIRST_BUILD = None  # the build stamp (BUILD_FIELDS) in the manifest of the study's first run
 

@@ -103,12 +103,7 @@ def max_speed(run):
     return max(math.sqrt(v[i] ** 2 + v[i + 1] ** 2 + v[i + 2] ** 2) for i in range(0, len(v), 3))
 
 
-def own_cpu(summary):
-    """The integrator's CPU seconds: the run's stats.cpu_seconds less, for the knit, its yarn
-    clearance measuring inside the run (summary.json yarn.clearance_cpu_seconds)."""
-    summary = summary or {}
-    measuring = (summary.get("yarn") or {}).get("clearance_cpu_seconds", 0.0)
-    return summary.get("stats", summary).get("cpu_seconds", math.nan) - measuring
+own_cpu = expkit.integrator_cpu  # the run's CPU less the knit's clearance measuring
 
 
 def run_case(args, case, c, wall_cap, rows, refs, ringing):
@@ -169,10 +164,7 @@ def run_case(args, case, c, wall_cap, rows, refs, ringing):
                    run_cpu_seconds=s.get("cpu_seconds", math.nan),
                    # knit: yarn clearance measurements inside the run and their CPU, which
                    # run_cpu_seconds includes and cpu_seconds (the integrator's) does not
-                   clearance_states=((r.summary or {}).get("yarn") or {}).get(
-                       "clearance_measured_states", ""),
-                   clearance_cpu_seconds=((r.summary or {}).get("yarn") or {}).get(
-                       "clearance_cpu_seconds", ""),
+                   **expkit.clearance_columns(r.summary),
                    error_m=math.nan, error_over_r=math.nan)
         if measured == "yes" and r.summary:
             row["dt"] = s.get("dt", dt) or dt

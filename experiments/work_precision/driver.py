@@ -5,7 +5,10 @@ Eq. 5 edge coefficients against a tight reference, against CPU time, RHS evaluat
 linear-solver set-ups. Called by run.sh; see README.md.
 
 Outputs in --out: runs.csv (one row per run, including the extrapolated and skipped ones),
-references.csv, best.csv (cheapest integrator per accuracy level), manifest.json.
+references.csv, best.csv (cheapest integrator per accuracy level), manifest.json. CPU:
+cpu_seconds is the integrator's, the run's (run_cpu_seconds) less, for the knit, the yarn
+clearance measuring `knitsim knit` does inside the run (clearance_states measurements taking
+clearance_cpu_seconds), as in experiments/transient: the integrators are compared on their work.
 """
 import math
 import os
@@ -114,7 +117,9 @@ def main():
                          status=ref.stats()["status"], residual=ref.stats()["residual"],
                          newton_step_m=ref.stats().get("newton_step", math.nan),
                          newton_floor_m=ref.stats().get("newton_floor", math.nan),
-                         t_final=ref.stats()["t_final"], cpu_seconds=ref.stats()["cpu_seconds"]))
+                         t_final=ref.stats()["t_final"],
+                         cpu_seconds=expkit.integrator_cpu(ref.summary),
+                         run_cpu_seconds=ref.stats()["cpu_seconds"]))
 
         def record(r, integ, rtol, atol, dt, measured="yes"):
             s = r.stats() if r.summary else {}
@@ -124,7 +129,11 @@ def main():
                        t_final=s.get("t_final", math.nan), steps=s.get("steps", 0),
                        rhs_evals=s.get("rhs_evals", 0), jac_evals=s.get("jac_evals", 0),
                        lin_setups=s.get("lin_setups", 0),
-                       cpu_seconds=s.get("cpu_seconds", math.nan),
+                       # the integrator's CPU: the run's (run_cpu_seconds) less, for the knit,
+                       # the yarn clearance measuring inside the run (clearance_cpu_seconds)
+                       cpu_seconds=expkit.integrator_cpu(r.summary),
+                       run_cpu_seconds=s.get("cpu_seconds", math.nan),
+                       **expkit.clearance_columns(r.summary),
                        residual=s.get("residual", math.nan),
                        newton_step_m=s.get("newton_step", math.nan),
                        newton_floor_m=s.get("newton_floor", math.nan), pos_err_m=math.nan,
@@ -218,7 +227,7 @@ def main():
                 r = run(name + "-capped", name, ["--max-steps", explicit_cap])
                 s = r.stats()
                 mean_h = s["t_final"] / s["steps"]
-                cpu_step = s["cpu_seconds"] / s["steps"]
+                cpu_step = expkit.integrator_cpu(r.summary) / s["steps"]
                 rhs_step = s["rhs_evals"] / s["steps"]
                 row = record(r, name, 0.0, 0.0, s["dt"] or mean_h,
                              measured="extrapolated: %d steps timed, t_settle %.4g s" % (
@@ -226,6 +235,7 @@ def main():
             steps = t_settle / mean_h
             row.update(status="extrapolated", t_final=t_settle, steps=steps,
                        rhs_evals=rhs_step * steps, cpu_seconds=cpu_step * steps,
+                       run_cpu_seconds=cpu_step * steps,  # drapes: no clearance measuring
                        cpu_per_step=cpu_step, rhs_per_step=rhs_step, dt=mean_h)
 
     fields = list(rows[0].keys())

@@ -94,8 +94,16 @@ def build(out):
                          "%.3g" % (float(c["cpu_seconds"]) / cheapest) if c else "—",
                          span([r["pos_err_m"] for r in iok], lambda v: num(v, 2)),
                          "; ".join(others) or "—"])
+        cpu_note = ""
+        if scene == "knit":
+            cpu_note = (" CPU: the integrator's, the run's less the yarn clearance measuring "
+                        "`knitsim knit` does inside it (runs.csv run_cpu_seconds, "
+                        "clearance_cpu_seconds)." if "run_cpu_seconds" in sr[0] else
+                        " CPU: the run's, the yarn clearance measuring `knitsim knit` does "
+                        "inside it included (this runs.csv predates the driver's subtracting "
+                        "it, as experiments/transient does).")
         text = ("Measured runs only. Settled = status `equilibrium`; position error = max over "
-                "particles of |x - x_ref| at the end.\n\n" + md_table(
+                "particles of |x - x_ref| at the end." + cpu_note + "\n\n" + md_table(
                     ["integrator", "settled", "CPU of the settled runs (s)", "cheapest settled",
                      "its CPU (s)", "its steps", "× the scene's cheapest", "position error of "
                      "the settled runs (m)", "runs that did not settle"], rows))
