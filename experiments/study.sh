@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The run.sh of a Python study (STYLE.md practice 10): driver.py writes the raw CSV and
-# manifest.json into OUT, then plot.py turns the CSV into PNGs if the driver got that far.
+# manifest.json into OUT, then plot.py turns the CSV into PNGs (a study without plots: summary.py
+# writes its tables) if the driver got that far. Arguments after "--" are the driver's to pass on.
 #
 #   experiments/study.sh NAME CSV [driver arguments: --quick --out DIR ...]
 #
@@ -14,9 +15,12 @@ here=$root/experiments/$name
 out=$root/out/experiments/$name
 args=("$@")
 for ((i = 0; i < ${#args[@]}; i++)); do
+  [ "${args[i]}" = "--" ] && break
   [ "${args[i]}" = "--out" ] && out=${args[i + 1]:-$out}
 done
 status=0
 /usr/bin/python3 "$here/driver.py" "$@" || status=$?
-[ -f "$out/$csv" ] && /usr/bin/python3 "$here/plot.py" "$out"
+after=$here/plot.py
+[ -f "$after" ] || after=$here/summary.py
+[ -f "$out/$csv" ] && /usr/bin/python3 "$after" "$out"
 exit $status

@@ -9,16 +9,4 @@
 # Default OUT: out/experiments/random_charts. The knitsim binary: $KNITSIM, else build/knitsim.
 # Exit status: the driver's (1 if a run was refused or crashed, or a --require-clearance check
 # failed; everything is written first).
-set -euo pipefail
-here=$(cd "$(dirname "$0")" && pwd)
-root=$(cd "$here/../.." && pwd)
-out=$root/out/experiments/random_charts
-args=("$@")
-for ((i = 0; i < ${#args[@]}; i++)); do
-  [ "${args[i]}" = "--" ] && break
-  [ "${args[i]}" = "--out" ] && out=${args[i + 1]:-$out}
-done
-status=0
-/usr/bin/python3 "$here/driver.py" "$@" || status=$?
-[ -f "$out/random_charts.csv" ] && /usr/bin/python3 "$here/summary.py" "$out"
-exit $status
+exec "$(cd "$(dirname "$0")" && pwd)/../study.sh" random_charts random_charts.csv "$@"
