@@ -537,17 +537,23 @@ Vec3 point_on(const NurbsCurve& c, double u) {
 
 namespace {
 
-// Course j's yarn polyline (see the header) into v, its arc lengths into arc.
-void course_polyline(const std::vector<Vec3>& yarn, int S, std::vector<Vec3>& v,
-                     std::vector<double>& arc) {
+// The vertices of intervals k0..k1 - 1 of the polyline through yarn (see the header), and
+// vertex k1 S, into v (v[0] is vertex k0 S).
+void polyline_vertices(const std::vector<Vec3>& yarn, int S, int k0, int k1, std::vector<Vec3>& v) {
   const NurbsCurve curve = interpolate_cubic(yarn, kYarnParametrization);
   const std::vector<double> ubar = interpolation_parameters(yarn, kYarnParametrization);
   v.clear();
-  v.reserve(S * (yarn.size() - 1) + 1);
-  for (size_t k = 0; k + 1 < yarn.size(); ++k)
+  v.reserve(S * (k1 - k0) + 1);
+  for (int k = k0; k < k1; ++k)
     for (int s = 0; s < S; ++s)
       v.push_back(point_on(curve, ubar[k] + (ubar[k + 1] - ubar[k]) * s / S));
-  v.push_back(point_on(curve, ubar.back()));
+  v.push_back(point_on(curve, ubar[k1]));
+}
+
+// Course j's yarn polyline (see the header) into v, its arc lengths into arc.
+void course_polyline(const std::vector<Vec3>& yarn, int S, std::vector<Vec3>& v,
+                     std::vector<double>& arc) {
+  polyline_vertices(yarn, S, 0, static_cast<int>(yarn.size()) - 1, v);
   arc.assign(v.size(), 0.0);
   for (size_t k = 1; k < v.size(); ++k) arc[k] = arc[k - 1] + norm(v[k] - v[k - 1]);
 }
@@ -569,14 +575,22 @@ YarnPolylines yarn_polylines(const KnitModel& m, const std::vector<Vec3>& positi
 }
 
 std::vector<ContactPoint> knit_contact_points(const KnitModel& m) {
-  const int W = m.chart.wales, C = m.chart.courses;
+  const int W = m.chart.wales, C = m.chart.courses, S = kYarnSamplesPerInterval;
   const double h = 1e-4 * m.params.loop_radius;  // central-difference step, m
+  // A perturbed yarn point moves the interpolant by a factor ~0.27 less per interpolation point
+  // away (a cubic's cardinal functions), so the differences interpolate only the yarn points the
+  // particle moves and kWindow either side, and take the vertices within kReach of them: the
+  // window's own ends change those derivatives by ~0.27^(kWindow - kReach) relative, and the
+  // vertices further away have derivatives below ~0.27^kReach of the largest (~2e-6).
+  constexpr int kWindow = 20, kReach = 10;
   std::vector<Vec3> pos = m.rest_positions();
   std::vector<ContactPoint> out;
   std::vector<Vec3> v, vp, vm;
   std::vector<double> arc, scratch;
   for (int j = 0; j < C; ++j) {
-    course_polyline(course_yarn(m, pos, j), kYarnSamplesPerInterval, v, arc);
+    const std::vector<Vec3> yarn = course_yarn(m, pos, j);
+    const int n = static_cast<int>(yarn.size()) - 1;  // yarn points 0..n
+    course_polyline(yarn, S, v, arc);
     // The particles course j's yarn depends on: levels j to the highest upper point of its loops.
     int top = j + 1;
     for (int i = 0; i < W; ++i)
@@ -585,30 +599,46 @@ std::vector<ContactPoint> knit_contact_points(const KnitModel& m) {
     for (int L = j; L <= std::min(top, C); ++L)
       for (int i = 0; i < W; ++i)
         if (m.point(i, L) >= 0) ids.push_back(m.point(i, L));
-    // d vertex / d particle (x, y) by central differences: per vertex, per particle, a 2 x 2.
-    std::vector<std::array<double, 4>> J(v.size() * ids.size());
+    // d vertex / d particle (x, y) by central differences: per vertex, per particle, a 3 x 2.
+    std::vector<std::array<double, 6>> J(v.size() * ids.size(), std::array<double, 6>{});
     for (std::size_t q = 0; q < ids.size(); ++q)
       for (int c = 0; c < 2; ++c) {
         double& coord = c == 0 ? pos[ids[q]].x : pos[ids[q]].y;
         const double keep = coord;
         coord = keep + h;
-        course_polyline(course_yarn(m, pos, j), kYarnSamplesPerInterval, vp, scratch);
+        const std::vector<Vec3> plus = course_yarn(m, pos, j);
         coord = keep - h;
-        course_polyline(course_yarn(m, pos, j), kYarnSamplesPerInterval, vm, scratch);
+        const std::vector<Vec3> minus = course_yarn(m, pos, j);
         coord = keep;
-        for (std::size_t k = 0; k < v.size(); ++k) {
-          J[k * ids.size() + q][c] = (vp[k].x - vm[k].x) / (2.0 * h);      // d vx / d c
-          J[k * ids.size() + q][2 + c] = (vp[k].y - vm[k].y) / (2.0 * h);  // d vy / d c
+        auto moved = [&](int k) {
+          return plus[k].x != yarn[k].x || plus[k].y != yarn[k].y || plus[k].z != yarn[k].z ||
+                 minus[k].x != yarn[k].x || minus[k].y != yarn[k].y || minus[k].z != yarn[k].z;
+        };
+        int a = n + 1, b = -1;  // the yarn points the particle moves
+        for (int k = 0; k <= n; ++k)
+          if (moved(k)) a = std::min(a, k), b = k;
+        if (b < 0) continue;
+        const int lo = std::max(0, a - kWindow), hi = std::min(n, b + kWindow);
+        const int first = std::max(0, a - kReach), last = std::min(n, b + kReach);
+        polyline_vertices({plus.begin() + lo, plus.begin() + hi + 1}, S, first - lo, last - lo, vp);
+        polyline_vertices({minus.begin() + lo, minus.begin() + hi + 1}, S, first - lo, last - lo,
+                          vm);
+        for (int k = first * S; k <= last * S; ++k) {
+          const int t = k - first * S;  // the vertex's index in vp, vm
+          J[k * ids.size() + q][c] = (vp[t].x - vm[t].x) / (2.0 * h);      // d vx / d c
+          J[k * ids.size() + q][2 + c] = (vp[t].y - vm[t].y) / (2.0 * h);  // d vy / d c
+          J[k * ids.size() + q][4 + c] = (vp[t].z - vm[t].z) / (2.0 * h);  // d vz / d c
         }
       }
     // Per vertex the kContactParticles particles of largest |W|; the rest is added to the
-    // largest, so the weights sum to the identity (translations carried exactly).
+    // largest, so the weights sum to [I; 0] (translations in the plane carried exactly).
     std::vector<int> order(ids.size());
     for (std::size_t k = 0; k < v.size(); ++k) {
-      const std::array<double, 4>* row = &J[k * ids.size()];
+      const std::array<double, 6>* row = &J[k * ids.size()];
       auto size = [&](int q) {
-        return row[q][0] * row[q][0] + row[q][1] * row[q][1] + row[q][2] * row[q][2] +
-               row[q][3] * row[q][3];
+        double s = 0.0;
+        for (double w : row[q]) s += w * w;
+        return s;
       };
       for (std::size_t q = 0; q < ids.size(); ++q) order[q] = static_cast<int>(q);
       const std::size_t keep = std::min<std::size_t>(kContactParticles, ids.size());
@@ -617,20 +647,16 @@ std::vector<ContactPoint> knit_contact_points(const KnitModel& m) {
       ContactPoint p;
       p.yarn = j;
       p.arc = arc[k];
-      std::array<double, 4> rest_sum{0.0, 0.0, 0.0, 0.0};
+      std::array<double, 6> rest_sum{};
       for (std::size_t q = 0; q < keep; ++q) {
         p.particles[q] = ids[order[q]];
         p.weights[q] = row[order[q]];
-        for (int e = 0; e < 4; ++e) rest_sum[e] += row[order[q]][e];
+        for (int e = 0; e < 6; ++e) rest_sum[e] += row[order[q]][e];
       }
-      const std::array<double, 4> identity{1.0, 0.0, 0.0, 1.0};
-      for (int e = 0; e < 4; ++e) p.weights[0][e] += identity[e] - rest_sum[e];
-      Vec3 at_rest{0.0, 0.0, 0.0};
-      for (std::size_t q = 0; q < keep; ++q) {
-        const Vec3& x = pos[p.particles[q]];
-        at_rest.x += p.weights[q][0] * x.x + p.weights[q][1] * x.y;
-        at_rest.y += p.weights[q][2] * x.x + p.weights[q][3] * x.y;
-      }
+      const std::array<double, 6> identity{1.0, 0.0, 0.0, 1.0, 0.0, 0.0};
+      for (int e = 0; e < 6; ++e) p.weights[0][e] += identity[e] - rest_sum[e];
+      p.offset = Vec3{0.0, 0.0, 0.0};
+      const Vec3 at_rest = position_of(p, pos);
       p.offset = v[k] - at_rest;
       out.push_back(p);
     }

@@ -127,11 +127,10 @@
 // values and not SPEC 2.9's as first written: docs/knit.md, "Rest geometry of tucks and misses".
 //
 // Yarn contact (knit.contact = c > 0; off by default; docs/knit.md, "Yarn contact"): the
-// barrier of models/yarn_contact.hpp between the yarn polylines' rest vertices (below), each
-// carried by the interlacing points around it: its front-view rest position, bilinear in the
-// wale column's points that bracket it (the nearest existing levels above and below, in the two
-// wales either side; linear beyond the chart's edges), so it is affine in at most 4 points and
-// equals the vertex at rest; its depth z stays the rest depth (the chart stays in its plane).
+// barrier of models/yarn_contact.hpp between the yarn polylines' rest vertices (below), each the
+// first-order Taylor map of its vertex about the rest state in the (x, y) of the (up to 8)
+// interlacing points it depends on most (weights by central differences at set-up, the rest
+// lumped onto the largest so in-plane translations are exact; its depth follows too).
 // Touching distance d = r (the yarn diameter), core d0 = 0.9 r, kappa = c k_w; yarns are one
 // course each, and pieces of one course pair if kSameYarnGap r apart along it.
 //
@@ -316,7 +315,7 @@ YarnPolylines yarn_polylines(const KnitModel& m, const std::vector<Vec3>& positi
                              int samples_per_interval = kYarnSamplesPerInterval);
 
 // The yarn contact's points (see "Yarn contact" above): the rest yarn polylines' vertices, each
-// bilinear in the interlacing points around it; yarn = course, arc = the polyline's rest arc.
+// affine in the interlacing points around it; yarn = course, arc = the polyline's rest arc.
 std::vector<ContactPoint> knit_contact_points(const KnitModel& m);
 
 }  // namespace knitsim

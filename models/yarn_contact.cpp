@@ -138,20 +138,23 @@ bool ContactNetwork::may_pair(int a, int b) const {
   return p.yarn != q.yarn || std::abs(p.arc - q.arc) >= spec_.same_yarn_gap;
 }
 
+Vec3 position_of(const ContactPoint& point, const std::vector<Vec3>& particles) {
+  Vec3 s = point.offset;
+  for (int i = 0; i < kContactParticles && point.particles[i] >= 0; ++i) {
+    const Vec3& q = particles[point.particles[i]];
+    const std::array<double, 6>& W = point.weights[i];
+    s.x += W[0] * q.x + W[1] * q.y;
+    s.y += W[2] * q.x + W[3] * q.y;
+    s.z += W[4] * q.x + W[5] * q.y;
+  }
+  return s;
+}
+
 void ContactNetwork::positions(double t, const double* x) const {
   net_.all_positions(t, x, pos_);
   pts_.resize(spec_.points.size());
-  for (std::size_t k = 0; k < spec_.points.size(); ++k) {
-    const ContactPoint& p = spec_.points[k];
-    Vec3 s = p.offset;
-    for (int i = 0; i < kContactParticles && p.particles[i] >= 0; ++i) {
-      const Vec3& q = pos_[p.particles[i]];
-      const std::array<double, 4>& W = p.weights[i];
-      s.x += W[0] * q.x + W[1] * q.y;
-      s.y += W[2] * q.x + W[3] * q.y;
-    }
-    pts_[k] = s;
-  }
+  for (std::size_t k = 0; k < spec_.points.size(); ++k)
+    pts_[k] = position_of(spec_.points[k], pos_);
 }
 
 void ContactNetwork::refresh_pairs() const {
@@ -229,17 +232,17 @@ double ContactNetwork::min_distance(double t, const double* x, int* in_contact) 
 
 namespace {
 
-// Adds W_i^T F (F a force on point p, x and y) to p's free particles, divided by their mass if
+// Adds W_i^T F (F a force on point p) to p's free particles' x and y, divided by their mass if
 // `mass` is given.
-void spread(const ContactPoint& p, const SpringNetwork& net, double fx, double fy, double* out,
+void spread(const ContactPoint& p, const SpringNetwork& net, Vec3 F, double* out,
             const std::vector<double>* mass) {
   for (int i = 0; i < kContactParticles && p.particles[i] >= 0; ++i) {
     const int f = net.free_index(p.particles[i]);
     if (f < 0) continue;
-    const std::array<double, 4>& W = p.weights[i];
+    const std::array<double, 6>& W = p.weights[i];
     const double s = mass ? 1.0 / (*mass)[3 * f] : 1.0;
-    out[3 * f] += s * (W[0] * fx + W[2] * fy);
-    out[3 * f + 1] += s * (W[1] * fx + W[3] * fy);
+    out[3 * f] += s * (W[0] * F.x + W[2] * F.y + W[4] * F.z);
+    out[3 * f + 1] += s * (W[1] * F.x + W[3] * F.y + W[5] * F.z);
   }
 }
 
@@ -263,9 +266,9 @@ bool ContactNetwork::for_each_contact(double t, const double* x, OnContact on_co
 bool ContactNetwork::add_contact_forces(double t, const double* x, double* out,
                                         const std::vector<double>* mass) const {
   return for_each_contact(t, x, [&](const Pair& pr, Vec3 d, double D, double de, double) {
-    const double fx = -de * d.x / D, fy = -de * d.y / D;  // on a; b gets the opposite
-    spread(spec_.points[pr.a], net_, fx, fy, out, mass);
-    spread(spec_.points[pr.b], net_, -fx, -fy, out, mass);
+    const Vec3 F = (-de / D) * d;  // on a; b gets the opposite
+    spread(spec_.points[pr.a], net_, F, out, mass);
+    spread(spec_.points[pr.b], net_, -1.0 * F, out, mass);
   });
 }
 
@@ -293,21 +296,23 @@ void ContactNetwork::stiffness_values(double t, const double* x, double* values)
   const std::vector<double>& m = net_.mass();
   const bool finite =
       for_each_contact(t, x, [&](const Pair& pr, Vec3 d, double D, double de, double d2e) {
-        const double ux = d.x / D, uy = d.y / D, s = de / D;
-        // H (x, y block) = d2e u u^T + (de / D)(I - u u^T)
-        const double H[2][2] = {{d2e * ux * ux + s * (1.0 - ux * ux), (d2e - s) * ux * uy},
-                                {(d2e - s) * ux * uy, d2e * uy * uy + s * (1.0 - uy * uy)}};
+        const double u[3] = {d.x / D, d.y / D, d.z / D}, s = de / D;
+        // H = d2e u u^T + (de / D)(I - u u^T)
+        double H[3][3];
+        for (int p = 0; p < 3; ++p)
+          for (int q = 0; q < 3; ++q) H[p][q] = (d2e - s) * u[p] * u[q] + (p == q ? s : 0.0);
         bool missed = false;
         const ContactPoint* pt[2] = {&spec_.points[pr.a], &spec_.points[pr.b]};
         for (int A = 0; A < 2; ++A)
           for (int i = 0; i < kContactParticles && pt[A]->particles[i] >= 0; ++i) {
             const int fr = net_.free_index(pt[A]->particles[i]);
             if (fr < 0) continue;
-            const std::array<double, 4>& Wi = pt[A]->weights[i];
-            // Wi^T H, 2 x 2
-            const double G[2][2] = {
-                {Wi[0] * H[0][0] + Wi[2] * H[1][0], Wi[0] * H[0][1] + Wi[2] * H[1][1]},
-                {Wi[1] * H[0][0] + Wi[3] * H[1][0], Wi[1] * H[0][1] + Wi[3] * H[1][1]}};
+            const std::array<double, 6>& Wi = pt[A]->weights[i];
+            // G = Wi^T H, 2 x 3 (Wi row-major 3 x 2: Wi[2 k + p] is row k, column p)
+            double G[2][3];
+            for (int p = 0; p < 2; ++p)
+              for (int q = 0; q < 3; ++q)
+                G[p][q] = Wi[p] * H[0][q] + Wi[2 + p] * H[1][q] + Wi[4 + p] * H[2][q];
             for (int B = 0; B < 2; ++B)
               for (int j = 0; j < kContactParticles && pt[B]->particles[j] >= 0; ++j) {
                 const int fc = net_.free_index(pt[B]->particles[j]);
@@ -317,13 +322,13 @@ void ContactNetwork::stiffness_values(double t, const double* x, double* values)
                   missed = true;
                   continue;
                 }
-                const std::array<double, 4>& Wj = pt[B]->weights[j];
+                const std::array<double, 6>& Wj = pt[B]->weights[j];
                 // dF_r/dx_c = -s_r s_c Wi^T H Wj; the Jacobian row is divided by r's mass.
                 const double f = -(A == B ? 1.0 : -1.0) / m[3 * fr];
                 for (int p = 0; p < 2; ++p)
                   for (int q = 0; q < 2; ++q)
                     values[node_block_entry(nodes_, e_node, fc, p, q)] +=
-                        f * (G[p][0] * Wj[q] + G[p][1] * Wj[2 + q]);
+                        f * (G[p][0] * Wj[q] + G[p][1] * Wj[2 + q] + G[p][2] * Wj[4 + q]);
               }
           }
         pattern_misses_ += missed;

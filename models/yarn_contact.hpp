@@ -5,11 +5,12 @@
 // Contact points. The yarn is represented by points that are affine in the particles, so the
 // barrier has local support and an exact, sparse Jacobian (the knit's NURBS centreline is a
 // global interpolant whose inverse is dense):
-//     p = sum_i W_i x_i,xy + o      (at most 8 particles, W_i 2 x 2; o a fixed offset, m)
-// where x_i,xy is particle i's position with its z set to 0: the contact sees the particles' x and
-// y only and each point keeps its own fixed depth o.z. That is the model of a chart that stays
-// in its plane (the knit default: no force has a z component, the interlacing points stay at
-// z = 0); a network whose particles leave the plane must not use it (build_knit refuses contact
+//     p = sum_i W_i x_i,xy + o      (at most 8 particles, W_i 3 x 2; o a fixed offset, m)
+// where x_i,xy is particle i's (x, y): the contact sees the particles' in-plane positions only,
+// and a point's depth p.z follows them through W_i's third row (a yarn's depth between its
+// interlacing points moves as the in-plane shape changes). That is the model of a chart that
+// stays in its plane (the knit default: no force has a z component, the interlacing points stay
+// at z = 0); a network whose particles leave the plane must not use it (build_knit refuses contact
 // with knit.bending). Each point carries its yarn's id and its arc length along that yarn at rest.
 //
 // Pairs. Two points interact if they lie on different yarns, or on one yarn at least
@@ -19,10 +20,10 @@
 // the IPC barrier (Li et al. 2020) shifted to a core: no force at or beyond the touching distance
 // d, a repulsion growing without bound as D falls to the core distance d0 < d (E = +inf for
 // D <= d0). phi = phi' = phi'' = 0 at g = 1, so E is C^2 where contact begins.
-// Gradient and Hessian (in p_a - p_b, xy components): B = dE/dD u, and
+// Gradient and Hessian (in p_a - p_b, 3 x 3): B = dE/dD u, and
 //     H = E''(D) u u^T + (E'(D) / D) (I - u u^T),  u = (p_a - p_b) / D,
-// mapped onto the particles by the weights (force W_i^T (-B) on a's particle i; block (i, j) of
-// d^2E/dx^2 gets s_i s_j W_i^T H W_j, s = +1 for a's particles, -1 for b's).
+// mapped onto the particles by the weights (force W_i^T (-B) on a's particle i, in x and y; block
+// (i, j) of d^2E/dx^2 gets s_i s_j W_i^T H W_j, s = +1 for a's particles, -1 for b's).
 //
 // Near pairs (a Verlet list): pairs closer than d + skin are listed at a state and reused while
 // no particle has moved more than skin / (2 sqrt(2) W) since (W the largest sum_i |W_i|_F of a
@@ -56,14 +57,23 @@ namespace knitsim {
 
 constexpr int kContactParticles = 8;  // particles a contact point may depend on
 
+inline std::array<int, kContactParticles> filled(int v) {
+  std::array<int, kContactParticles> a;
+  a.fill(v);
+  return a;
+}
+
 struct ContactPoint {
-  std::array<int, kContactParticles> particles{-1, -1, -1, -1, -1, -1, -1, -1};  // -1 ends
-  // Per particle a 2 x 2 matrix W_i (row-major: xx, xy, yx, yy), dimensionless.
-  std::array<std::array<double, 4>, kContactParticles> weights{};
+  std::array<int, kContactParticles> particles = filled(-1);  // -1 ends
+  // Per particle a 3 x 2 matrix W_i (row-major: xx, xy, yx, yy, zx, zy), dimensionless.
+  std::array<std::array<double, 6>, kContactParticles> weights{};
   Vec3 offset;       // o, m (its z is the point's depth)
   int yarn = 0;      // which yarn the point lies on
   double arc = 0.0;  // arc length along its yarn at rest, m
 };
+
+// p = o + sum_i W_i x_i,xy of a contact point, given the positions of all particles (m).
+Vec3 position_of(const ContactPoint& point, const std::vector<Vec3>& particles);
 
 struct YarnContactSpec {
   std::vector<ContactPoint> points;

@@ -59,22 +59,49 @@ TEST_CASE("yarn contact: the points are the rest polylines' vertices, affine in 
         REQUIRE(k < pts.size());
         const ContactPoint& p = pts[k];
         CHECK(p.yarn == static_cast<int>(j));
-        Vec3 s = p.offset;
-        std::array<double, 4> sum{0.0, 0.0, 0.0, 0.0};
-        for (int i = 0; i < kContactParticles && p.particles[i] >= 0; ++i) {
-          const std::array<double, 4>& w = p.weights[i];
-          s.x += w[0] * rest[p.particles[i]].x + w[1] * rest[p.particles[i]].y;
-          s.y += w[2] * rest[p.particles[i]].x + w[3] * rest[p.particles[i]].y;
-          for (int e = 0; e < 4; ++e) sum[e] += w[e];
-        }
-        // translations carried: the weights sum to the identity
-        weight_error = std::max({weight_error, std::abs(sum[0] - 1.0), std::abs(sum[1]),
-                                 std::abs(sum[2]), std::abs(sum[3] - 1.0)});
+        const Vec3 s = position_of(p, rest);
+        std::array<double, 6> sum{};
+        for (int i = 0; i < kContactParticles && p.particles[i] >= 0; ++i)
+          for (int e = 0; e < 6; ++e) sum[e] += p.weights[i][e];
+        // translations in the plane carried: the weights sum to [I; 0]
+        weight_error =
+            std::max({weight_error, std::abs(sum[0] - 1.0), std::abs(sum[1]), std::abs(sum[2]),
+                      std::abs(sum[3] - 1.0), std::abs(sum[4]), std::abs(sum[5])});
         worst = std::max(worst, norm(s - lines.vertices[j][v]));
       }
     CHECK(k == pts.size());
     CHECK(worst <= 1e-12 * m.params.loop_radius);
     CHECK(weight_error <= 1e-12);
+  }
+}
+
+TEST_CASE(
+    "yarn contact: the points are the vertices to first order (their weights are the "
+    "vertices' derivatives)",
+    "[contact]") {
+  // Each point is the first-order Taylor map of its vertex at rest, so at a small in-plane
+  // displacement of size delta its error is O(delta^2): wrong weights would leave O(delta).
+  for (const char* chart : {"single_tuck.chart", "several_misses.chart", "several_tucks.chart"}) {
+    INFO(chart);
+    const KnitModel m = chart_model(chart, with_contact());
+    const double r = m.params.loop_radius;
+    auto worst_error = [&](double delta) {
+      std::mt19937 shake(5);
+      std::uniform_real_distribution<double> u(-delta * r, delta * r);
+      std::vector<Vec3> pos = m.rest_positions();
+      for (Vec3& p : pos) p.x += u(shake), p.y += u(shake);
+      const YarnPolylines lines = yarn_polylines(m, pos);
+      double worst = 0.0;
+      std::size_t k = 0;
+      for (const std::vector<Vec3>& course : lines.vertices)
+        for (const Vec3& vertex : course)
+          worst =
+              std::max(worst, norm(position_of(m.contact->contact().points[k++], pos) - vertex));
+      return worst / r;
+    };
+    const double coarse = worst_error(1e-3), fine = worst_error(5e-4);
+    CHECK(coarse <= 1e-4);         // delta = 1e-3: O(delta) errors would be ~1e-3
+    CHECK(fine <= 0.35 * coarse);  // halving delta divides a second-order error by ~4
   }
 }
 
@@ -268,13 +295,7 @@ TEST_CASE("yarn contact: single_tuck relaxed with contact keeps its yarns apart"
   std::size_t idx = 0;
   for (std::size_t j = 0; j < lines.vertices.size(); ++j)
     for (std::size_t k = 0; k < lines.vertices[j].size(); ++k, ++idx) {
-      const ContactPoint& p = m.contact->contact().points[idx];
-      Vec3 q = p.offset;
-      for (int i = 0; i < kContactParticles && p.particles[i] >= 0; ++i) {
-        const std::array<double, 4>& w = p.weights[i];
-        q.x += w[0] * pos[p.particles[i]].x + w[1] * pos[p.particles[i]].y;
-        q.y += w[2] * pos[p.particles[i]].x + w[3] * pos[p.particles[i]].y;
-      }
+      const Vec3 q = position_of(m.contact->contact().points[idx], pos);
       worst = std::max(worst, norm(q - lines.vertices[j][k]));
     }
   CHECK(worst <= 0.3 * r);
