@@ -439,6 +439,19 @@ KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
   if (p.yarn_contact()) {
     YarnContactSpec contact;
     contact.points = knit_contact_points(m);
+    // Renewal: the points are re-linearised about the current state where they stray from the
+    // centreline's vertices by more than kContactRefreshTol r (models/yarn_contact.hpp).
+    auto geometry = std::make_shared<const KnitModel>(m);
+    contact.exact = [geometry](const std::vector<Vec3>& positions, std::vector<Vec3>& out) {
+      out.clear();
+      for (const std::vector<Vec3>& course : yarn_polylines(*geometry, positions).vertices)
+        out.insert(out.end(), course.begin(), course.end());
+    };
+    contact.linearise = [geometry](const std::vector<Vec3>& positions, int course) {
+      return knit_contact_points(*geometry, positions, course);
+    };
+    contact.refresh_tol = kContactRefreshTol * r;
+    contact.refresh_move = kContactRefreshMove * r;
     contact.touching = r;
     contact.core = 0.9 * r;
     contact.stiffness = p.contact_ratio * p.wale_stiffness;
@@ -574,7 +587,11 @@ YarnPolylines yarn_polylines(const KnitModel& m, const std::vector<Vec3>& positi
   return out;
 }
 
-std::vector<ContactPoint> knit_contact_points(const KnitModel& m) {
+std::vector<ContactPoint> knit_contact_points(const KnitModel& m,
+                                              const std::vector<Vec3>& positions, int j) {
+  check_positions(m, positions);
+  if (j < 0 || j >= m.chart.courses)
+    throw std::invalid_argument("knit_contact_points: no such course");
   const int W = m.chart.wales, C = m.chart.courses, S = kYarnSamplesPerInterval;
   const double h = 1e-4 * m.params.loop_radius;  // central-difference step, m
   // A perturbed yarn point moves the interpolant by a factor ~0.27 less per interpolation point
@@ -583,83 +600,90 @@ std::vector<ContactPoint> knit_contact_points(const KnitModel& m) {
   // window's own ends change those derivatives by ~0.27^(kWindow - kReach) relative, and the
   // vertices further away have derivatives below ~0.27^kReach of the largest (~2e-6).
   constexpr int kWindow = 20, kReach = 10;
-  std::vector<Vec3> pos = m.rest_positions();
+  std::vector<Vec3> pos = positions;
   std::vector<ContactPoint> out;
   std::vector<Vec3> v, vp, vm;
-  std::vector<double> arc, scratch;
-  for (int j = 0; j < C; ++j) {
-    const std::vector<Vec3> yarn = course_yarn(m, pos, j);
-    const int n = static_cast<int>(yarn.size()) - 1;  // yarn points 0..n
-    course_polyline(yarn, S, v, arc);
-    // The particles course j's yarn depends on: levels j to the highest upper point of its loops.
-    int top = j + 1;
+  std::vector<double> arc;
+  const std::vector<Vec3> yarn = course_yarn(m, pos, j);
+  const int n = static_cast<int>(yarn.size()) - 1;  // yarn points 0..n
+  course_polyline(yarn, S, v, arc);
+  // The particles course j's yarn depends on: levels j to the highest upper point of its loops.
+  int top = j + 1;
+  for (int i = 0; i < W; ++i)
+    if (m.loop(i, j) >= 0) top = std::max(top, m.points[m.loops[m.loop(i, j)].upper].level);
+  std::vector<int> ids;
+  for (int L = j; L <= std::min(top, C); ++L)
     for (int i = 0; i < W; ++i)
-      if (m.loop(i, j) >= 0) top = std::max(top, m.points[m.loops[m.loop(i, j)].upper].level);
-    std::vector<int> ids;
-    for (int L = j; L <= std::min(top, C); ++L)
-      for (int i = 0; i < W; ++i)
-        if (m.point(i, L) >= 0) ids.push_back(m.point(i, L));
-    // d vertex / d particle (x, y) by central differences: per vertex, per particle, a 3 x 2.
-    std::vector<std::array<double, 6>> J(v.size() * ids.size(), std::array<double, 6>{});
-    for (std::size_t q = 0; q < ids.size(); ++q)
-      for (int c = 0; c < 2; ++c) {
-        double& coord = c == 0 ? pos[ids[q]].x : pos[ids[q]].y;
-        const double keep = coord;
-        coord = keep + h;
-        const std::vector<Vec3> plus = course_yarn(m, pos, j);
-        coord = keep - h;
-        const std::vector<Vec3> minus = course_yarn(m, pos, j);
-        coord = keep;
-        auto moved = [&](int k) {
-          return plus[k].x != yarn[k].x || plus[k].y != yarn[k].y || plus[k].z != yarn[k].z ||
-                 minus[k].x != yarn[k].x || minus[k].y != yarn[k].y || minus[k].z != yarn[k].z;
-        };
-        int a = n + 1, b = -1;  // the yarn points the particle moves
-        for (int k = 0; k <= n; ++k)
-          if (moved(k)) a = std::min(a, k), b = k;
-        if (b < 0) continue;
-        const int lo = std::max(0, a - kWindow), hi = std::min(n, b + kWindow);
-        const int first = std::max(0, a - kReach), last = std::min(n, b + kReach);
-        polyline_vertices({plus.begin() + lo, plus.begin() + hi + 1}, S, first - lo, last - lo, vp);
-        polyline_vertices({minus.begin() + lo, minus.begin() + hi + 1}, S, first - lo, last - lo,
-                          vm);
-        for (int k = first * S; k <= last * S; ++k) {
-          const int t = k - first * S;  // the vertex's index in vp, vm
-          J[k * ids.size() + q][c] = (vp[t].x - vm[t].x) / (2.0 * h);      // d vx / d c
-          J[k * ids.size() + q][2 + c] = (vp[t].y - vm[t].y) / (2.0 * h);  // d vy / d c
-          J[k * ids.size() + q][4 + c] = (vp[t].z - vm[t].z) / (2.0 * h);  // d vz / d c
-        }
-      }
-    // Per vertex the kContactParticles particles of largest |W|; the rest is added to the
-    // largest, so the weights sum to [I; 0] (translations in the plane carried exactly).
-    std::vector<int> order(ids.size());
-    for (std::size_t k = 0; k < v.size(); ++k) {
-      const std::array<double, 6>* row = &J[k * ids.size()];
-      auto size = [&](int q) {
-        double s = 0.0;
-        for (double w : row[q]) s += w * w;
-        return s;
+      if (m.point(i, L) >= 0) ids.push_back(m.point(i, L));
+  // d vertex / d particle (x, y) by central differences: per vertex, per particle, a 3 x 2.
+  std::vector<std::array<double, 6>> J(v.size() * ids.size(), std::array<double, 6>{});
+  for (std::size_t q = 0; q < ids.size(); ++q)
+    for (int c = 0; c < 2; ++c) {
+      double& coord = c == 0 ? pos[ids[q]].x : pos[ids[q]].y;
+      const double keep = coord;
+      coord = keep + h;
+      const std::vector<Vec3> plus = course_yarn(m, pos, j);
+      coord = keep - h;
+      const std::vector<Vec3> minus = course_yarn(m, pos, j);
+      coord = keep;
+      auto moved = [&](int k) {
+        return plus[k].x != yarn[k].x || plus[k].y != yarn[k].y || plus[k].z != yarn[k].z ||
+               minus[k].x != yarn[k].x || minus[k].y != yarn[k].y || minus[k].z != yarn[k].z;
       };
-      for (std::size_t q = 0; q < ids.size(); ++q) order[q] = static_cast<int>(q);
-      const std::size_t keep = std::min<std::size_t>(kContactParticles, ids.size());
-      std::partial_sort(order.begin(), order.begin() + keep, order.end(),
-                        [&](int a, int b) { return size(a) > size(b); });
-      ContactPoint p;
-      p.yarn = j;
-      p.arc = arc[k];
-      std::array<double, 6> rest_sum{};
-      for (std::size_t q = 0; q < keep; ++q) {
-        p.particles[q] = ids[order[q]];
-        p.weights[q] = row[order[q]];
-        for (int e = 0; e < 6; ++e) rest_sum[e] += row[order[q]][e];
+      int a = n + 1, b = -1;  // the yarn points the particle moves
+      for (int k = 0; k <= n; ++k)
+        if (moved(k)) a = std::min(a, k), b = k;
+      if (b < 0) continue;
+      const int lo = std::max(0, a - kWindow), hi = std::min(n, b + kWindow);
+      const int first = std::max(0, a - kReach), last = std::min(n, b + kReach);
+      polyline_vertices({plus.begin() + lo, plus.begin() + hi + 1}, S, first - lo, last - lo, vp);
+      polyline_vertices({minus.begin() + lo, minus.begin() + hi + 1}, S, first - lo, last - lo, vm);
+      for (int k = first * S; k <= last * S; ++k) {
+        const int t = k - first * S;                                 // the vertex's index in vp, vm
+        J[k * ids.size() + q][c] = (vp[t].x - vm[t].x) / (2.0 * h);  // d vx / d c
+        J[k * ids.size() + q][2 + c] = (vp[t].y - vm[t].y) / (2.0 * h);  // d vy / d c
+        J[k * ids.size() + q][4 + c] = (vp[t].z - vm[t].z) / (2.0 * h);  // d vz / d c
       }
-      const std::array<double, 6> identity{1.0, 0.0, 0.0, 1.0, 0.0, 0.0};
-      for (int e = 0; e < 6; ++e) p.weights[0][e] += identity[e] - rest_sum[e];
-      p.offset = Vec3{0.0, 0.0, 0.0};
-      const Vec3 at_rest = position_of(p, pos);
-      p.offset = v[k] - at_rest;
-      out.push_back(p);
     }
+  // Per vertex the kContactParticles particles of largest |W|; the rest is added to the
+  // largest, so the weights sum to [I; 0] (translations in the plane carried exactly).
+  std::vector<int> order(ids.size());
+  for (std::size_t k = 0; k < v.size(); ++k) {
+    const std::array<double, 6>* row = &J[k * ids.size()];
+    auto size = [&](int q) {
+      double s = 0.0;
+      for (double w : row[q]) s += w * w;
+      return s;
+    };
+    for (std::size_t q = 0; q < ids.size(); ++q) order[q] = static_cast<int>(q);
+    const std::size_t keep = std::min<std::size_t>(kContactParticles, ids.size());
+    std::partial_sort(order.begin(), order.begin() + keep, order.end(),
+                      [&](int a, int b) { return size(a) > size(b); });
+    ContactPoint p;
+    p.yarn = j;
+    p.arc = arc[k];
+    std::array<double, 6> rest_sum{};
+    for (std::size_t q = 0; q < keep; ++q) {
+      p.particles[q] = ids[order[q]];
+      p.weights[q] = row[order[q]];
+      for (int e = 0; e < 6; ++e) rest_sum[e] += row[order[q]][e];
+    }
+    const std::array<double, 6> identity{1.0, 0.0, 0.0, 1.0, 0.0, 0.0};
+    for (int e = 0; e < 6; ++e) p.weights[0][e] += identity[e] - rest_sum[e];
+    p.offset = Vec3{0.0, 0.0, 0.0};
+    const Vec3 at_rest = position_of(p, pos);
+    p.offset = v[k] - at_rest;
+    out.push_back(p);
+  }
+  return out;
+}
+
+std::vector<ContactPoint> knit_contact_points(const KnitModel& m) {
+  const std::vector<Vec3> rest = m.rest_positions();
+  std::vector<ContactPoint> out;
+  for (int j = 0; j < m.chart.courses; ++j) {
+    const std::vector<ContactPoint> course = knit_contact_points(m, rest, j);
+    out.insert(out.end(), course.begin(), course.end());
   }
   return out;
 }

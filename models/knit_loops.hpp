@@ -317,5 +317,15 @@ YarnPolylines yarn_polylines(const KnitModel& m, const std::vector<Vec3>& positi
 // The yarn contact's points (see "Yarn contact" above): the rest yarn polylines' vertices, each
 // affine in the interlacing points around it; yarn = course, arc = the polyline's rest arc.
 std::vector<ContactPoint> knit_contact_points(const KnitModel& m);
+// Course j's contact points linearised about the given positions of every point (their vertices
+// there, first-order in the points' x and y). Throws std::invalid_argument for a bad course or
+// positions.
+std::vector<ContactPoint> knit_contact_points(const KnitModel& m,
+                                              const std::vector<Vec3>& positions, int j);
+// Renewal of the contact points (ContactNetwork::refresh), in units of r: a course is
+// re-linearised when one of its points strays kContactRefreshTol from its vertex, checked once an
+// interlacing point has moved kContactRefreshMove since the last renewal.
+constexpr double kContactRefreshTol = 0.01;
+constexpr double kContactRefreshMove = 0.05;
 
 }  // namespace knitsim

@@ -77,23 +77,20 @@ ContactNetwork::ContactNetwork(SpringNetwork network, YarnContactSpec contact)
   if (spec_.skin == 0.0) spec_.skin = c.touching - c.core;
   if (spec_.pattern_radius == 0.0) spec_.pattern_radius = 2.0 * c.touching;
   reach_ = spec_.touching + spec_.skin;
-  wmax_ = 0.0;
-  for (const ContactPoint& p : spec_.points) {
-    double w = 0.0;
-    int count = 0;
-    for (int i = 0; i < kContactParticles && p.particles[i] >= 0; ++i, ++count) {
-      if (p.particles[i] >= net_.particle_count())
-        throw std::invalid_argument("yarn contact: a point's particle is out of range");
-      double f2 = 0.0;
-      for (double v : p.weights[i]) {
-        if (!std::isfinite(v)) throw std::invalid_argument("yarn contact: a weight is not finite");
-        f2 += v * v;
-      }
-      w += std::sqrt(f2);
+  update_wmax();
+  if (c.refresh_tol < 0.0 || c.refresh_move < 0.0)
+    throw std::invalid_argument("yarn contact: negative refresh tolerance or move");
+  if (c.exact && c.linearise) {
+    int yarns = 0;
+    for (std::size_t k = 0; k < c.points.size(); ++k) {
+      if (c.points[k].yarn < yarns - 1 || c.points[k].yarn < 0)
+        throw std::invalid_argument("yarn contact: renewable points must be ordered by yarn");
+      while (yarns <= c.points[k].yarn) yarn_begin_.push_back(static_cast<int>(k)), ++yarns;
     }
-    if (count == 0 || !is_finite(p.offset))
-      throw std::invalid_argument("yarn contact: a point has no particle or a non-finite offset");
-    wmax_ = std::max(wmax_, w);
+    yarn_begin_.push_back(static_cast<int>(c.points.size()));
+    std::vector<double> x0(net_.dof()), v0(net_.dof());
+    net_.initial_state(x0.data(), v0.data());
+    net_.all_positions(0.0, x0.data(), renewed_at_);
   }
   const CscPattern& np = net_.stiffness_pattern();
   if (!has_node_triples(np))
@@ -136,6 +133,71 @@ bool ContactNetwork::may_pair(int a, int b) const {
   const ContactPoint& p = spec_.points[a];
   const ContactPoint& q = spec_.points[b];
   return p.yarn != q.yarn || std::abs(p.arc - q.arc) >= spec_.same_yarn_gap;
+}
+
+void ContactNetwork::update_wmax() const {
+  wmax_ = 0.0;
+  for (const ContactPoint& p : spec_.points) {
+    double w = 0.0;
+    int count = 0;
+    for (int i = 0; i < kContactParticles && p.particles[i] >= 0; ++i, ++count) {
+      if (p.particles[i] >= net_.particle_count())
+        throw std::invalid_argument("yarn contact: a point's particle is out of range");
+      double f2 = 0.0;
+      for (double v : p.weights[i]) {
+        if (!std::isfinite(v)) throw std::invalid_argument("yarn contact: a weight is not finite");
+        f2 += v * v;
+      }
+      w += std::sqrt(f2);
+    }
+    if (count == 0 || !is_finite(p.offset))
+      throw std::invalid_argument("yarn contact: a point has no particle or a non-finite offset");
+    wmax_ = std::max(wmax_, w);
+  }
+}
+
+bool ContactNetwork::refresh(double t, const double* x) const {
+  if (yarn_begin_.empty() || !(spec_.refresh_tol > 0.0)) return false;
+  net_.all_positions(t, x, pos_);
+  double moved = 0.0;
+  for (std::size_t i = 0; i < pos_.size(); ++i) {
+    if (!is_finite(pos_[i])) return false;
+    moved = std::max(
+        {moved, std::abs(pos_[i].x - renewed_at_[i].x), std::abs(pos_[i].y - renewed_at_[i].y)});
+  }
+  if (moved < spec_.refresh_move) return false;
+  const std::vector<Vec3> particles = pos_;
+  spec_.exact(particles, exact_);
+  if (exact_.size() != spec_.points.size())
+    throw std::logic_error("yarn contact: exact positions of another number of points");
+  positions(t, x);
+  std::vector<std::pair<int, std::vector<ContactPoint>>> undo;  // per renewed yarn, its points
+  for (int y = 0; y + 1 < static_cast<int>(yarn_begin_.size()); ++y) {
+    double drift = 0.0;
+    for (int k = yarn_begin_[y]; k < yarn_begin_[y + 1]; ++k)
+      drift = std::max(drift, norm(exact_[k] - pts_[k]));
+    if (!(drift > spec_.refresh_tol)) continue;
+    std::vector<ContactPoint> fresh = spec_.linearise(particles, y);
+    if (static_cast<int>(fresh.size()) != yarn_begin_[y + 1] - yarn_begin_[y])
+      throw std::logic_error("yarn contact: a renewed yarn has another number of points");
+    auto first = spec_.points.begin() + yarn_begin_[y];
+    undo.emplace_back(y, std::vector<ContactPoint>(first, first + fresh.size()));
+    std::copy(fresh.begin(), fresh.end(), first);
+  }
+  if (undo.empty()) return false;
+  update_wmax();
+  listed_at_.clear();                        // points moved: the near-pair list is stale
+  if (!(min_distance(t, x) > spec_.core)) {  // a pair would start inside its core: undone
+    for (const auto& [y, old] : undo)
+      std::copy(old.begin(), old.end(), spec_.points.begin() + yarn_begin_[y]);
+    update_wmax();
+    listed_at_.clear();
+    ++refusals_;
+    return false;
+  }
+  renewed_at_ = particles;
+  refreshes_ += static_cast<long>(undo.size());
+  return true;
 }
 
 Vec3 position_of(const ContactPoint& point, const std::vector<Vec3>& particles) {

@@ -34,6 +34,14 @@
 // its forces and energy; the Jacobian then misses that block (counted: pattern_misses()), which
 // slows Newton but does not change the state reached.
 //
+// Renewal (refresh; optional): the points approximate positions the caller can compute exactly
+// (the knit's centreline vertices), to first order about a state. Given both functions, refresh
+// at an accepted state compares each yarn's points with their exact positions and re-linearises
+// the yarns whose points stray more than refresh_tol about that state (the run driver calls it at
+// each stop check; integrators then forget their history). A renewal that would put a pair inside
+// its core is undone (counted: refusals()). The sparse pattern stays the construction's: renewed
+// points may depend on other particles, whose missing blocks count as pattern misses.
+//
 // Step filter (admissible_step): the largest fraction of a step dx along which no pair's
 // distance falls below d0 + filter_keep (D_start - d0), found exactly (linear motion of two
 // points: a quadratic in the fraction); pairs by their swept boxes on the grid. The equilibrium
@@ -47,6 +55,7 @@
 #pragma once
 
 #include <array>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -84,6 +93,14 @@ struct YarnContactSpec {
   double skin = 0.0;            // m: the near-pair list's margin (0: (d - d0))
   double pattern_radius = 0.0;  // m: pairs this close at the start have Jacobian blocks (0: 2 d)
   double filter_keep = 0.2;     // a step keeps at least this fraction of a pair's gap to d0
+  // Renewal (see above; both set, or the points are never renewed). `exact` writes every point's
+  // exact position (points order) from every particle's position; `linearise` returns yarn y's
+  // points (as many as it has, in order) linearised about those positions. Points must be
+  // ordered by yarn.
+  std::function<void(const std::vector<Vec3>&, std::vector<Vec3>&)> exact;
+  std::function<std::vector<ContactPoint>(const std::vector<Vec3>&, int)> linearise;
+  double refresh_tol = 0.0;   // m: a yarn is renewed when one of its points strays this far
+  double refresh_move = 0.0;  // m: and only checked once a particle moved this far (x or y) since
 };
 
 class ContactNetwork final : public MechanicalSystem {
@@ -110,6 +127,7 @@ class ContactNetwork final : public MechanicalSystem {
   bool project(double t, double* x, double* v) const override { return net_.project(t, x, v); }
   double potential_energy(double t, const double* x) const override;
   double admissible_step(double t, const double* x, const double* dx) const override;
+  bool refresh(double t, const double* x) const override;
   std::string describe() const override;
 
   const SpringNetwork& network() const { return net_; }
@@ -122,6 +140,8 @@ class ContactNetwork final : public MechanicalSystem {
   // Pairs in contact whose Jacobian blocks were not all in the pattern, over all evaluations.
   long pattern_misses() const { return pattern_misses_; }
   long list_rebuilds() const { return rebuilds_; }
+  long refreshes() const { return refreshes_; }  // yarns renewed, over all refreshes
+  long refusals() const { return refusals_; }    // renewals undone (a pair inside its core)
 
  private:
   struct Pair {
@@ -131,6 +151,7 @@ class ContactNetwork final : public MechanicalSystem {
   void refresh_pairs() const;                       // the near-pair list at pos_, if stale
   bool pairs_of(double t, const double* x) const;   // positions + list; false if not finite
   bool may_pair(int a, int b) const;
+  void update_wmax() const;  // wmax_ of the current points; throws on a bad point
   // Calls on_contact(pair, p_a - p_b, D, dE/dD, d2E/dD2) for every pair closer than d at (t, x);
   // false (stopping) if the state is not finite or a pair is inside its core.
   template <class OnContact>
@@ -144,16 +165,17 @@ class ContactNetwork final : public MechanicalSystem {
   int block_entry(int fr, int fc) const;  // node entry of free particles (fr, fc), or -1
 
   SpringNetwork net_;
-  YarnContactSpec spec_;
+  mutable YarnContactSpec spec_;  // its points are renewed by refresh
   double reach_ = 0.0;          // d + skin
-  double wmax_ = 1.0;           // the largest sum |w| of a point
+  mutable double wmax_ = 1.0;   // the largest sum |w| of a point
   CscPattern nodes_;            // the free particles' block pattern
   CscPattern pattern_;          // nodes_ expanded to 3 x 3 blocks
   std::vector<int> net_entry_;  // per value of the network's pattern, its place in pattern_
-  mutable std::vector<Vec3> pos_, pts_, listed_at_;
+  std::vector<int> yarn_begin_;  // per yarn, its first point (and the end last)
+  mutable std::vector<Vec3> pos_, pts_, listed_at_, exact_, renewed_at_;
   mutable std::vector<Pair> pairs_;
   mutable std::vector<double> net_values_, force_;
-  mutable long pattern_misses_ = 0, rebuilds_ = 0;
+  mutable long pattern_misses_ = 0, rebuilds_ = 0, refreshes_ = 0, refusals_ = 0;
 };
 
 }  // namespace knitsim

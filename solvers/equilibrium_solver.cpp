@@ -130,6 +130,11 @@ class EquilibriumSolver final : public Integrator {
     return fall_back();
   }
 
+  void model_changed() override {
+    if (inner_) return inner_->model_changed();  // the pins' motion, or the fallback
+    if (!fresh_) evaluate(x_.data());  // E, F and Ax of the changed model at the flow's state
+  }
+
   // The flow is stuck, or stays on a state the driver's stop cannot certify (K singular or with
   // a negative pivot no mode is found for; its t never advances, so t_max would never end it):
   // the dynamics (cvode-bdf) take over from here, at rest.

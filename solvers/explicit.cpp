@@ -65,6 +65,8 @@ class FixedStepExplicit : public Integrator {
     s.max_order_used = info_.order;
   }
 
+  void model_changed() override { prepare(); }  // Verlet's cached a(x) is the old model's
+
  protected:
   virtual void prepare() {}
   Step blown_up() const {

@@ -383,6 +383,7 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
              << " s)";
         return finish(RunStatus::Diverged, os.str());
       }
+      if (sys.refresh(t, integ.positions())) integ.model_changed();
       const double r = sys.static_residual(t, integ.positions());
       if (observer) observer->on_check(t, integ.positions(), integ.velocities(), r);
       note_reference(t, integ.positions(), integ.velocities());

@@ -182,6 +182,10 @@ class Integrator {
   // order history, keeping its counters; false if the method cannot (the default).
   virtual bool restart() { return false; }
 
+  // The system's functions changed at the current state (MechanicalSystem::refresh): forget
+  // what was computed from the old ones (step history, cached forces). Default: restart().
+  virtual void model_changed() { restart(); }
+
   // Method order of the step just taken: the controller's choice for variable-order methods
   // (cvode-bdf, cvode-adams), else info().order.
   virtual int last_order() const { return info().order; }

@@ -82,6 +82,13 @@ class MechanicalSystem {
     return 1.0;
   }
 
+  // Lets a model that approximates part of itself about a state (the yarn contact's points,
+  // linearised about where the yarn was) renew that approximation at an accepted state x;
+  // returns true if its functions changed there, so integrators must forget what they computed
+  // from them (Integrator::model_changed). The run driver calls it at each stop check. Default:
+  // nothing to renew.
+  virtual bool refresh(double /*t*/, const double* /*x*/) const { return false; }
+
   // Position constraint projection for the explicit reference paths (Provot 1995): called
   // after each step; returns true if anything moved. Implicit paths never call it.
   virtual bool project(double /*t*/, double* /*x*/, double* /*v*/) const { return false; }
