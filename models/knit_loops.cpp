@@ -444,7 +444,8 @@ KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
     auto geometry = std::make_shared<const KnitModel>(m);
     contact.exact = [geometry](const std::vector<Vec3>& positions, std::vector<Vec3>& out) {
       out.clear();
-      for (const std::vector<Vec3>& course : yarn_polylines(*geometry, positions).vertices)
+      for (const std::vector<Vec3>& course :
+           yarn_polylines(*geometry, positions, kContactSamplesPerInterval).vertices)
         out.insert(out.end(), course.begin(), course.end());
     };
     contact.linearise = [geometry](const std::vector<Vec3>& positions, int course) {
@@ -452,6 +453,7 @@ KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
     };
     contact.refresh_tol = kContactRefreshTol * r;
     contact.refresh_move = kContactRefreshMove * r;
+    contact.step_cap = kContactStepCap * r;
     contact.touching = r;
     contact.core = 0.9 * r;
     contact.stiffness = p.contact_ratio * p.wale_stiffness;
@@ -592,7 +594,7 @@ std::vector<ContactPoint> knit_contact_points(const KnitModel& m,
   check_positions(m, positions);
   if (j < 0 || j >= m.chart.courses)
     throw std::invalid_argument("knit_contact_points: no such course");
-  const int W = m.chart.wales, C = m.chart.courses, S = kYarnSamplesPerInterval;
+  const int W = m.chart.wales, C = m.chart.courses, S = kContactSamplesPerInterval;
   const double h = 1e-4 * m.params.loop_radius;  // central-difference step, m
   // A perturbed yarn point moves the interpolant by a factor ~0.27 less per interpolation point
   // away (a cubic's cardinal functions), so the differences interpolate only the yarn points the

@@ -322,10 +322,16 @@ std::vector<ContactPoint> knit_contact_points(const KnitModel& m);
 // positions.
 std::vector<ContactPoint> knit_contact_points(const KnitModel& m,
                                               const std::vector<Vec3>& positions, int j);
-// Renewal of the contact points (ContactNetwork::refresh), in units of r: a course is
-// re-linearised when one of its points strays kContactRefreshTol from its vertex, checked once an
-// interlacing point has moved kContactRefreshMove since the last renewal.
+// The contact's sampling and renewal, in units of r (docs/knit.md, "Yarn contact"): points at
+// kContactSamplesPerInterval per interpolation interval (twice the measuring polyline's: the
+// barrier keeps points apart, and segments between points spaced s can pass within
+// sqrt(D^2 - s^2 / 2) of each other); a course is re-linearised when one of its points strays
+// kContactRefreshTol from its vertex, checked once an interlacing point has moved
+// kContactRefreshMove since the last renewal; a solver step moves no point more than
+// kContactStepCap (the points stray ~quadratically in the step).
+constexpr int kContactSamplesPerInterval = 16;
 constexpr double kContactRefreshTol = 0.01;
 constexpr double kContactRefreshMove = 0.05;
+constexpr double kContactStepCap = 0.5;
 
 }  // namespace knitsim

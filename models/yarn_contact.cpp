@@ -71,11 +71,12 @@ ContactNetwork::ContactNetwork(SpringNetwork network, YarnContactSpec contact)
     throw std::invalid_argument("yarn contact: need 0 < core < touching distance");
   if (!(c.stiffness > 0.0 && std::isfinite(c.stiffness)))
     throw std::invalid_argument("yarn contact: stiffness must be positive and finite");
-  if (!(c.same_yarn_gap >= 0.0 && c.skin >= 0.0 && c.pattern_radius >= 0.0 && c.filter_keep > 0.0 &&
-        c.filter_keep < 1.0))
+  if (!(c.same_yarn_gap >= 0.0 && c.skin >= 0.0 && c.pattern_radius >= 0.0 && c.step_cap >= 0.0 &&
+        c.filter_keep > 0.0 && c.filter_keep < 1.0))
     throw std::invalid_argument("yarn contact: bad gap, skin, pattern radius or filter fraction");
   if (spec_.skin == 0.0) spec_.skin = c.touching - c.core;
   if (spec_.pattern_radius == 0.0) spec_.pattern_radius = 2.0 * c.touching;
+  if (spec_.step_cap == 0.0) spec_.step_cap = 4.0 * c.touching;
   reach_ = spec_.touching + spec_.skin;
   update_wmax();
   if (c.refresh_tol < 0.0 || c.refresh_move < 0.0)
@@ -412,9 +413,10 @@ double ContactNetwork::admissible_step(double t, const double* x, const double* 
   }
   pts_ = start;  // the cached points describe x again (the pair list is x's)
   if (!(longest < std::numeric_limits<double>::infinity())) return 0.0;
-  // A step that moves a point by more than 4 d is cut to that first (a yarn jumping several
-  // diameters in one Newton step is not trusted, and the swept boxes stay small).
-  const double cap = longest > 4.0 * spec_.touching ? 4.0 * spec_.touching / longest : 1.0;
+  // A step that moves a point by more than step_cap is cut to that first (a yarn jumping several
+  // diameters in one Newton step is not trusted, the swept boxes stay small, and renewable
+  // points stray less from their exact positions within one step).
+  const double cap = longest > spec_.step_cap ? spec_.step_cap / longest : 1.0;
   std::vector<Box> boxes(start.size());
   for (std::size_t k = 0; k < start.size(); ++k) {
     const Vec3 e = start[k] + cap * move[k];

@@ -42,8 +42,9 @@
 // its core is undone (counted: refusals()). The sparse pattern stays the construction's: renewed
 // points may depend on other particles, whose missing blocks count as pattern misses.
 //
-// Step filter (admissible_step): the largest fraction of a step dx along which no pair's
-// distance falls below d0 + filter_keep (D_start - d0), found exactly (linear motion of two
+// Step filter (admissible_step): a step that moves some point more than step_cap is cut to that;
+// then the largest fraction of it along which no pair's distance falls below
+// d0 + filter_keep (D_start - d0), found exactly (linear motion of two
 // points: a quadratic in the fraction); pairs by their swept boxes on the grid. The equilibrium
 // solver and implicit-euler shorten their steps by it, so no step jumps through the barrier.
 // The SUNDIALS methods have no such hook: a state inside the core gives a non-finite
@@ -93,6 +94,7 @@ struct YarnContactSpec {
   double skin = 0.0;            // m: the near-pair list's margin (0: (d - d0))
   double pattern_radius = 0.0;  // m: pairs this close at the start have Jacobian blocks (0: 2 d)
   double filter_keep = 0.2;     // a step keeps at least this fraction of a pair's gap to d0
+  double step_cap = 0.0;        // m: a step moves no point further than this (0: 4 d)
   // Renewal (see above; both set, or the points are never renewed). `exact` writes every point's
   // exact position (points order) from every particle's position; `linearise` returns yarn y's
   // points (as many as it has, in order) linearised about those positions. Points must be
