@@ -441,21 +441,29 @@ KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
     contact.points = knit_contact_points(m);
     // Renewal: the points are re-linearised about the current state where they stray from the
     // centreline's vertices by more than kContactRefreshTol r (models/yarn_contact.hpp).
+    // Renewed points keep the particles they have at rest, so their Jacobian blocks stay in the
+    // contact's fixed pattern.
     auto geometry = std::make_shared<const KnitModel>(m);
+    auto rest_points = std::make_shared<const std::vector<ContactPoint>>(contact.points);
+    auto course_start = std::make_shared<std::vector<std::size_t>>(m.chart.courses + 1, 0);
+    for (const ContactPoint& q : contact.points) ++(*course_start)[q.yarn + 1];
+    for (int j = 0; j < m.chart.courses; ++j) (*course_start)[j + 1] += (*course_start)[j];
     contact.exact = [geometry](const std::vector<Vec3>& positions, std::vector<Vec3>& out) {
       out.clear();
       for (const std::vector<Vec3>& course :
            yarn_polylines(*geometry, positions, kContactSamplesPerInterval).vertices)
         out.insert(out.end(), course.begin(), course.end());
     };
-    contact.linearise = [geometry](const std::vector<Vec3>& positions, int course) {
-      return knit_contact_points(*geometry, positions, course);
+    contact.linearise = [geometry, rest_points, course_start](const std::vector<Vec3>& positions,
+                                                              int course) {
+      return knit_contact_points(*geometry, positions, course,
+                                 rest_points->data() + (*course_start)[course]);
     };
     contact.refresh_tol = kContactRefreshTol * r;
     contact.refresh_move = kContactRefreshMove * r;
     contact.step_cap = kContactStepCap * r;
     contact.touching = r;
-    contact.core = 0.9 * r;
+    contact.core = kContactCore * r;
     contact.stiffness = p.contact_ratio * p.wale_stiffness;
     contact.same_yarn_gap = kSameYarnGap * r;
     m.contact = std::make_shared<ContactNetwork>(m.network, std::move(contact));
@@ -590,7 +598,8 @@ YarnPolylines yarn_polylines(const KnitModel& m, const std::vector<Vec3>& positi
 }
 
 std::vector<ContactPoint> knit_contact_points(const KnitModel& m,
-                                              const std::vector<Vec3>& positions, int j) {
+                                              const std::vector<Vec3>& positions, int j,
+                                              const ContactPoint* particles_of) {
   check_positions(m, positions);
   if (j < 0 || j >= m.chart.courses)
     throw std::invalid_argument("knit_contact_points: no such course");
@@ -658,9 +667,20 @@ std::vector<ContactPoint> knit_contact_points(const KnitModel& m,
       return s;
     };
     for (std::size_t q = 0; q < ids.size(); ++q) order[q] = static_cast<int>(q);
-    const std::size_t keep = std::min<std::size_t>(kContactParticles, ids.size());
-    std::partial_sort(order.begin(), order.begin() + keep, order.end(),
-                      [&](int a, int b) { return size(a) > size(b); });
+    std::size_t keep = std::min<std::size_t>(kContactParticles, ids.size());
+    if (particles_of != nullptr) {  // the given point's particles, in its order
+      const ContactPoint& given = particles_of[k];
+      keep = 0;
+      for (int i = 0; i < kContactParticles && given.particles[i] >= 0; ++i) {
+        const auto at = std::find(ids.begin(), ids.end(), given.particles[i]);
+        if (at == ids.end())
+          throw std::invalid_argument("knit_contact_points: a given particle is not the course's");
+        order[keep++] = static_cast<int>(at - ids.begin());
+      }
+    } else {
+      std::partial_sort(order.begin(), order.begin() + keep, order.end(),
+                        [&](int a, int b) { return size(a) > size(b); });
+    }
     ContactPoint p;
     p.yarn = j;
     p.arc = arc[k];

@@ -131,8 +131,8 @@
 // first-order Taylor map of its vertex about the rest state in the (x, y) of the (up to 8)
 // interlacing points it depends on most (weights by central differences at set-up, the rest
 // lumped onto the largest so in-plane translations are exact; its depth follows too).
-// Touching distance d = r (the yarn diameter), core d0 = 0.9 r, kappa = c k_w; yarns are one
-// course each, and pieces of one course pair if kSameYarnGap r apart along it.
+// Touching distance d = r (the yarn diameter), core d0 = kContactCore r, kappa = c k_w; yarns are
+// one course each, and pieces of one course pair if kSameYarnGap r apart along it.
 //
 // Failure modes: a bad chart or parameters throw std::invalid_argument at set-up (chart
 // messages name row and column). Geometry functions expect positions of every point
@@ -318,10 +318,12 @@ YarnPolylines yarn_polylines(const KnitModel& m, const std::vector<Vec3>& positi
 // affine in the interlacing points around it; yarn = course, arc = the polyline's rest arc.
 std::vector<ContactPoint> knit_contact_points(const KnitModel& m);
 // Course j's contact points linearised about the given positions of every point (their vertices
-// there, first-order in the points' x and y). Throws std::invalid_argument for a bad course or
-// positions.
+// there, first-order in the points' x and y), each on the (up to 8) particles it depends on most,
+// or, given particles_of (course j's points, in order), on the particles of its namesake there.
+// Throws std::invalid_argument for a bad course, positions or particle.
 std::vector<ContactPoint> knit_contact_points(const KnitModel& m,
-                                              const std::vector<Vec3>& positions, int j);
+                                              const std::vector<Vec3>& positions, int j,
+                                              const ContactPoint* particles_of = nullptr);
 // The contact's sampling and renewal, in units of r (docs/knit.md, "Yarn contact"): points at
 // kContactSamplesPerInterval per interpolation interval (twice the measuring polyline's: the
 // barrier keeps points apart, and segments between points spaced s can pass within
@@ -329,6 +331,10 @@ std::vector<ContactPoint> knit_contact_points(const KnitModel& m,
 // kContactRefreshTol from its vertex, checked once an interlacing point has moved
 // kContactRefreshMove since the last renewal; a solver step moves no point more than
 // kContactStepCap (the points stray ~quadratically in the step).
+// The barrier's core: points never come closer than kContactCore; with points at most ~0.3 r
+// apart along the yarn the centreline's segments then stay >= ~0.93 r apart (the contact target
+// is 0.9 r; touching distance d = r).
+constexpr double kContactCore = 0.95;
 constexpr int kContactSamplesPerInterval = 16;
 constexpr double kContactRefreshTol = 0.01;
 constexpr double kContactRefreshMove = 0.05;

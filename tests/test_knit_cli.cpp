@@ -155,6 +155,33 @@ TEST_CASE("knitsim knit: paper 2's network by name warns once that it is a mecha
   }
 }
 
+TEST_CASE(
+    "knitsim knit: with yarn contact the default integrator is implicit-euler and the "
+    "summary reports the contact") {
+  const TempDir tmp("knit-contact");
+  std::string err;
+  REQUIRE(run_small_chart(tmp, "--no-pictures", err) == 0);
+  auto summary = nlohmann::json::parse(slurp(tmp.path / "out" / "summary.json"));
+  CHECK(summary["integrator"] == "cvode-bdf");
+  CHECK(summary["contact"].is_null());
+  REQUIRE(run_small_chart(tmp, "--no-pictures --set knit.contact=10", err) == 0);
+  summary = nlohmann::json::parse(slurp(tmp.path / "out" / "summary.json"));
+  CHECK(summary["integrator"] == "implicit-euler");
+  const auto& c = summary["contact"];
+  REQUIRE(c.is_object());
+  CHECK(c["points"].get<int>() > 0);
+  CHECK(c["pattern_misses"] == 0);
+  CHECK(c["renewals_undone"] == 0);
+  CHECK(c["min_point_distance_over_r"].get<double>() > kContactCore);
+  CHECK(summary["yarn"]["clearance_min_over_r"].get<double>() >= 0.9);
+  REQUIRE(run_small_chart(tmp,
+                          "--no-pictures --set knit.contact=10 --integrator verlet "
+                          "--set run.t_max=1e-5",
+                          err) != 2);
+  summary = nlohmann::json::parse(slurp(tmp.path / "out" / "summary.json"));
+  CHECK(summary["integrator"] == "verlet");  // an explicit --integrator is kept
+}
+
 TEST_CASE("knitsim knit: a run that ends in a non-finite state still writes its outputs") {
   // Springs of 1e299 N/m overflow the forces in a few steps: the run ends `diverged` (exit 3)
   // and summary.json and points.csv are written; the non-finite state has no centrelines (they

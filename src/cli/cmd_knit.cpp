@@ -382,6 +382,24 @@ nlohmann::json measures_json(const KnitMeasures& k) {
           {"crossings_changed", k.crossings.changed}};
 }
 
+// The yarn contact's state at the end of a run (null without contact): its closest points and
+// how many pairs touch, and its counters over the run (models/yarn_contact.hpp).
+nlohmann::json contact_json(const KnitModel& m, double t, const std::vector<double>& x) {
+  if (!m.contact) return nullptr;
+  const ContactNetwork& c = *m.contact;
+  int touching = 0;
+  const double closest = c.min_distance(t, x.data(), &touching);
+  return {{"points", c.contact().points.size()},
+          {"min_point_distance_over_r", std::isfinite(closest)
+                                            ? nlohmann::json(closest / m.params.loop_radius)
+                                            : nlohmann::json(nullptr)},
+          {"pairs_in_contact", touching},
+          {"renewed_yarns", c.refreshes()},
+          {"renewals_undone", c.refusals()},
+          {"pattern_misses", c.pattern_misses()},
+          {"list_rebuilds", c.list_rebuilds()}};
+}
+
 void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m,
                    const IntegratorOptions& opt, const RunStats& stats,
                    const std::vector<double>& x, const std::vector<FrameRecorder::Frame>& frames,
@@ -489,31 +507,39 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
       {"dof", m.network.dof()},
       {"max_displacement_over_r", max_displacement_over_r(m, pos)},
       {"yarn", measures_json(measures)},
+      {"contact", contact_json(m, stats.t_final, x)},
       {"frames", frame_list},
       {"params", params_json(m.params)},
       {"options", options},
-      {"units", summary_units({{"residual, residual_floor",
-                                "1: the static residual (SPEC 2.3), max "
-                                "over free points of |net force| / (k_w r), "
-                                "a wale spring stretched by one loop radius "
-                                "(with gravity: or the mean point weight, "
-                                "the smaller)"},
-                               {"max_displacement_over_r", "1: largest displacement / loop radius"},
-                               {"yarn",
-                                "clearance_*_over_r 1: smallest segment-to-segment distance "
-                                "between yarn centreline pieces of different courses (or one "
-                                "course, >= pi r apart along it) / loop radius, 2 = at least 2; "
-                                "clearance_min_t s; clearance_min_where m; "
-                                "clearance_min_resolution_over_r 1: a dip between measured "
-                                "states shallower than this can be missed; "
-                                "clearance_cpu_seconds s: the measuring inside the run, part of "
-                                "stats.cpu_seconds; crossings: designed "
-                                "front-view crossings at rest and how many changed over/under "
-                                "order at the end"},
-                               {"params",
-                                "loop_radius m; wale_stiffness, "
-                                "course_stiffness N/m; damping N s/m; "
-                                "areal_density g/m^2; stabiliser_ratio 1"}})}};
+      {"units",
+       summary_units({{"residual, residual_floor",
+                       "1: the static residual (SPEC 2.3), max "
+                       "over free points of |net force| / (k_w r), "
+                       "a wale spring stretched by one loop radius "
+                       "(with gravity: or the mean point weight, "
+                       "the smaller)"},
+                      {"max_displacement_over_r", "1: largest displacement / loop radius"},
+                      {"yarn",
+                       "clearance_*_over_r 1: smallest segment-to-segment distance "
+                       "between yarn centreline pieces of different courses (or one "
+                       "course, >= pi r apart along it) / loop radius, 2 = at least 2; "
+                       "clearance_min_t s; clearance_min_where m; "
+                       "clearance_min_resolution_over_r 1: a dip between measured "
+                       "states shallower than this can be missed; "
+                       "clearance_cpu_seconds s: the measuring inside the run, part of "
+                       "stats.cpu_seconds; crossings: designed "
+                       "front-view crossings at rest and how many changed over/under "
+                       "order at the end"},
+                      {"contact",
+                       "null without yarn contact; min_point_distance_over_r 1: the "
+                       "closest two contact points at the end / loop radius (null: no "
+                       "pair within reach); pairs_in_contact: pairs closer than the touching "
+                       "distance r; renewed_yarns, renewals_undone, pattern_misses, "
+                       "list_rebuilds: counts over the run (docs/knit.md, Yarn contact)"},
+                      {"params",
+                       "loop_radius m; wale_stiffness, "
+                       "course_stiffness N/m; damping N s/m; "
+                       "areal_density g/m^2; stabiliser_ratio 1"}})}};
   write_json_atomic(dir / "summary.json", summary);
   write_json_atomic(dir / "manifest.json", manifest({{"chart", args.chart},
                                                      {"integrator", stats.integrator},
@@ -524,18 +550,18 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
 
 void run(const KnitArgs& args) {
   const KnitChart chart = read_chart(args.chart);
+  KnitParams params;
+  IntegratorOptions opt;
+  apply_sets(args.sets, params, opt);
+  copy_run_flags(args.options, opt);
   const std::string integrator =
-      args.integrator.empty() ? default_knit_integrator() : args.integrator;
+      args.integrator.empty() ? default_knit_integrator(params.yarn_contact()) : args.integrator;
   std::unique_ptr<Integrator> integ;
   try {
     integ = make_integrator(integrator);
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(std::string("--") + e.what());  // "--integrator = X: ..."
   }
-  KnitParams params;
-  IntegratorOptions opt;
-  apply_sets(args.sets, params, opt);
-  copy_run_flags(args.options, opt);
   // The stabilised default is an error-control setting: the fixed-step methods have none, so
   // their summaries keep the (unused) value given, not 1e-3.
   const bool stabilised_default =
@@ -683,7 +709,8 @@ void register_knit_command(CLI::App& app) {
       ->allow_extra_args(false)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_option("--integrator", args->integrator,
-                  "Integrator (knitsim list integrators); default cvode-bdf");
+                  "Integrator (knitsim list integrators); default cvode-bdf, implicit-euler with "
+                  "knit.contact > 0");
   CLI::Option* velocity_atol = add_run_options(cmd, args->options);
   velocity_atol->description(velocity_atol->get_description() +
                              "; not given: 0.001 (stabilised network), or 0 (paper network)");
