@@ -11,9 +11,9 @@ namespace knitsim {
 namespace {
 
 // A tuck's head lies this many loop radii behind the head of the held loop, kStackedTuckStep
-// more for each tuck stacked above it on the same needle (the lowest tuck of a stack deepest);
-// its legs come forward by kTuckLegForward r (a knit loop's by 2 r). Header: "Tuck and
-// held-loop geometry".
+// more for each course above it on the same needle up to the next knit (a tuck or a miss: the
+// lowest tuck of a stack deepest, a tuck under a float behind it); its legs come forward by
+// kTuckLegForward r (a knit loop's by 2 r). Header: "Tuck and held-loop geometry".
 constexpr double kTuckHeadDepth = 3.0;
 constexpr double kStackedTuckStep = 2.0;
 constexpr double kTuckLegForward = 1.0;
@@ -127,13 +127,13 @@ LoopTypeValues loop_type_values(const KnitModel& m, const CourseGeometry& g,
   const double r = m.params.loop_radius;
   const Frame& f = g.frames[loop.wale];
   const Vec3 P = x[loop.upper];
-  // Tucks stacked above this one on its needle: those of the courses above it, up to the next
-  // knit, which hang from the same upper point (misses between them make no point).
+  // Courses above a tuck on its needle up to the next knit (tucks or misses; they hang from, or
+  // float past, the same upper point): their yarns pass in front of its legs.
   int above = 0;
   if (loop.kind == Stitch::Tuck)
     for (int c = loop.course + 1; c < m.chart.courses && m.chart.at(loop.wale, c) != Stitch::Knit;
          ++c)
-      if (m.chart.at(loop.wale, c) == Stitch::Tuck) ++above;
+      ++above;
   const double back =
       loop.kind == Stitch::Tuck ? (kTuckHeadDepth + kStackedTuckStep * above) * r : 0.0;
   const double forward = loop.kind == Stitch::Tuck ? kTuckLegForward : kKnitLegForward;
