@@ -143,9 +143,26 @@ LoopTypeValues loop_type_values(const KnitModel& m, const CourseGeometry& g,
   const Vec3 T5 = P + 3.0 * r * f.ex - back * f.n;
   const Vec3 T2 = 0.5 * (T0 + T4) + forward * r * f.n;
   const Vec3 T6 = 0.5 * (T4 + T8) + forward * r * f.n;
-  if (loop.kind == Stitch::Tuck) return {{0, 2, 3, 4, 5, 6, 8}, {T0, T2, T3, T4, T5, T6, T8}};
-  const Vec3 T1 = f.B - r * f.ex, T7 = f.B + r * f.ex;
-  return {{0, 1, 2, 3, 4, 5, 6, 7, 8}, {T0, T1, T2, T3, T4, T5, T6, T7, T8}};
+  // Leg points: s per leg for a knit loop spanning s courses, |P - B| / s apart along e_y and
+  // centred on T2 (T6); one for a tuck.
+  const int legs = loop.kind == Stitch::Knit ? m.points[loop.upper].level - loop.course : 1;
+  const Vec3 stride = (norm(P - f.B) / legs) * f.ey;
+  auto leg = [&](Vec3 middle, int q) { return middle + (q - 0.5 * (legs - 1)) * stride; };
+  LoopTypeValues out;
+  auto put = [&](int k, Vec3 t) {
+    out.k.push_back(k);
+    out.t.push_back(t);
+  };
+  put(0, T0);
+  if (loop.kind == Stitch::Knit) put(1, f.B - r * f.ex);
+  for (int q = 0; q < legs; ++q) put(2, leg(T2, q));
+  put(3, T3);
+  put(4, T4);
+  put(5, T5);
+  for (int q = legs - 1; q >= 0; --q) put(6, leg(T6, q));
+  if (loop.kind == Stitch::Knit) put(7, f.B + r * f.ex);
+  put(8, T8);
+  return out;
 }
 
 void check_positions(const KnitModel& m, const std::vector<Vec3>& x) {

@@ -112,19 +112,26 @@
 // the courses intermesh. A tuck loop is the open arc T0 T2 T3 T4 T5 T6 T8 (no feet) with
 // its head T3..T5 pushed back by 3r behind the head of the held loop it shares the needle
 // with (SPEC 2.9 leaves the two coincident; on the face the tuck hides behind it), 2r more for
-// each tuck stacked above it on the same needle (tucks of the courses above it up to the next
-// knit in its wale, which hang from the same upper point: the lowest tuck of a stack is the
-// deepest, the newest the nearest the held loop), and its legs T2, T6 forward by r (not 2r) of
-// the midpoints. A float passes behind each missed wale at F_i = B_i - r e_y - r n. Each
-// course's yarn is one C^2 cubic NURBS through its points in wale order (T8 of a loop = T0 of
-// the next), centripetal parameters (src/geometry/nurbs.hpp).
-// Tuck and held-loop geometry (issue 31): the tuck head 3r back, its legs r forward and the
-// centripetal parameters (which damp the chord-length cubic's overshoot at uneven intervals) keep
-// yarns of different courses apart at rest: clearance (src/measure/yarn_measures.hpp) 1.212 r
-// on plain jersey, single_tuck and tucks40, 0.999 r on several_misses and several_tucks. Stacked
-// tucks: a tuck's head goes 2r further back for each tuck stacked above it, so the lowest is the
-// deepest and the upper tucks' legs stay in front of the lower ones' (>= 1.19 r apart). Why these
-// values and not SPEC 2.9's as first written: docs/knit.md, "Rest geometry of tucks and misses".
+// each course above it on the same needle up to the next knit in its wale (a tuck, which hangs
+// from the same upper point, or a miss, whose float passes the needle), and its legs T2, T6
+// forward by r (not 2r) of the midpoints. A knit loop spanning s courses (held over s - 1, so
+// U = P(i,j+s-1)) has s points T2 on its left leg and s points T6 on its right, |U - B| / s
+// apart along e_y and centred on the midpoints above (s = 1: SPEC's one each). A float passes
+// behind each missed wale at F_i = B_i - r e_y - r n. Each course's yarn is one C^2 cubic NURBS
+// through its points in wale order (T8 of a loop = T0 of the next), centripetal parameters
+// (src/geometry/nurbs.hpp).
+// Tuck and held-loop geometry, made so that yarns start at least one yarn diameter
+// (d = r) apart: the yarn of every course above a tuck on its needle (a stacked tuck's legs, a
+// float) passes in front of the tuck's legs, which run back from its sinkers to its head; each
+// such course puts the head 2r further back, so the lowest tuck of a stack is the deepest and a
+// float over a tuck stays clear of its legs. A held loop's legs get one point per course: with
+// one interval from each foot to a midpoint several courses up, the cubic swings the legs into
+// each other just above the feet. The tuck's legs r forward and the centripetal parameters
+// (which damp the cubic's overshoot at uneven intervals) do the rest. Clearance at rest
+// (src/measure/yarn_measures.hpp): 1.212 r on plain jersey, single_tuck and tucks40, 1.150 r on
+// several_misses, 1.199 r on several_tucks, >= 1.12 r on the 50 random charts of
+// experiments/random_charts; figures and limits: docs/knit.md, "Rest geometry of tucks and
+// misses".
 //
 // Yarn contact (knit.contact = c > 0; off by default; docs/knit.md, "Yarn contact"): the
 // barrier of models/yarn_contact.hpp between the yarn polylines' rest vertices (below), each the
@@ -265,8 +272,9 @@ struct KnitModel {
 
 KnitModel build_knit(const KnitChart& chart, const KnitParams& params);
 
-// Type-value points of one loop: k lists which T_k the loop has (0..8 for a knit;
-// 0, 2, 3, 4, 5, 6, 8 for a tuck) and t their positions, m.
+// Type-value points of one loop in yarn order: k lists which T_k the loop has (0..8 for a knit,
+// with 2 and 6 repeated s times for a loop spanning s courses; 0, 2, 3, 4, 5, 6, 8 for a tuck)
+// and t their positions, m.
 struct LoopTypeValues {
   std::vector<int> k;
   std::vector<Vec3> t;

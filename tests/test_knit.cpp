@@ -300,13 +300,15 @@ TEST_CASE("type-value points reproduce the SPEC 2.9 rest geometry exactly") {
       const Vec3 a = tv[m.loop(i, j)].t[8], b = tv[m.loop(i + 1, j)].t[0];
       CHECK((a.x == b.x && a.y == b.y && a.z == b.z));
     }
-  // A tuck has no feet; the course yarn holds every loop's points once plus one float point
-  // per missed wale: 1 + 8 per knit, 6 per tuck, 2 per miss.
+  // A tuck has no feet; a loop held over one course (under the tuck, under the miss) has two
+  // points on each leg; the course yarn holds every loop's points once plus one float point per
+  // missed wale: 1 + 8 per knit (+ 2 per held course), 6 per tuck, 2 per miss.
   const KnitModel t = model_of("KKKKK\nKTKMK\nKKKKK\n");
   const auto tvt = type_value_points(t, t.rest_positions());
   CHECK(tvt[t.loop(1, 1)].k == std::vector<int>{0, 2, 3, 4, 5, 6, 8});
+  CHECK(tvt[t.loop(1, 0)].k == std::vector<int>{0, 1, 2, 2, 3, 4, 5, 6, 6, 7, 8});
   const auto yarns = course_yarn_points(t, t.rest_positions());
-  CHECK(yarns[0].size() == 1 + 5 * 8);
+  CHECK(yarns[0].size() == 1 + 5 * 8 + 2 * 2);
   CHECK(yarns[1].size() == 1 + 3 * 8 + 6 + 2);
   CHECK_THROWS_AS(type_value_points(t, std::vector<Vec3>(3)), std::invalid_argument);
 }

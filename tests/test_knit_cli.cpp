@@ -108,9 +108,10 @@ TEST_CASE("knitsim knit: a small tuck chart settles and its outputs agree with t
         summary["stats"]["cpu_seconds"].get<double>());
   CHECK(yarn["crossings_designed"].get<int>() > 0);
   CHECK(yarn["crossings_changed"].get<int>() >= 0);
-  // One header line plus one row per particle; T0..T8 per knit loop, 7 per tuck loop.
+  // One header line plus one row per particle; T0..T8 per knit loop, two T2 and two T6 more for
+  // the loop held under the tuck (it spans two courses), 7 per tuck loop.
   CHECK(count_lines(slurp(out / "points.csv")) == 1 + static_cast<int>(m.points.size()));
-  CHECK(count_lines(slurp(out / "typevalue.csv")) == 1 + 9 * 14 + 7 * 1);
+  CHECK(count_lines(slurp(out / "typevalue.csv")) == 1 + 9 * 14 + 2 + 7 * 1);
   CHECK(slurp(out / "centerlines.vtk").find("LINES 3 ") != std::string::npos);
   // --step-history: one row per step; the last one at t_final with the final residual.
   const std::string steps = slurp(out / "steps.csv");
