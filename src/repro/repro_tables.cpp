@@ -1,5 +1,6 @@
 // The tables and report pieces of a reproduction: Table 4 and Table 6 of the fits (Table 6
 // re-runs the fitted parameters on two_corner), LM against the ICA, the pictures' rows.
+// Each function's contract is in repro_internal.hpp.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -51,7 +52,6 @@ size_t column(const Table& t, const std::string& name) {
                              t.columns.begin());
 }
 
-// Table 4 of `fits` (src/repro/repro.hpp); cpu_column: a last column cpu_seconds (all runs).
 Table table4(const std::vector<SampleFits>& fits, bool cpu_column) {
   Table t;
   t.columns = {"set", "sample", "runs", "best_run"};
@@ -127,7 +127,6 @@ Table table4(const std::vector<SampleFits>& fits, bool cpu_column) {
   return t;
 }
 
-// The mean over samples of (max - min) / box width of each continuous parameter.
 std::array<double, 4> mean_spread(const Table& t4, SyntheticSet set) {
   const DrapeFitBounds b;
   std::array<double, 4> sum{};
@@ -145,7 +144,6 @@ std::array<double, 4> mean_spread(const Table& t4, SyntheticSet set) {
   return sum;
 }
 
-// Table 4 as a compact markdown table for the report.
 std::string table4_markdown(const Table& t4, SyntheticSet set) {
   Table m;
   m.columns = {"sample",
@@ -186,7 +184,6 @@ bool contains(const std::vector<T>& v, const T& x) {
   return std::find(v.begin(), v.end(), x) != v.end();
 }
 
-// The fits of optimizer m that Tables 4 and 6 show (not a Fig. 13-only sample).
 std::vector<SampleFits> table_fits(const std::vector<SampleFits>& fits, const ReproOptions& o,
                                    ReproOptimizer m) {
   std::vector<SampleFits> out;
@@ -196,12 +193,8 @@ std::vector<SampleFits> table_fits(const std::vector<SampleFits>& fits, const Re
   return out;
 }
 
-// File-name suffix of an optimizer's outputs: "" for the ICA (the paper's), "_lm" for LM.
 std::string suffix(ReproOptimizer m) { return m == ReproOptimizer::Ica ? "" : "_lm"; }
 
-// Table 6 of `fits` (src/repro/repro.hpp): the best parameters re-run on two_corner, with the
-// pictures under dir/pictures when o.pictures. LM adds evaluations and cpu_seconds of the
-// four_corner fit.
 Table make_table6(const std::vector<SampleFits>& fits, const ReproOptions& o,
                   const ReproTargets& targets, const fs::path& dir, ReproOptimizer m) {
   const bool cost_columns = m == ReproOptimizer::Lm;
@@ -260,8 +253,6 @@ double ratio_error(const std::vector<double>& x, const PaperSample& p) {
   return (x[kGeneStiffness] / x[kGeneNaturalLength]) / (p.stiffness / p.natural_length) - 1.0;
 }
 
-// LM next to the ICA (when it ran) and the paper, per (set, sample): lm_vs_ica.csv
-// (src/repro/repro.hpp). t6: the two_corner errors per optimizer (empty tables when not run).
 Table lm_vs_ica(const std::vector<SampleFits>& lm, const std::vector<SampleFits>& ica,
                 const Table& lm_t6, const Table& ica_t6) {
   Table t;
@@ -342,7 +333,6 @@ Table lm_vs_ica(const std::vector<SampleFits>& lm, const std::vector<SampleFits>
   return t;
 }
 
-// lm_vs_ica of one set as a compact markdown table, and the target's tally on twin.
 std::string lm_vs_ica_markdown(const Table& t, SyntheticSet set) {
   auto num = [&](const std::vector<std::string>& row, const std::string& c, double scale,
                  int digits) {
@@ -407,7 +397,6 @@ std::string lm_vs_ica_markdown(const Table& t, SyntheticSet set) {
   return out.str();
 }
 
-// Markdown rows of the four_corner pictures of `fits` (re-run; written under dir/pictures).
 std::string four_corner_pictures(const std::vector<SampleFits>& fits, const ReproOptions& o,
                                  const ReproTargets& targets, const fs::path& dir, ReproOptimizer m,
                                  bool two_corner) {

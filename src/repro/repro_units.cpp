@@ -1,5 +1,6 @@
 // The work units of a reproduction: one ICA or LM fit of a sample, and the Taguchi experiments'
 // ICA options; their keys and scenes.
+// Each function's contract is in repro_internal.hpp.
 #include <cmath>
 #include <cstdio>
 #include <ctime>
@@ -24,8 +25,6 @@ double thread_cpu_now() {
   return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
-// The built-in scene `scene` with the sample's areal density and the reproduction's rtol (and
-// on four_corner its symmetry reduction).
 Scene sample_scene(const std::string& scene, int sample, const ReproOptions& o) {
   std::vector<std::string> sets = {"fabric.areal_density=" +
                                    format_number(paper_sample(sample).areal_density, 17)};
@@ -90,8 +89,6 @@ std::string lm_status(const DrapeLmResult& r) {
 
 }  // namespace
 
-// One fit of the sample's four_corner scene to `target` by `m`: the unit result
-// (src/repro/repro.hpp).
 json fit_unit(const ReproOptions& o, const Target& target, SyntheticSet set, int sample,
               const FitMethod& m) {
   const DrapeFitProblem problem(sample_scene("four_corner", sample, o), target,
@@ -139,7 +136,6 @@ std::vector<WorkUnit> fit_work_units(const ReproOptions& o, std::vector<FitSpec>
   return units;
 }
 
-// "fit/<set>/s<sample>/run<NN>" (ICA) or "lm/<set>/s<sample>" (one LM fit per sample).
 std::string fit_key(ReproOptimizer optimizer, SyntheticSet set, int sample, int run) {
   char buf[64];
   if (optimizer == ReproOptimizer::Ica)
@@ -156,7 +152,6 @@ std::string taguchi_key(const ReproOptions& o, int experiment, int replicate) {
   return buf;
 }
 
-// Levels 1..3 of factors A..G in L27 experiment e (0..26).
 std::array<int, 7> experiment_levels(int e) {
   std::array<int, 7> levels{};
   for (int f = 0; f < 7; ++f) levels[f] = l27_level(e, default_l27_columns()[f]) + 1;
