@@ -1,6 +1,7 @@
 // The one contract between physics (models/) and integrators (solvers/).
 //
-// A MechanicalSystem is a second-order ODE over n degrees of freedom (n = 3 x free particles):
+// A MechanicalSystem is a second-order ODE over n degrees of freedom (3 per free particle; a
+// mirror reduction ties some of them and has fewer, models/mirror_reduced.hpp):
 //
 //     x'' = a(t, x, v) = a_c(t, x) - Gamma v
 //
@@ -10,11 +11,14 @@
 //
 // Its Jacobian blocks are da/dx = da_c/dx (sparse, the "stiffness" pattern, built once, every
 // diagonal present) and da/dv = -Gamma (diagonal). Pinned particles are not degrees of freedom;
-// their (possibly time-dependent) positions enter a_c through t.
+// their (possibly time-dependent) positions enter a_c through t. a_c derives from the potential:
+// M a_c = -dE/dx with E = potential_energy (gravity included), so M da_c/dx is symmetric; the
+// equilibrium solver's energy test and the certificate rely on both.
 //
 // Implementations hold parameters, never integration state. Methods are const but may use
-// private scratch buffers, so one instance must not be evaluated from two threads at once
-// (build one instance per thread: models are cheap to build). No method allocates.
+// private scratch buffers (and rebuild internal lists, e.g. yarn contact's near pairs), so one
+// instance must not be evaluated from two threads at once (build one instance per thread:
+// models are cheap to build).
 #pragma once
 
 #include <string>
@@ -28,7 +32,7 @@ class MechanicalSystem {
  public:
   virtual ~MechanicalSystem() = default;
 
-  // Number of degrees of freedom n (3 x free particles).
+  // Number of degrees of freedom n.
   virtual int dof() const = 0;
 
   // Initial state at t = 0 (arrays of length n).
@@ -44,7 +48,8 @@ class MechanicalSystem {
   // gamma_i (1/s), length n; a = a_c - gamma .* v.
   virtual const std::vector<double>& damping_rate() const = 0;
 
-  // m_i (kg), length n (each particle's mass repeated for its 3 components).
+  // m_i (kg), length n: a particle's mass on each of its coordinates (a reduction's are
+  // weighted, models/mirror_reduced.hpp).
   virtual const std::vector<double>& mass() const = 0;
 
   // CSC pattern of da_c/dx (n x n), every diagonal entry present; fixed for the lifetime.
@@ -58,10 +63,11 @@ class MechanicalSystem {
   virtual double static_residual(double t, const double* x) const = 0;
 
   // Round-off floor of static_residual at (t, x): an upper estimate of the residual that
-  // rounding alone leaves at an exact equilibrium, in the same units. run_to_equilibrium
-  // accepts r <= max(equilibrium_tol, this) as equilibrium (and says which applied), so a
-  // stiff model is not integrated to t_max chasing a residual its arithmetic cannot reach.
-  // Default 0: no floor known.
+  // rounding alone leaves at an exact equilibrium, in the same units. run_to_equilibrium solves
+  // K against it (as forces) for the floor of the stop in positions and, where K is singular
+  // and the residual decides, accepts r below it (up to 1e3 x equilibrium_tol;
+  // equilibrium_threshold, solvers/integrator.hpp), so a stiff model is not integrated to
+  // t_max chasing what its arithmetic cannot reach. Default 0: no floor known.
   virtual double residual_roundoff(double /*t*/, const double* /*x*/) const { return 0.0; }
 
   // True when the forces do not see rigid motions of the whole state (no pins, no external
@@ -93,7 +99,8 @@ class MechanicalSystem {
   // after each step; returns true if anything moved. Implicit paths never call it.
   virtual bool project(double /*t*/, double* /*x*/, double* /*v*/) const { return false; }
 
-  // Energies: potential (springs + gravity) at (t, x) and kinetic 1/2 sum m v^2 (J).
+  // Energies (J): potential at (t, x) (every force of a_c: springs, stencils, contact, gravity;
+  // see the header comment) and kinetic 1/2 sum m v^2.
   virtual double potential_energy(double t, const double* x) const = 0;
   double kinetic_energy(const double* v) const;
 
