@@ -1,9 +1,9 @@
 // equilibrium: the state the damped dynamics reach from rest, found without integrating the
-// transient (SPEC 2.3; the equilibrium issue's design).
+// transient (SPEC 2.3; user's view and measurements: docs/equilibrium.md).
 //
 //   1. While pins move (t < equilibrium_start_time()) the dynamics run: cvode-bdf with the run's
-//      options. The soft modes relax over 5e3-2e4 s against a 100 s move, so the path through
-//      the motion is not quasi-static and must be integrated.
+//      options. The soft modes relax far slower than the pins move (docs/equilibrium.md), so the
+//      path through the motion is not quasi-static and must be integrated.
 //   2. Then continuation along the overdamped flow C dx/ds = F(x) -- the gradient flow of the
 //      potential energy E, since F = -dE/dx and C = M Gamma is the (diagonal, positive) damping
 //      matrix -- by linearly implicit steps
@@ -24,18 +24,19 @@
 // (equilibrium_check.hpp). Where a dof has no damping its mass per second stands in for C (the
 // flow's end does not depend on C's scale).
 //
-// Fallback: kMaxRejected flow steps in a row that lower no energy, or kMaxFlowSteps flow steps
-// without the driver's stop, hand the run to the dynamics (cvode-bdf, from the current state at
-// rest) to its end; RunStats.fallbacks counts it and the status message says so. t then
-// advances again.
+// Fallback: kMaxRejected tries in a row that the step control rejects, kMaxStalled converged
+// steps in a row where K is not positive definite and no negative mode is found, or
+// kMaxFlowSteps flow steps without the driver's stop hand the run to the dynamics (cvode-bdf,
+// from the current state at rest) to its end; RunStats.fallbacks counts it and the status
+// message says so. t then advances again.
 //
 // Time: the flow's h is a continuation parameter, not time. The solver's t stays at the end of
 // the pins' motion (or the start), so t_final says when the pins stopped and --continue from
 // its state restarts the flow at once; velocities are 0 after the motion.
 //
-// Counters: steps = flow steps tried (accepted + rejected) plus the dynamics' steps;
-// nonlin_fails = rejected flow steps; factorisations include the dynamics' and the saddle
-// probes'.
+// Counters: steps = flow steps (one accepted step each, or the one that gave up) plus the
+// dynamics' steps; nonlin_fails = rejected tries of a flow step plus the dynamics' own;
+// factorisations include the dynamics' and the saddle probes'.
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
@@ -56,9 +57,9 @@ namespace {
 constexpr double kFirstMove = 1e-3;  // m: the largest displacement of the first flow step
 constexpr double kEscape = 1e-3;     // m: the largest displacement of a saddle escape
 constexpr double kMaxH = 1e15;       // s: beyond this C / h is below round-off of K
-constexpr int kMaxRejected = 60;     // rejected steps in a row before the solver gives up
-constexpr long kMaxFlowSteps = 5000;  // flow steps before it gives up (drapes take 9-250)
-constexpr int kMaxStalled = 20;       // converged steps in a row where K is not definite, none left
+constexpr int kMaxRejected = 60;     // rejected tries in a row before the fallback
+constexpr long kMaxFlowSteps = 5000;  // before the fallback (drapes: experiments/equilibrium)
+constexpr int kMaxStalled = 20;       // converged steps in a row, K not definite, no mode to leave
 constexpr double kRoundoffFall = 1e-12;  // relative energy change read as round-off
 
 class EquilibriumSolver final : public Integrator {

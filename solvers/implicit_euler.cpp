@@ -2,16 +2,19 @@
 //
 //   Backward Euler on x'' = a_c(x) - Gamma v, with a_c linearised about x_k (Ax = da_c/dx):
 //     dv = h [ a_c(x_k) + h Ax (v_k + dv) - Gamma (v_k + dv) ]
-//   Multiplying by M (M Ax = K = dF/dx is symmetric) gives a symmetric 3n x 3n system
+//   Multiplying by M (K = M Ax = dF/dx, symmetric; as in schur_matrix.hpp, the negative of the
+//   equilibrium files' Hessian K) gives a symmetric n x n system (n = dof)
 //     (M + h C - h^2 K) dv = h M (a_c - Gamma v_k + h Ax v_k),   C = M Gamma,
 //   solved by a SymmetricFactor (symmetric_factor.hpp: LDL^T, since K is indefinite when
 //   springs are compressed; supernodal LL^T where S allows it on large grids). The pattern is
-//   the model's stiffness pattern, analysed once;
-//   values are refilled and refactored every step. Then v_{k+1} = v_k + dv,
-//   x_{k+1} = x_k + h v_{k+1}. Forces and Jacobian are taken at t_{k+1} (moving pins).
-//   First order, L-stable; its fixed point is the exact equilibrium, so large steps are
-//   allowed when only the equilibrium is wanted. Default h = 1 s. A step through a barrier of the
-//   model (MechanicalSystem::admissible_step) is shortened to what it admits.
+//   the model's stiffness pattern, analysed once; values are refilled and refactored every
+//   step. Then v_{k+1} = v_k + dv, x_{k+1} = x_k + h v_{k+1}. Forces and Jacobian are taken at
+//   t_{k+1} (moving pins) and x_k.
+//   First order, L-stable; its fixed point is the exact equilibrium, so large steps may be
+//   taken when only the equilibrium is wanted, though they can end at another state than the
+//   dynamics reach (the driver's energy check flags one above the run's energy;
+//   docs/numerics.md). Default h = 1 s. A step through a barrier of the model
+//   (MechanicalSystem::admissible_step) is shortened to what it admits.
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
