@@ -396,8 +396,8 @@ std::shared_ptr<const MirrorReduced::Structure> build_structure(const SpringNetw
 }
 
 // The structures of the latest meshes: a fit's drapes (thousands) share a few (grid size x
-// topology x reduction), and building one costs ~10 % of a fit drape's CPU (perf of `knitsim
-// fit`). A hit is bit for bit what a fresh build gives. At most 32 MB of integers.
+// topology x reduction), each of which would otherwise build its structure again. A hit is bit
+// for bit what a fresh build gives. At most 32 MB of integers.
 PatternMemo<MirrorReduced::Structure>& structure_memo() {
   static PatternMemo<MirrorReduced::Structure> memo(std::size_t{1} << 23);
   return memo;

@@ -122,8 +122,8 @@ SpringNetwork::SpringNetwork(SpringNetworkSpec spec) : spec_(std::move(spec)) {
 namespace {
 
 // The stiffness layouts of the latest meshes: a fit builds the same few (grid size x topology
-// x reduction) for thousands of drapes, and building one cost ~8 % of a fit drape's CPU (perf
-// of `knitsim fit`). A hit is the layout itself, bit for bit what a fresh build gives.
+// x reduction) for thousands of drapes, each of which would otherwise build its layout again.
+// A hit is the layout itself, bit for bit what a fresh build gives.
 PatternMemo<SpringNetwork::StiffnessLayout>& layout_memo() {
   static PatternMemo<SpringNetwork::StiffnessLayout> memo(std::size_t{1} << 23);  // 32 MB
   return memo;

@@ -14,6 +14,10 @@
 //   Spring Jacobian (3x3 block, B = dF_a/dx_b):
 //     B = f'(L) u u^T + (f(L)/L) (I - u u^T);  dF_a/dx_a = -B, dF_b/dx_a = B, dF_b/dx_b = -B
 //   For k_lim = 0 this is k [ (1 - L0/L)(I - u u^T) + u u^T ] (SPEC 2.1).
+//   stencil (2-4 particles i, weights w_i, stiffness k; the knit's out-of-plane bending,
+//   models/knit_loops.hpp): E = k/2 |v|^2 with v = sum_i w_i x_i, F_i = -k w_i v, Jacobian
+//   block dF_i/dx_j = -k w_i w_j I. stiffness_values() writes these blocks row-scaled by 1/m_i
+//   (da_c/dx, MechanicalSystem).
 //
 // State: only free particles are degrees of freedom, 3 per particle in particle order
 // (x, y, z). Pinned particles follow a PinPath (fixed, or moved linearly in time).
@@ -22,14 +26,16 @@
 // F_ref = mean free mass x |g| (or residual_force_scale if set, e.g. without gravity).
 // Its round-off floor (residual_roundoff): each spring's length is computed from the
 // difference of two absolute positions, |delta L| <= eps (|x_a| + |x_b|) (eps = DBL_EPSILON),
-// so its force carries up to k eps (|x_a| + |x_b|); the floor is max_i sum over i's springs of
-// that, / F_ref: a bound, not a typical value. It matters only for stiff springs: 3.6e-9 at
-// the paper's k = 1000 N/m on four_corner, 3.6e-7 at k = 1e5 N/m, ~14x the residual reached
-// at rest there (docs/numerics.md, "Round-off floor").
+// so its force carries up to k eps (|x_a| + |x_b|); a stencil's k v up to k eps sum_j |w_j|
+// |x_j|, of which particle i gets |w_i|. The floor is max_i of the sum over i's springs and
+// stencils, / F_ref: a bound, not a typical value, that matters only for stiff springs
+// (figures: docs/numerics.md, "Round-off floor").
 //
-// Failure modes: bad specs (index out of range, non-positive mass or rest length, a spring
-// joining a particle to itself, NaN) throw std::invalid_argument at construction. Evaluation
-// never throws; a non-finite state produces non-finite output for the caller to detect.
+// Failure modes: bad specs (sizes that do not match, an index out of range or pinned twice, a
+// spring joining a particle to itself, a stencil naming a particle twice or with fewer than 2,
+// non-positive mass, rest length or stiffness, negative damping, no gravity and no
+// residual_force_scale, NaN) throw std::invalid_argument at construction. Evaluation never
+// throws; a non-finite state produces non-finite output for the caller to detect.
 #pragma once
 
 #include <array>
