@@ -14,8 +14,7 @@
 //   typevalue.csv    course,loop,k,x,y,z  T0..T8 of every loop at the end (loop = its wale;
 //                    a tuck has no T1, T7)
 //   centerlines.csv  course,u,x,y,z  each course's NURBS centreline sampled in arc length, 8
-//                    samples per interval between yarn points (the polyline is within 0.035 r
-//                    of the curve on tucks40 and single_tuck; 4 samples would give 0.12 r)
+//                    samples per interval between yarn points
 //   centerlines.vtk  the same as legacy VTK POLYDATA LINES, one line per course (cell data
 //                    `course`)
 //   frames/centerlines_NNN.vtk, frames/frame_NNN.png   the captured frames (below)
@@ -31,9 +30,9 @@
 //                    omitted if not finite)
 //   steps.csv        with --step-history: step,t,h,order,residual (src/io/step_log.hpp)
 // Numbers in the CSV and VTK files are the shortest decimal text that reads back as the same
-// double (std::to_chars). Cost: the centrelines of each distinct state are computed once (the
-// first frame is the rest state, the last usually the end state); on tucks40 (40 x 40, 102k
-// samples per state) writing everything takes ~1 s CPU, most of it the six pictures.
+// double (std::to_chars). The centrelines of each distinct state are computed once (the first
+// frame is the rest state, the last usually the end state); most of the writing's cost is the
+// pictures (--no-pictures skips them).
 // Frames: the start and states at the residual checks of the run, --frames of them evenly
 // spaced in log time (first = the start, then from the first check to the last). The recorder
 // keeps a check's state when log t has advanced by `spacing` since the last kept one; past
@@ -45,14 +44,13 @@
 // bare network, which prints one warning line (a mechanism: its steady state depends on the
 // path). models/knit_loops.hpp, docs/knit.md.
 //
-// Velocity tolerance. With the stabiliser on (the default network) and no --velocity-atol, the
-// run uses velocity_atol = kStabilisedVelocityAtol (1e-3 m/s, ~ atol 1e-9 m x 1e6 rad/s, above
-// the network's fastest modes, omega ~ 2e5 rad/s): the stabilised steady state is unique, so
-// the ringing of the stiff modes need not be followed (IntegratorOptions::velocity_atol). On
-// tucks40.chart cvode-bdf then takes 4x fewer steps (425) with the same shape (< 1e-5 r;
-// experiments/benchmark/README.md, "Knit case"). Paper 2's network (knit.network = paper) is a
-// mechanism whose end state depends on the path, so it keeps atol on the velocities too: a
-// velocity_atol of 2e-4 m/s moves several_tucks' end state by 1.6e-3 r, 400x its tolerance error.
+// Velocity tolerance. With the stabiliser on (the default network), an adaptive integrator and
+// no --velocity-atol, the run uses velocity_atol = kStabilisedVelocityAtol (1e-3 m/s, ~ atol
+// 1e-9 m x 1e6 rad/s, above the network's fastest modes, omega ~ 2e5 rad/s): the stabilised
+// steady state is unique, so the ringing of the stiff modes need not be followed
+// (IntegratorOptions::velocity_atol). Paper 2's network (knit.network = paper) is a mechanism
+// whose end state depends on the path, so it keeps atol on the velocities too. Steps and shape
+// against velocity_atol: experiments/benchmark/README.md, "Knit case".
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
@@ -88,11 +86,13 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr double kStabilisedVelocityAtol = 1e-3;  // m/s, see the file comment
-// A run whose yarns came closer than this (in r) warns (issue 31's target: >= 0.9 r).
+// A run whose yarns came closer than this (in r) warns: the clearance the knit model aims at
+// (docs/knit.md, "Yarn measures").
 constexpr double kClearanceWarning = 0.9;
 // The clearance over the run is measured when an interlacing point has moved by 0.05 r since
 // the last measured state (src/measure/yarn_measures.hpp, ClearanceOverRun: a dip shallower than
-// 2 A 0.05 r can be missed, A the measured amplification, reported: tucks40 0.12 r).
+// 2 A 0.05 r can be missed, A the measured amplification, reported; figures per chart in
+// docs/knit.md, "Yarn measures").
 constexpr double kClearanceResample = 0.05;
 
 struct KnitArgs {
