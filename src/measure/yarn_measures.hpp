@@ -1,6 +1,7 @@
-// Yarn measures of a knit state (SPEC 2.9, issue 31 item 3): the clearance between yarn
-// centrelines and the over/under order of the designed crossings. They are read off a state;
-// nothing here enters the dynamics.
+// Yarn measures of a knit state (SPEC 2.9; user's view: docs/knit.md, "Yarn measures"): the
+// clearance between yarn centrelines and the over/under order of the designed crossings. They
+// are read off a state; nothing here enters the dynamics. knitsim knit reports them
+// (src/cli/cmd_knit.cpp); tests/test_yarn_measures.cpp checks the committed charts at rest.
 //
 // Measuring polyline: the yarn polylines of models/knit_loops.hpp (S = 8 samples per
 // interpolation interval; a vertex's label names the same piece of yarn in every state).
@@ -23,10 +24,11 @@
 // with a, b the closest points of the two segments and t_a, t_b their directions (vertex k to
 // k + 1). sigma says which yarn passes over the other and with which orientation; it is
 // invariant under rigid motions and changes only if the two pieces pass through each other
-// (a - b -> 0) or turn parallel. The check at a later state: for each designed crossing the
-// closest pair of segments within +-S segments (one interval) of each rest segment, and its
-// sigma; a crossing whose sigma differs from the rest state's has changed (the yarns swapped
-// over and under there).
+// (a - b -> 0) or turn parallel. The sign is taken at the pieces' local closest approach: from
+// the crossing's segment pair, a descent by steps of -1, 0, +1 segments on each yarn, at most
+// S segments (one interval) from the start, to the pair of least distance. The check at a
+// later state repeats that descent from the rest pair; a crossing whose sigma differs from the
+// rest state's has changed (the yarns swapped over and under there).
 //
 // Failure modes: positions of the wrong length throw std::invalid_argument (as the model's
 // geometry functions); a non-finite state gives a non-finite clearance (NaN compares false:
@@ -77,8 +79,8 @@ struct CrossingCheck {
 CrossingCheck check_crossings(const std::vector<YarnCrossing>& crossings,
                               const YarnPolylines& lines);
 
-// The clearance over a run (issue 31: its minimum over the whole run, not only at the end):
-// a RunObserver that measures the first state it sees, every state given to observe(..., true)
+// The clearance over a run (its minimum over the whole run, not only at the end): a
+// RunObserver that measures the first state it sees, every state given to observe(..., true)
 // (the end of the run) and every residual check at which some interlacing point has moved by at
 // least tau r (tau = resample_over_r) since the last measured state.
 // What that guarantees, over the states the observer is given (every residual check; for
