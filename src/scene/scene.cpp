@@ -151,10 +151,10 @@ const std::vector<Key>& keys() {
            "duration of that pin move");
     number("run.t_max", [](Scene& s) -> double& { return s.options.t_max; }, "s",
            "end time if no equilibrium is reached (status time_limit, exit 3)");
-    number("run.equilibrium_tol", [](Scene& s) -> double& { return s.options.equilibrium_tol; },
-           "1",
-           "static residual (force / mean particle weight) that stops a run where K is singular; "
-           "the stop in positions is tested once the residual is below max(1e-4, this)");
+    number(
+        "run.equilibrium_tol", [](Scene& s) -> double& { return s.options.equilibrium_tol; }, "1",
+        "static residual (force / mean particle weight) that stops a run where K is singular; "
+        "the stop in positions is tested once the residual is below max(1e-4, this)");
     number("run.position_tol", [](Scene& s) -> double& { return s.options.position_tol; }, "m",
            "the stop: Newton correction |K^-1 F| below this (docs/numerics.md)");
     return k;
