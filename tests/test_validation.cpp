@@ -359,10 +359,9 @@ TEST_CASE("a write that fails mid-run (a full disk): exit 4, one line naming the
 TEST_CASE("one run per --out: a second run into a busy folder exits 5; no stale lock") {
   TempDir tmp("validation-busy");
   const fs::path out = tmp.path / "o";
-  const fs::path lock = out / kOutputLockFile;
   // Whether some process holds the folder's lock (tried from here, released at once).
-  const auto held = [&lock] {
-    const int fd = ::open(lock.c_str(), O_RDWR | O_CLOEXEC);
+  const auto held = [&out] {
+    const int fd = ::open(out.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
     if (fd < 0) return false;
     const bool busy = ::flock(fd, LOCK_EX | LOCK_NB) != 0;
     ::close(fd);

@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -13,6 +14,7 @@
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
+#include <utility>
 
 #include "src/base/command_line.hpp"
 
@@ -89,50 +91,39 @@ void refuse_other_commands_folder(const fs::path& dir, const std::string& reques
                               "` (its manifest.json); give another folder or remove that one");
 }
 
-// Takes the advisory lock of `dir` (kOutputLockFile) for the rest of the process, once per
-// folder: the descriptors stay open until exit, when the kernel releases them. Returns false if
-// another process holds it. The lock file is also the probe that the folder takes new files:
-// where it is made here, it is made as every output will be; where it was there already (a
-// reused folder), or this process holds it, the folder's own write permission is asked
-// (faccessat, effective ids). Throws std::invalid_argument("--out SHOWN: cannot write: reason")
-// if the folder takes none, or "cannot lock" if flock fails otherwise than busy.
+// Takes the advisory lock of `dir` for the rest of the process, once per folder: flock on a
+// descriptor of the folder itself, kept open until exit, when the kernel releases it. Returns
+// false if another process holds it. No file is made for it (a new inode costs more than the
+// rest of a small run's file work on some disks); the folder's write permission is asked
+// instead (faccessat, effective ids). Throws std::invalid_argument("--out SHOWN: cannot write:
+// reason") if the folder takes no files, or "cannot lock" if flock fails otherwise than busy.
 bool lock_output_dir(const fs::path& dir, const std::string& shown) {
   static std::mutex mutex;
-  static std::map<fs::path, int> held;  // canonical folder -> descriptor of its lock file
-  const auto cannot_write = [&shown](int err) {
-    throw std::invalid_argument("--out " + shown + ": cannot write: " + std::strerror(err));
+  static std::map<std::pair<dev_t, ino_t>, int> held;  // folder -> its locked descriptor
+  const auto fail = [&shown](const char* what, int err) {
+    throw std::invalid_argument("--out " + shown + ": " + what + ": " + std::strerror(err));
   };
-  const auto check_writable = [&] {
-    if (::faccessat(AT_FDCWD, dir.c_str(), W_OK | X_OK, AT_EACCESS) != 0) cannot_write(errno);
-  };
-  std::error_code ec;
-  fs::path key = fs::canonical(dir, ec);
-  if (ec) key = fs::absolute(dir);
-  const std::lock_guard<std::mutex> guard(mutex);
-  if (held.count(key)) {
-    check_writable();
-    return true;
+  if (::faccessat(AT_FDCWD, dir.c_str(), W_OK | X_OK, AT_EACCESS) != 0) fail("cannot write", errno);
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) fail("cannot write", errno);
+  struct stat st {};
+  if (::fstat(fd, &st) != 0) {
+    const int err = errno;
+    ::close(fd);
+    fail("cannot write", err);
   }
-  const fs::path file = dir / kOutputLockFile;
-  int fd = ::open(file.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
-  const bool existed = fd < 0 && errno == EEXIST;
-  if (existed) fd = ::open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-  if (fd < 0) cannot_write(errno);
-  if (existed) {
-    try {
-      check_writable();
-    } catch (...) {
-      ::close(fd);
-      throw;
-    }
+  const std::lock_guard<std::mutex> guard(mutex);
+  if (held.count({st.st_dev, st.st_ino})) {
+    ::close(fd);
+    return true;
   }
   if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
     const int err = errno;
     ::close(fd);
     if (err == EWOULDBLOCK) return false;
-    throw std::invalid_argument("--out " + shown + ": cannot lock: " + std::strerror(err));
+    fail("cannot lock", err);
   }
-  held[key] = fd;
+  held[{st.st_dev, st.st_ino}] = fd;
   return true;
 }
 
@@ -162,8 +153,6 @@ fs::path make_output_dir(const std::string& requested, const std::string& stem, 
     fs::create_directories(dir, ec);
     if (ec) throw std::invalid_argument("--out " + requested + ": cannot create: " + ec.message());
   }
-  // The lock file is the probe that the folder is writable (it used to be a probe file of its
-  // own, made and removed: one more file made per run, no more checked).
   bool locked = false;
   try {
     locked = lock_output_dir(dir, dir.string());
@@ -172,9 +161,10 @@ fs::path make_output_dir(const std::string& requested, const std::string& stem, 
     throw;
   }
   if (!locked)
-    throw OutputFolderBusy("--out " + dir.string() +
-                           ": in use by another knitsim run (it holds " + kOutputLockFile +
-                           "); wait for it to end, or give another folder");
+    throw OutputFolderBusy(
+        "--out " + dir.string() +
+        ": in use by another knitsim run (it holds the folder's lock); wait for it to "
+        "end, or give another folder");
   if (created_out) *created_out = created;
   return dir;
 }
@@ -199,9 +189,7 @@ void remove_stale_output(const fs::path& file) {
 void remove_if_unused(const fs::path& dir, bool created) {
   std::error_code ec;
   if (!created) return;
-  for (const fs::directory_entry& entry : fs::directory_iterator(dir, ec))
-    if (entry.path().filename() != kOutputLockFile) return;
-  if (!ec) fs::remove_all(dir, ec);
+  if (fs::is_empty(dir, ec) && !ec) fs::remove(dir, ec);
 }
 
 bool read_input_file(const std::string& path, std::size_t max_bytes, std::string& text,

@@ -36,9 +36,8 @@ void write_file_atomic_with(const std::filesystem::path& path,
 // JSON pretty-printed with 2 spaces and a final newline.
 void write_json_atomic(const std::filesystem::path& path, const nlohmann::json& value);
 
-// The output folder of a command, created and checked writable (its lock file, below, is made
-// in it; in a folder that has one already, the folder's write permission is asked) before any
-// work starts.
+// The output folder of a command, created and checked writable (the folder's write permission,
+// effective ids) before any work starts.
 //   requested empty: a fresh folder out/<stem>-YYYYmmdd-HHMMSS (local time) under the working
 //     directory, with -2, -3, ... appended if that name is taken;
 //   otherwise `requested`, created with its parents if missing; an existing folder is reused
@@ -46,10 +45,10 @@ void write_json_atomic(const std::filesystem::path& path, const nlohmann::json& 
 //     command than this process's (command_name()): that folder holds another command's
 //     results, and the call throws rather than overwrite them.
 // The folder is then locked for the life of the process: an advisory flock(LOCK_EX) on the
-// file .knitsim-lock inside it (the kernel drops the lock when the process ends, however it
-// ends, so a killed run leaves no stale lock; the empty file stays). A second knitsim given the
-// same folder while the first runs throws OutputFolderBusy, before it writes anything; the same
-// process may ask for its own folder again.
+// folder itself (a descriptor of it; no lock file is made, and the kernel drops the lock when the
+// process ends, however it ends, so a killed run leaves no stale lock). A second knitsim given
+// the same folder while the first runs throws OutputFolderBusy, before it writes anything; the
+// same process may ask for its own folder again.
 // Throws std::invalid_argument("--out DIR: cannot create|write ...: reason"). `created`, if
 // given, says whether the folder is new (for remove_if_unused).
 std::filesystem::path make_output_dir(const std::string& requested, const std::string& stem,
@@ -63,10 +62,7 @@ void refuse_fresh_start_over_checkpoint(const std::string& out,
 // --no-pictures, steps.csv without --step-history, ...). Left in a reused --out folder, an
 // earlier run's file would read as this run's.
 void remove_stale_output(const std::filesystem::path& file);
-// The name of the lock file make_output_dir keeps in every output folder.
-inline constexpr const char* kOutputLockFile = ".knitsim-lock";
-
-// Removes `dir` if `created` and it holds nothing but its lock file: for bad input found only
+// Removes `dir` if `created` and it holds nothing: for bad input found only
 // once the run starts (an integrator option the model refuses), so that nothing is left behind.
 void remove_if_unused(const std::filesystem::path& dir, bool created);
 

@@ -10,8 +10,8 @@
 //   4  an output that could not be written once the run had started (disk full, quota, a file
 //      size limit): one line "knitsim: error: cannot write PATH: reason" (OutputError, or a
 //      std::filesystem::filesystem_error from making an output folder or checkpoint)
-//   5  the --out folder is in use by another knitsim run still going (its .knitsim-lock is
-//      flock'ed, src/base/files.hpp): one line, nothing written
+//   5  the --out folder is in use by another knitsim run still going (the folder is flock'ed,
+//      src/base/files.hpp): one line, nothing written
 //   1  anything else (an internal error), one line on stderr
 #include <CLI/CLI.hpp>
 #include <algorithm>
