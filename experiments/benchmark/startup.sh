@@ -3,13 +3,16 @@
 # cost as a whole process? The dynamic loader's work grows with every shared library mapped, so
 # the script also counts them.
 #
-#   experiments/benchmark/startup.sh [--n N] [--vs OTHER_KNITSIM] [KNITSIM]
+#   experiments/benchmark/startup.sh [--n N] [--fresh] [--vs OTHER_KNITSIM] [KNITSIM]
 #
 # Times whole processes, start to exit (Python's perf_counter around posix_spawn .. wait4; CPU
 # = the child's user + system time from wait4): `knitsim --version` and `knitsim drape --scene
 # four_corner --no-pictures --out DIR` (all defaults, DIR rewritten each run, as a script looping
-# over drapes would), N runs each (default 21) after one warm-up run, and prints the medians.
-# With --vs the other binary runs in alternation with KNITSIM (A B A B ...) and the median of
+# over drapes would; with --fresh a new DIR every run, as docs/performance.md states its target),
+# N runs each (default 21) after one warm-up run, and prints the medians. DIR is under $TMPDIR
+# (default /tmp): its file system sets what the files cost (on an ext4 without a journal each new
+# file costs more the more files were deleted there in the last half minute; on tmpfs little).
+# With --vs the other binary runs in alternation with KNITSIM (A B B A A B ...) and the median of
 # the pair-by-pair ratios A / B is printed too: alternation keeps the ratio fair when a shared
 # machine's speed drifts. KNITSIM defaults to build/knitsim. Also prints how many shared
 # libraries each binary maps at start (`ldd | wc -l`, the vdso and the loader included) and
@@ -19,12 +22,14 @@ here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
 N=21
 OTHER=""
-usage="usage: $0 [--n N] [--vs OTHER_KNITSIM] [KNITSIM]"
+FRESH=0
+usage="usage: $0 [--n N] [--fresh] [--vs OTHER_KNITSIM] [KNITSIM]"
 KNITSIM=""
 while [ $# -gt 0 ]; do
   case "$1" in
     --n) N=${2:?$usage}; shift ;;
     --vs) OTHER=${2:?$usage}; shift ;;
+    --fresh) FRESH=1 ;;
     -*) echo "$usage" >&2; exit 2 ;;
     *) [ -z "$KNITSIM" ] || { echo "$usage" >&2; exit 2; }; KNITSIM=$1 ;;
   esac
@@ -39,10 +44,10 @@ for exe in "$KNITSIM" ${OTHER:+"$OTHER"}; do
 done
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-/usr/bin/python3 - "$N" "$work" "$KNITSIM" ${OTHER:+"$OTHER"} <<'PY'
+/usr/bin/python3 - "$N" "$FRESH" "$work" "$KNITSIM" ${OTHER:+"$OTHER"} <<'PY'
 import os, statistics, sys, time
 
-n, work, exes = int(sys.argv[1]), sys.argv[2], sys.argv[3:]
+n, fresh, work, exes = int(sys.argv[1]), sys.argv[2] == "1", sys.argv[3], sys.argv[4:]
 cases = {"--version": ["--version"],
          "drape four_corner --no-pictures": ["drape", "--scene", "four_corner", "--no-pictures"]}
 devnull = os.open(os.devnull, os.O_WRONLY)
@@ -63,8 +68,10 @@ for name, args in cases.items():
     wall = [[] for _ in exes]
     cpu = [[] for _ in exes]
     for i in range(n + 1):  # run 0 warms the caches and is not counted
-        for k, exe in enumerate(exes):
-            extra = ["--out", f"{work}/drape{k}"] if args[0] == "drape" else []
+        for k in (range(len(exes)) if i % 2 == 0 else reversed(range(len(exes)))):
+            exe = exes[k]
+            out = f"{work}/drape{k}" + (f"-{i}" if fresh else "")
+            extra = ["--out", out] if args[0] == "drape" else []
             w, c = run([exe] + args + extra)
             if i > 0:
                 wall[k].append(w)
