@@ -172,7 +172,8 @@ bool ContactNetwork::refresh(double t, const double* x) const {
   if (exact_.size() != spec_.points.size())
     throw std::logic_error("yarn contact: exact positions of another number of points");
   positions(t, x);
-  std::vector<std::pair<int, std::vector<ContactPoint>>> undo;  // per renewed yarn, its points
+  // Each straying yarn is renewed on its own, and undone if that puts a pair inside its core.
+  long renewed = 0;
   for (int y = 0; y + 1 < static_cast<int>(yarn_begin_.size()); ++y) {
     double drift = 0.0;
     for (int k = yarn_begin_[y]; k < yarn_begin_[y + 1]; ++k)
@@ -182,22 +183,22 @@ bool ContactNetwork::refresh(double t, const double* x) const {
     if (static_cast<int>(fresh.size()) != yarn_begin_[y + 1] - yarn_begin_[y])
       throw std::logic_error("yarn contact: a renewed yarn has another number of points");
     auto first = spec_.points.begin() + yarn_begin_[y];
-    undo.emplace_back(y, std::vector<ContactPoint>(first, first + fresh.size()));
+    const std::vector<ContactPoint> old(first, first + fresh.size());
     std::copy(fresh.begin(), fresh.end(), first);
-  }
-  if (undo.empty()) return false;
-  update_wmax();
-  listed_at_.clear();                        // points moved: the near-pair list is stale
-  if (!(min_distance(t, x) > spec_.core)) {  // a pair would start inside its core: undone
-    for (const auto& [y, old] : undo)
-      std::copy(old.begin(), old.end(), spec_.points.begin() + yarn_begin_[y]);
     update_wmax();
-    listed_at_.clear();
-    ++refusals_;
-    return false;
+    listed_at_.clear();  // points moved: the near-pair list is stale
+    if (min_distance(t, x) > spec_.core) {
+      ++renewed;
+    } else {
+      std::copy(old.begin(), old.end(), first);
+      update_wmax();
+      listed_at_.clear();
+      ++refusals_;
+    }
   }
+  if (renewed == 0) return false;
   renewed_at_ = particles;
-  refreshes_ += static_cast<long>(undo.size());
+  refreshes_ += renewed;
   return true;
 }
 

@@ -38,9 +38,10 @@
 // (the knit's centreline vertices), to first order about a state. Given both functions, refresh
 // at an accepted state compares each yarn's points with their exact positions and re-linearises
 // the yarns whose points stray more than refresh_tol about that state (the run driver calls it at
-// each stop check; integrators then forget their history). A renewal that would put a pair inside
-// its core is undone (counted: refusals()). The sparse pattern stays the construction's: renewed
-// points may depend on other particles, whose missing blocks count as pattern misses.
+// each stop check; integrators then forget their history). Each yarn is renewed on its own, and
+// undone if that puts a pair inside its core (counted: refusals()). The sparse pattern stays the
+// construction's: renewed points should keep their particles (the knit's do), or their missing
+// blocks count as pattern misses.
 //
 // Step filter (admissible_step): a step that moves some point more than step_cap is cut to that;
 // then the largest fraction of it along which no pair's distance falls below
