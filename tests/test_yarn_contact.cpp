@@ -41,6 +41,32 @@ std::vector<double> tuck_in_contact(const KnitModel& m) {
   return x;
 }
 
+// Two particles 2 apart on x joined by a spring of rest 2, and a contact point on each, of
+// different yarns (touching distance 1, core 0.9, kappa 10).
+SpringNetworkSpec two_particles() {
+  SpringNetworkSpec spec;
+  spec.positions = {{0.0, 0.0, 0.0}, {2.0, 0.0, 0.0}};
+  spec.masses = {1.0, 1.0};
+  spec.springs = {{0, 1, 2.0, 1.0}};
+  spec.gravity = {0.0, 0.0, 0.0};
+  spec.residual_force_scale = 1.0;
+  return spec;
+}
+YarnContactSpec two_points() {
+  YarnContactSpec c;
+  ContactPoint p0;
+  p0.particles[0] = 0;
+  p0.weights[0] = {1.0, 0.0, 0.0, 1.0};
+  ContactPoint p1 = p0;
+  p1.particles[0] = 1;
+  p1.yarn = 1;
+  c.points = {p0, p1};
+  c.touching = 1.0;
+  c.core = 0.9;
+  c.stiffness = 10.0;
+  return c;
+}
+
 }  // namespace
 
 TEST_CASE("yarn contact: the points are the rest polylines' vertices, affine in the points",
@@ -159,23 +185,9 @@ TEST_CASE("yarn contact: refresh re-linearises the points about the state where 
 }
 
 TEST_CASE("yarn contact: a renewal that would put a pair inside its core is undone", "[contact]") {
-  SpringNetworkSpec spec;
-  spec.positions = {{0.0, 0.0, 0.0}, {2.0, 0.0, 0.0}};
-  spec.masses = {1.0, 1.0};
-  spec.springs = {{0, 1, 2.0, 1.0}};
-  spec.gravity = {0.0, 0.0, 0.0};
-  spec.residual_force_scale = 1.0;
-  YarnContactSpec c;
-  ContactPoint p0;
-  p0.particles[0] = 0;
-  p0.weights[0] = {1.0, 0.0, 0.0, 1.0};
-  ContactPoint p1 = p0;
-  p1.particles[0] = 1;
-  p1.yarn = 1;
-  c.points = {p0, p1};
-  c.touching = 1.0;
-  c.core = 0.9;
-  c.stiffness = 10.0;
+  const SpringNetworkSpec spec = two_particles();
+  YarnContactSpec c = two_points();
+  const ContactPoint p0 = c.points[0], p1 = c.points[1];
   c.refresh_tol = 0.01;
   double shift = 0.0;  // the exact positions: yarn 1's point `shift` to the left of its particle
   c.exact = [&](const std::vector<Vec3>& pos, std::vector<Vec3>& out) {
@@ -262,24 +274,8 @@ TEST_CASE("yarn contact: forces are -grad E and the Jacobian is exact, pairs in 
 TEST_CASE("yarn contact: inside the core the energy is infinite and forces are not finite",
           "[contact]") {
   // Two points of different yarns on single particles, pushed together along x.
-  SpringNetworkSpec spec;
-  spec.positions = {{0.0, 0.0, 0.0}, {2.0, 0.0, 0.0}};
-  spec.masses = {1.0, 1.0};
-  spec.springs = {{0, 1, 2.0, 1.0}};
-  spec.gravity = {0.0, 0.0, 0.0};
-  spec.residual_force_scale = 1.0;
-  YarnContactSpec c;
-  ContactPoint p0, p1;
-  p0.particles[0] = 0;
-  p0.weights[0] = {1.0, 0.0, 0.0, 1.0};
-  p0.yarn = 0;
-  p1 = p0;
-  p1.particles[0] = 1;
-  p1.yarn = 1;
-  c.points = {p0, p1};
-  c.touching = 1.0;
-  c.core = 0.9;
-  c.stiffness = 10.0;
+  const SpringNetworkSpec spec = two_particles();
+  YarnContactSpec c = two_points();
   const ContactNetwork net(SpringNetwork(spec), c);
   std::vector<double> x = {0.0, 0.0, 0.0, 0.95, 0.0, 0.0};
   CHECK(std::isfinite(net.potential_energy(0.0, x.data())));
