@@ -185,18 +185,17 @@ bool ContactNetwork::refresh(double t, const double* x) const {
     auto first = spec_.points.begin() + yarn_begin_[y];
     const std::vector<ContactPoint> old(first, first + fresh.size());
     std::copy(fresh.begin(), fresh.end(), first);
-    update_wmax();
-    listed_at_.clear();  // points moved: the near-pair list is stale
+    listed_at_.clear();  // points moved: the near-pair list is rebuilt (wmax_ only sets when)
     if (min_distance(t, x) > spec_.core) {
       ++renewed;
     } else {
       std::copy(old.begin(), old.end(), first);
-      update_wmax();
       listed_at_.clear();
       ++refusals_;
     }
   }
   if (renewed == 0) return false;
+  update_wmax();  // once, for the points kept (it also checks them)
   renewed_at_ = particles;
   refreshes_ += renewed;
   return true;
