@@ -72,7 +72,7 @@ ContactNetwork::ContactNetwork(SpringNetwork network, YarnContactSpec contact)
   if (!(c.stiffness > 0.0 && std::isfinite(c.stiffness)))
     throw std::invalid_argument("yarn contact: stiffness must be positive and finite");
   if (!(c.same_yarn_gap >= 0.0 && c.skin >= 0.0 && c.pattern_radius >= 0.0 && c.step_cap >= 0.0 &&
-        c.filter_keep > 0.0 && c.filter_keep < 1.0))
+        c.filter_keep > 0.0 && c.filter_keep < 1.0 && c.renew_keep > 0.0 && c.renew_keep < 1.0))
     throw std::invalid_argument("yarn contact: bad gap, skin, pattern radius or filter fraction");
   if (spec_.skin == 0.0) spec_.skin = c.touching - c.core;
   if (spec_.pattern_radius == 0.0) spec_.pattern_radius = 2.0 * c.touching;
@@ -172,31 +172,52 @@ bool ContactNetwork::refresh(double t, const double* x) const {
   if (exact_.size() != spec_.points.size())
     throw std::logic_error("yarn contact: exact positions of another number of points");
   positions(t, x);
-  // Each straying yarn is renewed on its own, and undone if that puts a pair inside its core.
-  long renewed = 0;
+  // Each straying yarn is renewed on its own: its points move from where they are to their exact
+  // positions, as far along that as the step filter allows (a renewal is a step of the points).
+  long renewed = 0, cut = 0;
+  std::vector<Vec3> move(pts_.size());
   for (int y = 0; y + 1 < static_cast<int>(yarn_begin_.size()); ++y) {
+    const int begin = yarn_begin_[y], end = yarn_begin_[y + 1];
     double drift = 0.0;
-    for (int k = yarn_begin_[y]; k < yarn_begin_[y + 1]; ++k)
-      drift = std::max(drift, norm(exact_[k] - pts_[k]));
+    for (int k = begin; k < end; ++k) drift = std::max(drift, norm(exact_[k] - pts_[k]));
     if (!(drift > spec_.refresh_tol)) continue;
     std::vector<ContactPoint> fresh = spec_.linearise(particles, y);
-    if (static_cast<int>(fresh.size()) != yarn_begin_[y + 1] - yarn_begin_[y])
+    if (static_cast<int>(fresh.size()) != end - begin)
       throw std::logic_error("yarn contact: a renewed yarn has another number of points");
-    auto first = spec_.points.begin() + yarn_begin_[y];
-    const std::vector<ContactPoint> old(first, first + fresh.size());
+    std::fill(move.begin(), move.end(), Vec3{0.0, 0.0, 0.0});
+    for (int k = begin; k < end; ++k) move[k] = exact_[k] - pts_[k];
+    const double s = sweep_fraction(pts_, move, spec_.renew_keep);
+    if (s < 1.0) {
+      ++cut_renewals_, ++cut;
+      // Part way: the old and the fresh maps blended, which needs the same particles in order.
+      bool same = s > 0.0;
+      for (int k = begin; same && k < end; ++k)
+        same = fresh[k - begin].particles == spec_.points[k].particles;
+      if (!same) continue;
+      for (int k = begin; k < end; ++k) {
+        ContactPoint& q = fresh[k - begin];
+        const ContactPoint& o = spec_.points[k];
+        for (int i = 0; i < kContactParticles && q.particles[i] >= 0; ++i)
+          for (int e = 0; e < 6; ++e)
+            q.weights[i][e] = o.weights[i][e] + s * (q.weights[i][e] - o.weights[i][e]);
+        q.offset = o.offset + s * (q.offset - o.offset);
+      }
+    }
+    auto first = spec_.points.begin() + begin;
+    const std::vector<ContactPoint> old(first, first + (end - begin));
     std::copy(fresh.begin(), fresh.end(), first);
     listed_at_.clear();  // points moved: the near-pair list is rebuilt (wmax_ only sets when)
-    if (min_distance(t, x) > spec_.core) {
+    if (min_distance(t, x) > spec_.core) {  // pts_ now holds the renewed points
       ++renewed;
-    } else {
+    } else {  // round-off at the filter's floor: the old points are kept
       std::copy(old.begin(), old.end(), first);
       listed_at_.clear();
-      ++refusals_;
+      positions(t, x);
     }
   }
   if (renewed == 0) return false;
   update_wmax();  // once, for the points kept (it also checks them)
-  renewed_at_ = particles;
+  if (cut == 0) renewed_at_ = particles;  // a cut renewal is taken up again at the next check
   refreshes_ += renewed;
   return true;
 }
@@ -417,9 +438,15 @@ double ContactNetwork::admissible_step(double t, const double* x, const double* 
   // diameters in one Newton step is not trusted, the swept boxes stay small, and renewable
   // points stray less from their exact positions within one step).
   const double cap = longest > spec_.step_cap ? spec_.step_cap / longest : 1.0;
+  for (Vec3& m : move) m = cap * m;
+  return cap * sweep_fraction(start, move, spec_.filter_keep);
+}
+
+double ContactNetwork::sweep_fraction(const std::vector<Vec3>& start, const std::vector<Vec3>& move,
+                                      double keep) const {
   std::vector<Box> boxes(start.size());
   for (std::size_t k = 0; k < start.size(); ++k) {
-    const Vec3 e = start[k] + cap * move[k];
+    const Vec3 e = start[k] + move[k];
     boxes[k] = {std::min(start[k].x, e.x) - 0.5 * spec_.touching,
                 std::max(start[k].x, e.x) + 0.5 * spec_.touching,
                 std::min(start[k].y, e.y) - 0.5 * spec_.touching,
@@ -429,10 +456,9 @@ double ContactNetwork::admissible_step(double t, const double* x, const double* 
   overlapping_boxes(boxes, spec_.touching, [&](int a, int b) {
     if (!may_pair(a, b)) return;
     const Vec3 d0 = start[a] - start[b];
-    const Vec3 dd = cap * (move[a] - move[b]);
+    const Vec3 dd = move[a] - move[b];
     const double D0 = norm(d0);
-    const double floor =
-        spec_.core + spec_.filter_keep * (std::min(D0, spec_.touching) - spec_.core);
+    const double floor = spec_.core + keep * (std::min(D0, spec_.touching) - spec_.core);
     const double A = dot(dd, dd), B = dot(d0, dd), C = D0 * D0 - floor * floor;
     if (!(A > 0.0) || B >= 0.0 || C <= 0.0) return;
     const double disc = B * B - A * C;
@@ -440,7 +466,7 @@ double ContactNetwork::admissible_step(double t, const double* x, const double* 
     const double tau = (-B - std::sqrt(disc)) / A;  // first time the distance reaches floor
     fraction = std::min(fraction, std::max(0.0, tau));
   });
-  return cap * fraction;
+  return fraction;
 }
 
 std::string ContactNetwork::describe() const {

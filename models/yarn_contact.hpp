@@ -38,8 +38,14 @@
 // (the knit's centreline vertices), to first order about a state. Given both functions, refresh
 // at an accepted state compares each yarn's points with their exact positions and re-linearises
 // the yarns whose points stray more than refresh_tol about that state (the run driver calls it at
-// each stop check; integrators then forget their history). Each yarn is renewed on its own, and
-// undone if that puts a pair inside its core (counted: refusals()). The sparse pattern stays the
+// each stop check; integrators then forget their history). Each yarn is renewed on its own: its
+// points move to their exact positions as far as the step filter below allows with renew_keep of
+// every pair's gap kept, the old and fresh maps blended part way when it cuts (counted:
+// cut_renewals()). A yarn whose exact centreline is already inside a core is so renewed over the
+// next steps while the barrier pushes it out, instead of being left to stray further (refusing
+// such renewals let several_misses' centreline stray to 0.26 r; keeping only 0.2 of the gap, as a
+// step does, collapsed pairs onto their cores within a few renewals: docs/knit.md). The
+// sparse pattern stays the
 // construction's: renewed points should keep their particles (the knit's do), or their missing
 // blocks count as pattern misses.
 //
@@ -104,6 +110,7 @@ struct YarnContactSpec {
   std::function<std::vector<ContactPoint>(const std::vector<Vec3>&, int)> linearise;
   double refresh_tol = 0.0;   // m: a yarn is renewed when one of its points strays this far
   double refresh_move = 0.0;  // m: and only checked once a particle moved this far (x or y) since
+  double renew_keep = 0.5;    // a renewal keeps at least this fraction of a pair's gap to d0
 };
 
 class ContactNetwork final : public MechanicalSystem {
@@ -144,7 +151,7 @@ class ContactNetwork final : public MechanicalSystem {
   long pattern_misses() const { return pattern_misses_; }
   long list_rebuilds() const { return rebuilds_; }
   long refreshes() const { return refreshes_; }  // yarns renewed, over all refreshes
-  long refusals() const { return refusals_; }    // renewals undone (a pair inside its core)
+  long cut_renewals() const { return cut_renewals_; }  // renewals the step filter cut short
 
  private:
   struct Pair {
@@ -165,7 +172,11 @@ class ContactNetwork final : public MechanicalSystem {
                           const std::vector<double>* mass) const;
   // Barrier energy and its first two derivatives in D.
   void barrier(double D, double& e, double& de, double& d2e) const;
-  int block_entry(int fr, int fc) const;  // node entry of free particles (fr, fc), or -1
+  // The largest fraction in [0, 1] of the points' straight moves from start along which no pair
+  // comes closer than d0 + filter_keep (min(D_start, d) - d0): exact (a quadratic per pair), pairs
+  // by their swept boxes.
+  double sweep_fraction(const std::vector<Vec3>& start, const std::vector<Vec3>& move,
+                        double keep) const;
 
   SpringNetwork net_;
   mutable YarnContactSpec spec_;  // its points are renewed by refresh
@@ -178,7 +189,7 @@ class ContactNetwork final : public MechanicalSystem {
   mutable std::vector<Vec3> pos_, pts_, listed_at_, exact_, renewed_at_;
   mutable std::vector<Pair> pairs_;
   mutable std::vector<double> net_values_, force_;
-  mutable long pattern_misses_ = 0, rebuilds_ = 0, refreshes_ = 0, refusals_ = 0;
+  mutable long pattern_misses_ = 0, rebuilds_ = 0, refreshes_ = 0, cut_renewals_ = 0;
 };
 
 }  // namespace knitsim

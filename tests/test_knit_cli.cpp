@@ -172,7 +172,7 @@ TEST_CASE(
   REQUIRE(c.is_object());
   CHECK(c["points"].get<int>() > 0);
   CHECK(c["pattern_misses"] == 0);
-  CHECK(c["renewals_undone"] == 0);
+  CHECK(c["renewals_cut"] == 0);
   CHECK(c["min_point_distance_over_r"].get<double>() > kContactCore);
   CHECK(summary["yarn"]["clearance_min_over_r"].get<double>() >= 0.9);
   REQUIRE(run_small_chart(tmp,

@@ -395,7 +395,7 @@ nlohmann::json contact_json(const KnitModel& m, double t, const std::vector<doub
                                             : nlohmann::json(nullptr)},
           {"pairs_in_contact", touching},
           {"renewed_yarns", c.refreshes()},
-          {"renewals_undone", c.refusals()},
+          {"renewals_cut", c.cut_renewals()},
           {"pattern_misses", c.pattern_misses()},
           {"list_rebuilds", c.list_rebuilds()}};
 }
@@ -534,7 +534,7 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
                        "null without yarn contact; min_point_distance_over_r 1: the "
                        "closest two contact points at the end / loop radius (null: no "
                        "pair within reach); pairs_in_contact: pairs closer than the touching "
-                       "distance r; renewed_yarns, renewals_undone, pattern_misses, "
+                       "distance r; renewed_yarns, renewals_cut, pattern_misses, "
                        "list_rebuilds: counts over the run (docs/knit.md, Yarn contact)"},
                       {"params",
                        "loop_radius m; wale_stiffness, "
