@@ -189,19 +189,10 @@ bool ContactNetwork::refresh(double t, const double* x) const {
     const double s = sweep_fraction(pts_, move, spec_.renew_keep);
     if (s < 1.0) {
       ++cut_renewals_, ++cut;
-      // Part way: the old and the fresh maps blended, which needs the same particles in order.
-      bool same = s > 0.0;
-      for (int k = begin; same && k < end; ++k)
-        same = fresh[k - begin].particles == spec_.points[k].particles;
-      if (!same) continue;
-      for (int k = begin; k < end; ++k) {
-        ContactPoint& q = fresh[k - begin];
-        const ContactPoint& o = spec_.points[k];
-        for (int i = 0; i < kContactParticles && q.particles[i] >= 0; ++i)
-          for (int e = 0; e < 6; ++e)
-            q.weights[i][e] = o.weights[i][e] + s * (q.weights[i][e] - o.weights[i][e]);
-        q.offset = o.offset + s * (q.offset - o.offset);
-      }
+      // Part way: the fresh map (its weights, the tangent here) moved to put each point s of the
+      // way from where it is to its exact position; the rest is taken up at later checks.
+      for (int k = begin; k < end; ++k)
+        fresh[k - begin].offset = fresh[k - begin].offset - (1.0 - s) * move[k];
     }
     auto first = spec_.points.begin() + begin;
     const std::vector<ContactPoint> old(first, first + (end - begin));

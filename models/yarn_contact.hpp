@@ -39,12 +39,12 @@
 // at an accepted state compares each yarn's points with their exact positions and re-linearises
 // the yarns whose points stray more than refresh_tol about that state (the run driver calls it at
 // each stop check; integrators then forget their history). Each yarn is renewed on its own: its
-// points move to their exact positions as far as the step filter below allows with renew_keep of
-// every pair's gap kept, the old and fresh maps blended part way when it cuts (counted:
-// cut_renewals()). A yarn whose exact centreline is already inside a core is so renewed over the
-// next steps while the barrier pushes it out, instead of being left to stray further (refusing
-// such renewals let several_misses' centreline stray to 0.26 r; keeping only 0.2 of the gap, as a
-// step does, collapsed pairs onto their cores within a few renewals: docs/knit.md). The
+// points are re-linearised, and move to their exact positions as far as the step filter below
+// allows with renew_keep of every pair's gap kept (where it cuts, the fresh map is offset by the
+// part not taken, which later checks take up; counted: cut_renewals()). A yarn whose exact
+// centreline is already inside a core is so renewed over the next steps while the barrier pushes
+// it out, its tangent kept current (refusing such renewals, or blending the old and fresh maps,
+// let the points stray further: docs/knit.md, "Yarn contact"). The
 // sparse pattern stays the
 // construction's: renewed points should keep their particles (the knit's do), or their missing
 // blocks count as pattern misses.
