@@ -94,62 +94,60 @@ void for_each_near_pair(const YarnPolylines& lines, const std::vector<FlatSegmen
     }
 }
 
-int triple_sign(const FlatSegment& a, const FlatSegment& b, const SegmentClosest& c) {
-  const double v = dot(c.a - c.b, cross(a.p1 - a.p0, b.p1 - b.p0));
-  return v > 0.0 ? 1 : v < 0.0 ? -1 : 0;
-}
-
 FlatSegment segment_of(const YarnPolylines& lines, int course, int segment) {
   const std::vector<Vec3>& v = lines.vertices[course];
   return {course, segment, v[segment], v[segment + 1]};
 }
 
-// Front-view (x, y) proper intersection of two segments.
-bool cross_in_front_view(const FlatSegment& a, const FlatSegment& b) {
+// Front-view (x, y) proper intersection of two segments: true, with the depth of each segment
+// at the crossing point (linear along the segment), or false.
+bool cross_in_front_view(const FlatSegment& a, const FlatSegment& b, double* za = nullptr,
+                         double* zb = nullptr) {
   auto orient = [](Vec3 p, Vec3 q, Vec3 r) {
     return (q.x - p.x) * (r.y - p.y) - (q.y - p.y) * (r.x - p.x);
   };
   const double o1 = orient(a.p0, a.p1, b.p0), o2 = orient(a.p0, a.p1, b.p1);
   const double o3 = orient(b.p0, b.p1, a.p0), o4 = orient(b.p0, b.p1, a.p1);
-  return ((o1 > 0.0 && o2 < 0.0) || (o1 < 0.0 && o2 > 0.0)) &&
-         ((o3 > 0.0 && o4 < 0.0) || (o3 < 0.0 && o4 > 0.0));
+  if (!(((o1 > 0.0 && o2 < 0.0) || (o1 < 0.0 && o2 > 0.0)) &&
+        ((o3 > 0.0 && o4 < 0.0) || (o3 < 0.0 && o4 > 0.0))))
+    return false;
+  if (za != nullptr) *za = a.p0.z + (o3 / (o3 - o4)) * (a.p1.z - a.p0.z);
+  if (zb != nullptr) *zb = b.p0.z + (o1 / (o1 - o2)) * (b.p1.z - b.p0.z);
+  return true;
 }
 
-// sigma of a crossing in `lines`: from the segment pair (a, b), descend to the pair of least
-// distance among neighbouring pairs (index steps of -1, 0, +1 on each yarn, at most one
-// interval from the start), i.e. to the local closest approach of the two yarn pieces, and
-// take the triple-product sign there.
+// sigma of a crossing in `lines`: which piece is in front (+1: a, -1: b) where the two cross in
+// the front view, taken at the segment pair nearest the given one (rings of growing index
+// distance, at most two intervals along each yarn) whose front views cross. If none do there
+// (the pieces' projections came to touch or parted), where their front views come closest
+// within that reach. 0 only if the depths are equal there.
 int crossing_sign(const YarnPolylines& lines, YarnSegment a, YarnSegment b) {
-  const int w = lines.samples_per_interval;
+  const int reach = 2 * lines.samples_per_interval;
   const int na = static_cast<int>(lines.vertices[a.course].size()) - 1;
   const int nb = static_cast<int>(lines.vertices[b.course].size()) - 1;
-  auto distance_at = [&](int i, int k, SegmentClosest& c) {
-    if (i < 0 || k < 0 || i >= na || k >= nb || std::abs(i - a.segment) > w ||
-        std::abs(k - b.segment) > w)
-      return std::numeric_limits<double>::infinity();
-    const FlatSegment sa = segment_of(lines, a.course, i), sb = segment_of(lines, b.course, k);
-    // Not a segment against itself or its neighbour on one course (they touch).
-    if (!counted(lines, sa, sb, std::numeric_limits<double>::min()))
-      return std::numeric_limits<double>::infinity();
-    c = closest_points(sa.p0, sa.p1, sb.p0, sb.p1);
-    return c.distance;
-  };
-  int i = a.segment, k = b.segment;
-  SegmentClosest best;
-  double d = distance_at(i, k, best);
-  for (bool moved = true; moved;) {
-    moved = false;
-    int bi = i, bk = k;
-    SegmentClosest c;
-    for (int di = -1; di <= 1; ++di)
-      for (int dk = -1; dk <= 1; ++dk) {
-        const double e = distance_at(i + di, k + dk, c);
-        if (e < d) d = e, bi = i + di, bk = k + dk, best = c, moved = true;
+  auto order = [](double za, double zb) { return za > zb ? 1 : za < zb ? -1 : 0; };
+  auto flat = [](Vec3 p) { return Vec3{p.x, p.y, 0.0}; };
+  double nearest = std::numeric_limits<double>::infinity();
+  int nearest_order = 0;
+  for (int ring = 0; ring <= reach; ++ring)
+    for (int di = -ring; di <= ring; ++di)
+      for (int dk = -ring; dk <= ring; ++dk) {
+        if (std::max(std::abs(di), std::abs(dk)) != ring) continue;
+        const int i = a.segment + di, k = b.segment + dk;
+        if (i < 0 || k < 0 || i >= na || k >= nb) continue;
+        const FlatSegment sa = segment_of(lines, a.course, i), sb = segment_of(lines, b.course, k);
+        // Not a segment against itself or its neighbour on one course (they touch).
+        if (!counted(lines, sa, sb, std::numeric_limits<double>::min())) continue;
+        double za, zb;
+        if (cross_in_front_view(sa, sb, &za, &zb)) return order(za, zb);
+        const SegmentClosest c = closest_points(flat(sa.p0), flat(sa.p1), flat(sb.p0), flat(sb.p1));
+        if (c.distance < nearest) {
+          nearest = c.distance;
+          nearest_order =
+              order(sa.p0.z + c.s * (sa.p1.z - sa.p0.z), sb.p0.z + c.t * (sb.p1.z - sb.p0.z));
+        }
       }
-    i = bi, k = bk;
-  }
-  if (!std::isfinite(d)) return 0;
-  return triple_sign(segment_of(lines, a.course, i), segment_of(lines, b.course, k), best);
+  return nearest_order;
 }
 
 }  // namespace
