@@ -14,8 +14,11 @@ from expkit import (md_table, median, num, percentile, provenance, read_json,  #
 
 STUDY = "random_charts"
 CSV = "random_charts.csv"
+# The same charts with yarn contact (run.sh -- --set knit.contact=10), its CSV and manifest
+# renamed: the second part of summary.md when present.
+CONTACT_CSV, CONTACT_MANIFEST = "random_charts_contact.csv", "manifest_contact.json"
 WORST = 5
-WARN = 0.9  # r: knitsim's warning threshold (and the target of issue 31)
+WARN = 0.9  # r: knitsim's warning threshold and the clearance target
 
 
 def value(r, key):
@@ -168,7 +171,19 @@ def build(folder):
          worst_table(rows, "clearance_rest_over_r")),
         ("Provenance", provenance(manifest)),
     ]
-    return ("Random 12 x 12 charts through `knitsim knit`", [CSV, "manifest.json"], sections)
+    sources = [CSV, "manifest.json"]
+    contact = read_rows(folder, CONTACT_CSV)
+    if contact:
+        cm = read_json(folder, CONTACT_MANIFEST)
+        sections += [
+            ("With yarn contact: runs (%s)" % CONTACT_CSV, runs_section(contact, cm)),
+            ("With yarn contact: distribution over the charts", distribution_section(contact)),
+            ("With yarn contact: worst %d charts by minimum clearance over the run" % WORST,
+             worst_table(contact, "clearance_min_over_r") + "\n" + drawn_section(contact)),
+            ("With yarn contact: provenance", provenance(cm, CONTACT_MANIFEST)),
+        ]
+        sources += [CONTACT_CSV, CONTACT_MANIFEST]
+    return ("Random 12 x 12 charts through `knitsim knit`", sources, sections)
 
 
 if __name__ == "__main__":
