@@ -419,12 +419,12 @@ TEST_CASE("yarn contact: the committed tuck and miss charts keep 0.9 r over the 
     m.network.initial_state(x.data(), v.data());
     over.observe(0.0, x.data(), true);
     IntegratorOptions opt;
-    opt.max_wall_seconds = 60.0;  // a guard: each takes ~30-70 steps, a few seconds
+    opt.max_wall_seconds = 60.0;  // a guard: each takes 26-40 steps, about a second
     const RunStats s = run_to_equilibrium(m.system(), "implicit-euler", opt, x, v, &over);
     INFO(s.message);
     REQUIRE(s.status == RunStatus::Equilibrium);
     over.observe(s.t_final, x.data(), true);
-    CHECK(over.minimum().over_r >= 0.9);  // measured 0.948, 0.917, 0.935
+    CHECK(over.minimum().over_r >= 0.9);  // measured 0.948, 0.932, 0.938
     CHECK(m.contact->min_distance(s.t_final, x.data()) > m.contact->contact().core);
   }
 }
