@@ -1,6 +1,6 @@
 // Yarn contact: a barrier that keeps yarn centrelines of different yarn parts apart, added to a
-// SpringNetwork as one MechanicalSystem (ContactNetwork). Paper 2 has none (issue 31, item 2;
-// docs/knit.md, "Yarn contact").
+// SpringNetwork as one MechanicalSystem (ContactNetwork). Paper 2 has none (docs/knit.md,
+// "Yarn contact").
 //
 // Contact points. The yarn is represented by points that are affine in the particles, so the
 // barrier has local support and an exact, sparse Jacobian (the knit's NURBS centreline is a

@@ -1,4 +1,4 @@
-// Transient accuracy of the adaptive integrators (issue 30 item 1; experiments/transient is the
+// Transient accuracy of the adaptive integrators (experiments/transient is the
 // study on the built-in grid and the knit chart): the state of the two_corner_slack drape at
 // fixed times, while its pins move and when they stop, and the single_tuck knit while it rings,
 // against a tight reference. Each adaptive integrator that follows time must be within a bound

@@ -1,4 +1,4 @@
-// Yarn measures (src/measure/yarn_measures.hpp, issue 31 item 3): the segment-to-segment
+// Yarn measures (src/measure/yarn_measures.hpp): the segment-to-segment
 // distance, the clearance of knit states, the designed crossings and their check, and the
 // clearance over a run.
 #include <algorithm>

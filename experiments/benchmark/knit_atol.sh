@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Knit benchmark, absolute tolerances (issue 4 target: a 40 x 40 chart with tucks to steady
-# state with cvode-bdf in <= 1 s). models/charts/tucks40.chart (23 single tucks) with the
+# Knit benchmark, absolute tolerances (target: a 40 x 40 chart with tucks to steady state
+# with cvode-bdf in <= 1 s). models/charts/tucks40.chart (23 single tucks) with the
 # stabiliser at 0.1: cvode-bdf over velocity_atol x atol x rtol against a tight reference,
 # verlet at its automatic stable step for comparison, then what velocity_atol does to the two
 # drape scenes at the fit's rtol 1e-8.

@@ -1,4 +1,4 @@
-"""Convergence study (issue 5 item 2), four parts, all through the knitsim CLI:
+"""Convergence study, four parts, all through the knitsim CLI:
 
   orders     observed order of the fixed-step methods (euler, verlet, implicit-euler) from a
              step-halving series on a short trajectory of the four_corner drape, t_end = 4e-5 s

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Convergence study (issue 5 item 2): driver.py writes the raw CSV and manifest.json into
+# Convergence study: driver.py writes the raw CSV and manifest.json into
 # OUT, plot.py turns the CSV into PNGs. See README.md.
 #
 #   experiments/convergence/run.sh [--quick] [--out DIR] [--keep-runs]

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""fit_tolerance study (issue 5 item 4): one sample's `knitsim fit` at rtol 1e-4 ... 1e-10.
+"""fit_tolerance study: one sample's `knitsim fit` at rtol 1e-4 ... 1e-10.
 
 Target: the edge coefficients of a four_corner drape at known "twin" parameters (k 1000 N/m,
 c 15 N s/m, L0 5.2 cm, topology a), run by cvode-bdf at rtol 1e-10, so the exact answer is

@@ -1,12 +1,12 @@
-// Optimizers side by side on the drape fit (issue 7, item 4): the ICA of paper 1 (src/fit/ica.hpp)
+// Optimizers side by side on the drape fit: the ICA of paper 1 (src/fit/ica.hpp)
 // against pagmo2's DE, SADE, CMA-ES and PSO (Debian's libpagmo-dev) and against the screened
 // multi-start Levenberg-Marquardt fit (src/fit/lm_fit.hpp), on the same target and the same budget
 // of drape evaluations.
 //
-// Problem: DrapeFitProblem (src/fit/drape_fit.hpp) of the base scene `--scene` (default four_corner)
-// with the Table 2 areal density of `--sample` (as `knitsim fit --scene four_corner --set
-// fabric.areal_density=<Table 2>` builds it), rtol 1e-8, the Table 3 box, fitted to `--target`
-// (default: the twin target of sample 1, SPEC 2.8). Cost = Eq. 5 error, percent.
+// Problem: DrapeFitProblem (src/fit/drape_fit.hpp) of the base scene `--scene` (default
+// four_corner) with the Table 2 areal density of `--sample` (as `knitsim fit --scene four_corner
+// --set fabric.areal_density=<Table 2>` builds it), rtol 1e-8, the Table 3 box, fitted to
+// `--target` (default: the twin target of sample 1, SPEC 2.8). Cost = Eq. 5 error, percent.
 // Encoding, the same for every optimizer: the 5 genes k, c, eps, L0 and the topology gene u in
 // [0, 3), topology = 'a' + floor(u) (src/fit/ica.hpp category_of; pagmo may propose u = 3 exactly,
 // which maps to c). LM searches the topologies x grid sizes itself (src/fit/lm_fit.hpp).

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Peer comparison (issue 5 item 6): `knitsim drape` (cvode-bdf) and the independent
+"""Peer comparison: `knitsim drape` (cvode-bdf) and the independent
 drape_scipy.py (scipy solve_ivp BDF, sparse analytic Jacobian, same residual stop) on the same
 scenes, timed in one driver run by each solver's own CPU clock (set-up and output excluded),
 each the median of REPEATS runs.
@@ -14,7 +14,7 @@ the loosest pair at which scipy's BDF reaches the 1e-8 residual stop on four_cor
   compare.csv  per scene, knitsim model (full, eighth, half) and tolerance: median knitsim CPU,
                scipy CPU, their ratio, the max position difference of the two equilibria.
 
-The same-algorithm peer of the equilibrium solver (issue 30 item 4): scipy.optimize's
+The same-algorithm peer of the equilibrium solver: scipy.optimize's
 trust-region Newton methods (trust-exact: the dense Hessian factorised; trust-ncg: sparse
 Hessian-vector products) minimising the same potential energy from the same flat state, with
 knitsim's stop in positions (drape_scipy.run_trust), against `knitsim drape --integrator

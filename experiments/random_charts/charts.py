@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""Random stitch charts for `knitsim knit` (issue 31: "50 random 12 x 12 charts with ~10 % tucks
-and misses, respecting the chart rules, seeded and reproducible by one command").
+"""Random stitch charts for `knitsim knit` (50 random 12 x 12 charts with ~10 % tucks
+and misses, respecting the chart rules, seeded and reproducible by one command).
 
     charts.py [--count N] [--seed S] [--wales W] [--courses C] [--probability P] --out DIR
 

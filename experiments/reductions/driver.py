@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Reductions study (issue 5 item 5): what each "model only what the scene requires" reduction
+"""Reductions study: what each "model only what the scene requires" reduction
 saves against the full model, measured where the code allows it (SPEC 1, 2.1-2.3, 2.12).
 
   state.csv     pinned particles are scene data, not state (SPEC 2.1): dof of each scene vs the

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Scaling study (issue 5 item 7; SPEC 2.12 "report how cost grows with the number of
+# Scaling study (SPEC 2.12 "report how cost grows with the number of
 # particles"): four_corner drapes of one 50 x 50 cm sheet refined from 11 x 11 to 101 x 101
 # particles (and 141 x 141 in full mode) with cvode-bdf (Schur LDL^T and KLU), cvode-bdf-gmres,
 # implicit-euler and the equilibrium solver on the full grid, the equilibrium solver as the

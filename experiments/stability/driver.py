@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Stability study (issue 5 item 3): measured stability limits of the explicit integrators on
+"""Stability study: measured stability limits of the explicit integrators on
 the four_corner drape vs the linear analysis of SPEC 2.4, a dt x stiffness stability map,
 cvode-bdf at the parameter extremes, and what every integrator does without damping.
 
@@ -238,7 +238,7 @@ def undamped(study, quick):
     return rows
 
 
-# Spurious equilibria at the extremes (issue 30 item 2): where each method ends, on the three
+# Spurious equilibria at the extremes: where each method ends, on the three
 # built-in scenes' whole sheets, against the state the damped dynamics reach from rest
 # (cvode-bdf at rtol 1e-8, atol 1e-11). Every run's end state is checked by knitsim (summary.json:
 # status, certificate, energy against energy_reference); the driver adds the distance.

@@ -1,4 +1,4 @@
-"""Transient work-precision (issue 30 item 1): the states of two transients at fixed times
+"""Transient work-precision: the states of two transients at fixed times
 against a tight reference, for every integrator over its tolerances or steps; error against CPU
 time. Called by run.sh; see README.md. Two cases (--only picks one):
 

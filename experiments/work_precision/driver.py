@@ -1,4 +1,4 @@
-"""Work-precision study (issue 5 item 1): every integrator on the four_corner and two_corner
+"""Work-precision study: every integrator on the four_corner and two_corner
 drapes and the single_tuck knit chart, over a sweep of rtol (adaptive methods) or dt
 (fixed-step methods). Error of the equilibrium positions (max over particles) and of the
 Eq. 5 edge coefficients against a tight reference, against CPU time, RHS evaluations and

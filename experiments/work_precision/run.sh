@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Work-precision study (issue 5 item 1): driver.py writes the raw CSV and manifest.json into
+# Work-precision study: driver.py writes the raw CSV and manifest.json into
 # OUT, plot.py turns the CSV into PNGs. See README.md.
 #
 #   experiments/work_precision/run.sh [--quick] [--out DIR] [--keep-runs] [--wall-cap S]

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Paper 2 (knit loops) figures: runs `knitsim knit` on the committed charts in models/charts/
 # with paper 2's network (wale + course springs, --set knit.network=paper) and with the
-# stabiliser (the default network since issue 31, named --set knit.stabiliser=0.1), then a 40 x 40 chart with tucks (stabiliser on) with cvode-bdf,
+# stabiliser (the default network, named --set knit.stabiliser=0.1), then a 40 x 40 chart with tucks (stabiliser on) with cvode-bdf,
 # implicit-euler (automatic dt = 1 s) and verlet. See README.md for which picture is which figure.
 #
 # Usage: paper_repro/knit/make_figures.sh   (from the repository root)
