@@ -1,14 +1,16 @@
 #!/usr/bin/env bash
 # Paper 2 (knit loops) figures: runs `knitsim knit` on the committed charts in models/charts/
 # with paper 2's network (wale + course springs, --set knit.network=paper) and with the
-# stabiliser (the default network, named --set knit.stabiliser=0.1), then a 40 x 40 chart with tucks (stabiliser on) with cvode-bdf,
+# stabiliser (the default network, named --set knit.stabiliser=0.1) and with yarn contact
+# (default network + --set knit.contact=10, pictures suffixed _contact), then a 40 x 40 chart with tucks (stabiliser on) with cvode-bdf,
 # implicit-euler (automatic dt = 1 s) and verlet. See README.md for which picture is which figure.
 #
 # Usage: paper_repro/knit/make_figures.sh   (from the repository root)
 #   KNITSIM=path/to/knitsim   the binary (default build/knitsim)
 #   OUT=folder                output folder (default out/knit_figures)
-# Writes $OUT/<chart>-<paper|stabilised>/ (the outputs of knitsim knit), $OUT/runs.csv (one row
-# per run: chart, variant, integrator, status, steps, t_final, wall time, max displacement / r),
+# Writes $OUT/<chart>-<paper|stabilised|contact>/ (the outputs of knitsim knit), $OUT/runs.csv (one row
+# per run: chart, variant, integrator, status, steps, t_final, wall time, max displacement / r,
+# min yarn clearance over the run / r and crossings changed, from summary.json's yarn block),
 # $OUT/manifest.json (git commit, binary and build stamp, load) and $OUT/figures/ (below).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -17,7 +19,7 @@ OUT=${OUT:-out/knit_figures}
 CHARTS=models/charts
 [ -x "$KNITSIM" ] || { echo "make_figures.sh: no knitsim binary at $KNITSIM (set KNITSIM)" >&2; exit 1; }
 mkdir -p "$OUT"
-echo "chart,variant,integrator,status,steps,t_final_s,wall_s,max_displacement_over_r" > "$OUT/runs.csv"
+echo "chart,variant,integrator,status,steps,t_final_s,wall_s,max_displacement_over_r,min_clearance_over_r,crossings_changed" > "$OUT/runs.csv"
 
 # run NAME VARIANT CHARTFILE ARGS...: one knitsim knit run into $OUT/NAME-VARIANT, one runs.csv row.
 run() {
@@ -30,9 +32,12 @@ run() {
   python3 - "$dir/summary.json" "$name" "$variant" >> "$OUT/runs.csv" <<'PY'
 import json, sys
 s = json.load(open(sys.argv[1]))
+y = s.get("yarn", {})
 print(",".join(str(v) for v in [sys.argv[2], sys.argv[3], s["integrator"], s["status"],
       s["stats"]["steps"], s["t_final"], round(s["wall_seconds"], 4),
-      round(s["max_displacement_over_r"], 4)]))
+      round(s["max_displacement_over_r"], 4),
+      round(y["clearance_min_over_r"], 4) if "clearance_min_over_r" in y else "",
+      y.get("crossings_changed", "")]))
 PY
   tail -n 1 "$OUT/runs.csv"
 }
@@ -40,6 +45,9 @@ PY
 for chart in plain_jersey single_tuck several_tucks several_misses; do
   run "$chart" paper "$CHARTS/$chart.chart" --set knit.network=paper
   run "$chart" stabilised "$CHARTS/$chart.chart" --set knit.stabiliser=0.1
+  # yarn contact: the default (stabilised) network plus the barrier keeping centrelines
+  # >= ~0.9 r apart (knit's integrator is then implicit-euler); not run on tucks40 (minutes).
+  run "$chart" contact "$CHARTS/$chart.chart" --set knit.contact=10
 done
 
 # tucks40.chart: a 40 x 40 jersey with 23 single tucks on a staggered grid (a timing benchmark,
@@ -51,7 +59,7 @@ run tucks40 paper-cvode-bdf "$CHARTS/tucks40.chart" --integrator cvode-bdf --set
 # The figure pictures, copied under the paper's figure numbers into $OUT/figures/. "During"
 # (Fig. 8c) is the captured frame whose largest displacement is nearest half the final one.
 mkdir -p "$OUT/figures"
-for variant in paper stabilised; do
+for variant in paper stabilised contact; do
   cp "$OUT/plain_jersey-$variant/after.png" "$OUT/figures/fig8a_plain_jersey_$variant.png"
   cp "$OUT/single_tuck-$variant/before.png" "$OUT/figures/fig8b_single_tuck_before_$variant.png"
   during=$(python3 - "$OUT/single_tuck-$variant/summary.json" <<'PY'
