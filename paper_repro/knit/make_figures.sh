@@ -85,4 +85,5 @@ expkit.write_manifest(types.SimpleNamespace(quick=False, out=sys.argv[1]), "knit
                       sample_run=types.SimpleNamespace(folder=sys.argv[2]),
                       command="paper_repro/knit/make_figures.sh")
 PY
-echo "make_figures.sh: outputs in $OUT (runs.csv, manifest.json, figures/)"
+python3 paper_repro/knit/features.py "$OUT" > /dev/null   # $OUT/features.csv (single_tuck)
+echo "make_figures.sh: outputs in $OUT (runs.csv, manifest.json, features.csv, figures/)"
