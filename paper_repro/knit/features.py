@@ -6,7 +6,8 @@ Writes OUT/features.csv. Definitions (points.csv: wale, level, x, y at the end, 
 models/knit_loops.hpp): the tuck is at wale 3, course 2 (chart row 3 from the bottom), its
 head at level 3; the held loop on its needle is course 1 (lower point level 1, upper level 3).
   held_loop_height_r: y(3,3) - y(3,1) at the end / r (its start is 2h; rest length h).
-  lateral_dx_r_d<k>:  mean over the two sides of |x - x0| / r of the level-3 points k wales from
+  held_loop_base_rise_r, tuck_head_rise_r: y - y0 of points (3,1) and (3,3) / r.
+  lateral_dx_toward_tuck_r_d<k>:  mean over the two sides of |x - x0| / r of the level-3 points k wales from
                       the tuck, signed + when toward the tuck.
 r = params.loop_radius from summary.json."""
 import csv, json, sys
@@ -20,7 +21,9 @@ for variant in ("paper", "stabilised", "contact"):
     f = lambda k, key: float(P[k][key])
     row = {"chart": "single_tuck", "variant": variant,
            "held_loop_height_start_r": round((f((3, 3), "y0") - f((3, 1), "y0")) / r, 3),
-           "held_loop_height_end_r": round((f((3, 3), "y") - f((3, 1), "y")) / r, 3)}
+           "held_loop_height_end_r": round((f((3, 3), "y") - f((3, 1), "y")) / r, 3),
+           "held_loop_base_rise_r": round((f((3, 1), "y") - f((3, 1), "y0")) / r, 3),
+           "tuck_head_rise_r": round((f((3, 3), "y") - f((3, 3), "y0")) / r, 3)}
     for k in range(1, 5):
         v = []
         for side in (-1, 1):
