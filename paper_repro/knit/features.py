@@ -7,8 +7,8 @@ models/knit_loops.hpp): the tuck is at wale 3, course 2 (chart row 3 from the bo
 head at level 3; the held loop on its needle is course 1 (lower point level 1, upper level 3).
   held_loop_height_r: y(3,3) - y(3,1) at the end / r (its start is 2h; rest length h).
   held_loop_base_rise_r, tuck_head_rise_r: y - y0 of points (3,1) and (3,3) / r.
-  lateral_dx_toward_tuck_r_d<k>:  mean over the two sides of |x - x0| / r of the level-3 points k wales from
-                      the tuck, signed + when toward the tuck.
+  lateral_dx_toward_tuck_r_d<k>: (x - x0) / r of the level-3 points k wales either side of
+                      the tuck, signed + toward the tuck, averaged over the two sides.
 r = params.loop_radius from summary.json."""
 import csv, json, sys
 out = sys.argv[1]
