@@ -1,7 +1,7 @@
 // Answer-file regression (SUNDIALS-examples style, digits as published): the four_corner
-// equilibrium of sample 1 (SPEC 2.12 fabric) against the independent implementation quoted in
-// the foundation issue: centre 1.288 cm below the corners for topology a, ~1.45 cm for b,
-// ~6.9 cm for c. Two integrators of different kinds must agree with each other and with it.
+// equilibrium of sample 1 (SPEC 2.12 fabric) against an independent implementation's values:
+// centre 1.288 cm below the corners for topology a, ~1.45 cm for b, ~6.9 cm for c (ours:
+// docs/scenes.md). Two integrators of different kinds must agree with each other and with it.
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <vector>

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Drape benchmark (issue "Foundation", item 7): cvode-bdf on four_corner and two_corner as
+# Drape benchmark (experiments/benchmark/README.md): cvode-bdf on four_corner and two_corner as
 # medians of REPEATS runs, on the whole sheet and on the part each scene requires (the eighth
 # of four_corner, the half of two_corner: model.symmetry), and the paper's explicit Euler reference on four_corner to the
 # same residual (SPEC 2.12 fabric: k 852 N/m, c 12 N s/m, L0 4.9 cm, 41.65 g/m^2, topology a,
