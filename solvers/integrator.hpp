@@ -35,11 +35,12 @@ struct IntegratorOptions {
   int max_order = 0;              // cap on the method order (BDF <= 5, Adams <= 12); 0 = default
   long max_steps = 500'000'000;   // steps per run at most
   double t_max = 1e7;             // s, physical end time if no equilibrium first, [1e-9, 1e15]
-  // The stop, tested once the static residual (1) is below max(1e-4, equilibrium_tol): where K
-  // is regular, the Newton correction ||K^-1 F||_inf below position_tol; where it is singular
-  // (rigid or mechanism modes), the residual below equilibrium_tol (equilibrium_threshold below).
-  double equilibrium_tol = 1e-8;  // static residual (1), the stop where K is singular
-  double position_tol = 1e-10;    // m, the stop in positions where K is regular
+  // The stop, tested once the static residual (max_i |F_i| / mean particle weight, dimensionless)
+  // is below max(1e-4, equilibrium_tol): where K is positive definite, ||K^-1 F||_inf below
+  // max(position_tol, its round-off floor) m; where K is singular, the residual below
+  // equilibrium_threshold() (below: equilibrium_tol, or a round-off floor up to 1e3 x it).
+  double equilibrium_tol = 1e-8;  // static residual, dimensionless: the stop where K is singular
+  double position_tol = 1e-10;    // m, the stop in positions where K is positive definite
   double max_wall_seconds = 0.0;  // s, wall-clock cap per run; 0 = none
   // Set from outside (the CLI's signal handler) to end the run as Interrupted; read at each
   // residual check. nullptr = none.

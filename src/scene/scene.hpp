@@ -12,7 +12,8 @@
 //   [pins]   layout (four_corner|two_corner), span (fraction of the width), move_time (s)
 //   [run]    t_max (s), equilibrium_tol (static residual, dimensionless: the stop where the
 //            stiffness is singular, and max(1e-4, it) the residual below which the stop is
-//            tested), position_tol (m: the stop in positions; both solvers/integrator.hpp)
+//            tested), position_tol (m: the stop in positions where the stiffness is positive
+//            definite; both solvers/integrator.hpp)
 // Line 2 of a scene file is a comment that describes it in one line (`knitsim list scenes`).
 //
 // Failure modes: every bad input throws std::invalid_argument with one line naming the key as
