@@ -44,8 +44,7 @@
 // part not taken, which later checks take up; counted: cut_renewals()). A yarn whose exact
 // centreline is already inside a core is so renewed over the next steps while the barrier pushes
 // it out, its tangent kept current (refusing such renewals, or blending the old and fresh maps,
-// let the points stray further: docs/knit.md, "Yarn contact"). The
-// sparse pattern stays the
+// let the points stray further: docs/knit.md, "Yarn contact"). The sparse pattern stays the
 // construction's: renewed points should keep their particles (the knit's do), or their missing
 // blocks count as pattern misses.
 //
@@ -173,8 +172,8 @@ class ContactNetwork final : public MechanicalSystem {
   // Barrier energy and its first two derivatives in D.
   void barrier(double D, double& e, double& de, double& d2e) const;
   // The largest fraction in [0, 1] of the points' straight moves from start along which no pair
-  // comes closer than d0 + filter_keep (min(D_start, d) - d0): exact (a quadratic per pair), pairs
-  // by their swept boxes.
+  // comes closer than d0 + keep (min(D_start, d) - d0): exact (a quadratic per pair), pairs by
+  // their swept boxes. The step filter keeps filter_keep, a renewal renew_keep.
   double sweep_fraction(const std::vector<Vec3>& start, const std::vector<Vec3>& move,
                         double keep) const;
 

@@ -130,9 +130,8 @@ int crossing_sign(const YarnPolylines& lines, YarnSegment a, YarnSegment b) {
   double nearest = std::numeric_limits<double>::infinity();
   int nearest_order = 0;
   for (int ring = 0; ring <= reach; ++ring)
-    for (int di = -ring; di <= ring; ++di)
-      for (int dk = -ring; dk <= ring; ++dk) {
-        if (std::max(std::abs(di), std::abs(dk)) != ring) continue;
+    for (int di = -ring; di <= ring; ++di)  // the ring's perimeter only
+      for (int dk = -ring; dk <= ring; dk += (std::abs(di) == ring ? 1 : std::max(1, 2 * ring))) {
         const int i = a.segment + di, k = b.segment + dk;
         if (i < 0 || k < 0 || i >= na || k >= nb) continue;
         const FlatSegment sa = segment_of(lines, a.course, i), sb = segment_of(lines, b.course, k);

@@ -22,15 +22,15 @@
 // carries its over/under order: sigma = +1 if the first piece is in front (larger z) where the
 // two cross in the front view, -1 if behind (the depths at the crossing point, linear along
 // each segment; at rest they differ by at least the clearance). The check at a later state
-// looks for the front-view crossing of the same two pieces at the segment pair nearest the rest
-// one (rings of growing index distance, at most two intervals, 2 S segments, along each yarn)
-// (where their projections no longer cross there: where they come closest in the front view
-// within that reach) and compares its order with the rest state's; a crossing whose order
-// differs has changed. The front view is the chart's plane: the
-// order is invariant under rigid motions in the plane and under translations, not under tilts
-// large enough to uncross the pieces' projections. (A 3D invariant such as the sign of
-// (a - b) . (t_a x t_b) at the pieces' closest points turns where the pieces lie near parallel
-// without passing through each other: measured on several_tucks, pieces 3 r apart in depth.)
+// takes the order where the same two pieces cross in the front view, at the segment pair
+// nearest the rest one (rings of growing index distance, at most two intervals, 2 S segments,
+// along each yarn), or, where their projections no longer cross within that reach, where they
+// come closest in the front view; a crossing whose order differs from the rest state's has
+// changed. The front view is the chart's plane: the order is invariant under rigid motions in
+// the plane, not under tilts large enough to uncross the pieces' projections. (A 3D invariant such
+// as the sign of (a - b) . (t_a x t_b) at the pieces' closest points turns where the pieces lie
+// near parallel without passing through each other: measured on several_tucks, pieces 3 r apart in
+// depth.)
 //
 // Failure modes: positions of the wrong length throw std::invalid_argument (as the model's
 // geometry functions); a non-finite state gives a non-finite clearance (NaN compares false:
