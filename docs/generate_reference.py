@@ -51,7 +51,18 @@ def help_page(knitsim, command):
     return HEADER + "# `%s --help`\n\n```text\n%s```\n" % (title, text)
 
 
-def describe_folder(folder, title, lines):
+# docs/summary_json.md must name every top-level field of every summary.json the quick runs
+# write: (section of that page, field) pairs collected by describe_folder.
+FIELDS_PAGE = os.path.join(HERE, "summary_json.md")
+SUMMARY_FIELDS = []
+
+
+def summary_section(command, rel):
+    """The section of summary_json.md that describes `rel`, a summary.json `command` wrote."""
+    return "drape" if rel != "summary.json" else command.split()[0]
+
+
+def describe_folder(folder, title, lines, command=None):
     """Every file of `folder` (recursively, sorted): CSV headers and JSON top-level keys."""
     lines.append("## %s\n" % title)
     lines.append("| file | columns (CSV header) or top-level keys (JSON) |")
@@ -78,6 +89,11 @@ def describe_folder(folder, title, lines):
                 what = ", ".join("`%s`" % k for k in sorted(value)) if isinstance(value, dict) else ""
                 if rel == "summary.json" and isinstance(value, dict) and "units" in value:
                     units = value["units"]
+                if command and name == "summary.json" and isinstance(value, dict):
+                    section = summary_section(command, rel)
+                    SUMMARY_FIELDS.extend((section, k) for k in value)
+                    if isinstance(value.get("stats"), dict):  # knit: the solver's fields
+                        SUMMARY_FIELDS.extend(("drape", k) for k in value["stats"])
             else:
                 what = "(%s)" % {".vtk": "legacy VTK polydata", ".png": "picture"}.get(
                     os.path.splitext(name)[1], "file")
@@ -117,7 +133,7 @@ def outputs_page(knitsim):
             run(knitsim, args + ["--out", out], cwd=work)
             shown = "knitsim " + " ".join(
                 os.path.relpath(a, ROOT) if a.startswith(ROOT) else a for a in args)
-            describe_folder(out, "%s: `%s --out DIR`" % (title, shown), lines)
+            describe_folder(out, "%s: `%s --out DIR`" % (title, shown), lines, command=title)
     finally:
         shutil.rmtree(work, ignore_errors=True)
     return "\n".join(lines).rstrip("\n") + "\n"
@@ -136,6 +152,19 @@ def generate(knitsim):
                                + run(knitsim, ["list", "integrators", "--format", "markdown"]))
     pages["outputs.md"] = outputs_page(knitsim)
     return pages
+
+
+def undocumented_fields(page_text):
+    """summary.json fields the quick runs wrote that the page's section does not name."""
+    sections, name = {}, None
+    for line in page_text.splitlines():
+        if line.startswith("## "):
+            name = line[3:].split("`")[1] if "`" in line else line[3:]
+            sections[name] = ""
+        elif name:
+            sections[name] += line + "\n"
+    return sorted({"%s: %s" % (sec, key) for sec, key in SUMMARY_FIELDS
+                   if "`%s`" % key not in sections.get(sec, "")})
 
 
 def check(pages, folder):
@@ -173,11 +202,22 @@ def main():
             shutil.rmtree(planted, ignore_errors=True)
         if stale != ["drape.md"]:
             sys.exit("docs_reference_catches: the check reported %s, not drape.md" % stale)
-        print("docs_reference_catches: the planted change in drape.md was reported")
+        # And a field the page no longer names (nonlin_fails dropped from its drape section).
+        page = open(FIELDS_PAGE).read().replace("`nonlin_fails`", "nonlin_fails")
+        if undocumented_fields(page) != ["drape: nonlin_fails"]:
+            sys.exit("docs_reference_catches: a field dropped from summary_json.md was reported "
+                     "as %s" % undocumented_fields(page))
+        print("docs_reference_catches: the planted change in drape.md and the field dropped "
+              "from summary_json.md were reported")
         return
     if "--check" in sys.argv:
         stale = check(pages, REFERENCE)
-        if stale:
+        missing = undocumented_fields(open(FIELDS_PAGE).read())
+        if missing:
+            print("docs/summary_json.md does not name: " + ", ".join(missing))
+        if stale or missing:
+            if not stale:
+                sys.exit("docs/summary_json.md is stale: describe the fields above")
             sys.exit("docs/reference is stale (%s): run docs/generate_reference.py %s and "
                      "commit the result" % (", ".join(stale), args[0]))
         print("docs/reference: %d files match the program" % len(pages))

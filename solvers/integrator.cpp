@@ -308,9 +308,12 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
       if (p.negative_pivots > 0) return "";  // a saddle: not yet
       const double tol = std::max(opt.position_tol, p.newton_floor);
       if (!(p.newton_step <= tol)) return "";
-      os << "Newton correction " << p.newton_step << " m below "
-         << (p.newton_floor > opt.position_tol ? "its round-off floor " : "position_tol ") << tol
-         << " m";
+      os << "Newton correction " << p.newton_step << " m below ";
+      if (p.newton_floor > opt.position_tol)
+        os << "its round-off floor " << tol << " m, the correction the forces' rounding alone "
+           << "makes, above position_tol " << opt.position_tol << " m";
+      else
+        os << "position_tol " << tol << " m";
       stats.certificate = "stable_minimum";
     }
     stats.negative_pivots = p.negative_pivots;

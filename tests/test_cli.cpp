@@ -437,6 +437,7 @@ TEST_CASE("the lab-data example fits; upside-down lab data are warned about") {
   INFO(r.err);
   REQUIRE(r.status == 0);
   CHECK(r.err.empty());
+  CHECK(fs::exists(out / "drape" / "drape.png"));
   const auto s = nlohmann::json::parse(slurp(out / "summary.json"));
   // Made from a drape of my_fabric.toml at k = 600 N/m, L0 = 0.04 m, topology a, with 0.1 mm
   // noise (docs/examples/make_lab_targets.py): the fit finds its k / L0 within a few percent
@@ -477,4 +478,15 @@ TEST_CASE("the lab-data example fits; upside-down lab data are warned about") {
   REQUIRE(lines(up.err).size() == 1);
   CHECK(up.err.find("knitsim fit: warning: --target " + flipped.string() +
                     ": every edge of four_corner hangs above its pins") != std::string::npos);
+  // Without --quiet the warning comes again after the result table, where the reader looks;
+  // --no-pictures leaves the fitted drape without its picture.
+  const fs::path loud = tmp.path / "loud";
+  const Run again = run_knitsim(fit + "'" + flipped.string() + "' --optimizer lm --no-pictures " +
+                                    "--out '" + loud.string() + "'",
+                                tmp);
+  const std::vector<std::string> warned = lines(again.err);
+  REQUIRE(warned.size() == 2);
+  CHECK(warned[0] == warned[1]);
+  CHECK(fs::exists(loud / "drape" / "summary.json"));
+  CHECK(!fs::exists(loud / "drape" / "drape.png"));
 }

@@ -136,7 +136,7 @@ void run(const DemoArgs& args) {
   report << "# knitsim demo\n\n"
          << "Built-in scenes (sample 1 of paper 1, Tables 2 and 4: k = 852 N/m, c = 12 N s/m, "
             "L0 = 4.9 cm, topology a, 41.65 g/m^2) run from the flat state to equilibrium "
-            "(static residual <= equilibrium_tol, SPEC 2.3) with "
+            "(the stop of docs/equilibrium.md) with "
          << integrator << ". Each folder holds summary.json, nodes.csv, drape.vtk, drape.png "
          << "and manifest.json.\n\n"
          << scenes.markdown() << "\n"

@@ -12,7 +12,7 @@
 //                  empires, evaluations}], scene, target, integrator, ica options, bounds
 //   history.csv    decade,best,mean,empires,evaluations (imperialist costs, paper 1 Fig. 13)
 //   drape/         the fitted drape re-run (write_drape_outputs: summary.json, nodes.csv,
-//                  drape.vtk, drape.png, manifest.json) plus edges.csv (its measured edges)
+//                  drape.vtk, drape.png unless --no-pictures, manifest.json) plus edges.csv (its measured edges)
 //                  and target_edges.csv (the target's, as fitted)
 //   manifest.json
 //   ica_checkpoint.json  {config, state}: the ICA's whole state (IcaState) after the latest
@@ -78,6 +78,7 @@ struct FitArgs {
   std::string out;
   bool resume = false;
   bool quiet = false;
+  bool no_pictures = false;  // the fitted drape without drape.png
   std::vector<std::string> ignored;  // flags given that the chosen optimizer does not read
 };
 
@@ -107,16 +108,23 @@ void warn_about_fit(const FitArgs& args, const std::string& integrator) {
          "~10 min), against milliseconds with cvode-bdf or static");
 }
 
-// One warning when every edge of the target that can tell hangs above its pins (sags_upward):
+// The warning when every edge of the target that can tell hangs above its pins (sags_upward):
 // lab data with z growing downward (image rows), which the fit would chase to a box corner.
-void warn_if_target_upside_down(const DrapeFitProblem& problem, const std::string& target) {
+// Empty when the target is the right way up. Printed before the fit and again after its table,
+// where a reader of the result meets it.
+std::string upside_down_warning(const DrapeFitProblem& problem, const std::string& target) {
   int upward = 0, counted = 0;
   for (const EdgeFit& edge : problem.measured())
     if (const std::optional<bool> up = sags_upward(edge, problem.target_scene()))
       ++counted, upward += *up ? 1 : 0;
-  if (counted > 0 && upward == counted)
-    warn("--target " + target + ": every edge of " + problem.target_scene() +
-         " hangs above its pins; lab z must grow upward (negate image rows; docs/fitting.md)");
+  if (counted == 0 || upward < counted) return "";
+  return "--target " + target + ": every edge of " + problem.target_scene() +
+         " hangs above its pins; lab z must grow upward (negate image rows; docs/fitting.md)";
+}
+
+void warn_if_upside_down(const DrapeFitProblem& problem, const std::string& target) {
+  const std::string message = upside_down_warning(problem, target);
+  if (!message.empty()) warn(message);
 }
 
 // One line on stdout: the fitted natural length also sets the mesh (n = round(W / L0) cells per
@@ -296,7 +304,7 @@ void run_lm_fit(const FitArgs& args, const Scene& base, const DrapeFitProblem& p
     drape_ok = drape.stats.status == RunStatus::Equilibrium;
     max_strain = drape.max_strain;
     std::filesystem::create_directories(dir / "drape");
-    write_drape_outputs(dir / "drape", fitted, drape, &problem.measured());
+    write_drape_outputs(dir / "drape", fitted, drape, &problem.measured(), !args.no_pictures);
     summary["params"] = params_json(fit.params);
     summary["objective"] = fit.objective;
     summary["best_country"] = fit.best_x;
@@ -347,6 +355,7 @@ void run_lm_fit(const FitArgs& args, const Scene& base, const DrapeFitProblem& p
     std::cout << t.text();
     if (fit.ok) std::cout << not_determined_line(id, max_strain, fit.params) << mesh_note(base, fit.params);
     std::cout << std::flush;
+    warn_if_upside_down(problem, args.target);
   }
   if (!fit.ok || !drape_ok) throw CLI::RuntimeError(3);
 }
@@ -396,7 +405,7 @@ void run(const FitArgs& args) {
   dir = make_output_dir(args.out, "fit-" + base.name);
   warn_about_fit(args, problem->integrator());
   note_keys_not_given(base, kFitBaseKeys);
-  warn_if_target_upside_down(*problem, args.target);
+  warn_if_upside_down(*problem, args.target);
   if (args.optimizer == "lm") return run_lm_fit(args, base, *problem, dir);
 
   if (!args.quiet) {
@@ -443,7 +452,7 @@ void run(const FitArgs& args) {
     const DrapeResult drape = run_drape(fitted, problem->integrator());
     const std::filesystem::path drape_dir = dir / "drape";
     std::filesystem::create_directories(drape_dir);
-    write_drape_outputs(drape_dir, fitted, drape, &problem->measured());
+    write_drape_outputs(drape_dir, fitted, drape, &problem->measured(), !args.no_pictures);
     drape_status = to_string(drape.stats.status);
     drape_ok = drape.stats.status == RunStatus::Equilibrium;
   }
@@ -490,6 +499,7 @@ void run(const FitArgs& args) {
               {"wall", format_number(fit.wall_seconds, 4) + " s"},
               {"outputs", dir.string() + "/"}};
     std::cout << t.text() << mesh_note(base, fit.params) << std::flush;
+    warn_if_upside_down(*problem, args.target);
   }
   if (interrupted) {
     std::cerr << "knitsim fit: interrupted by " << interrupt->signal_name() << " after decade "
@@ -548,6 +558,7 @@ void register_fit_command(CLI::App& app) {
   cmd->add_flag("--resume", args->resume,
                 "Continue the interrupted fit in --out from its ica_checkpoint.json (same "
                 "options needed; any --jobs); starts afresh if there is none");
+  cmd->add_flag("--no-pictures", args->no_pictures, "Skip the fitted drape's drape.png");
   cmd->add_flag("--quiet", args->quiet, "Nothing on stdout");
   cmd->callback([args, cmd] {
     args->ignored = given_flags(cmd, args->optimizer == "lm" ? kIcaOptionGroup : kLmOptionGroup);

@@ -513,7 +513,7 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
       {"options", options},
       {"units",
        summary_units({{"residual, residual_floor",
-                       "1: the static residual (SPEC 2.3), max "
+                       "1: the static residual (docs/equilibrium.md), max "
                        "over free points of |net force| / (k_w r), "
                        "a wale spring stretched by one loop radius "
                        "(with gravity: or the mean point weight, "

@@ -31,7 +31,7 @@ nlohmann::json summary_units(const nlohmann::json& model) {
   nlohmann::json units = {
       {"t_start, t_final", "s"},
       {"dt", "s: the fixed step of euler, verlet, implicit-euler; 0 for adaptive integrators"},
-      {"dt_estimated, dt_predicted", "s: stability limits of the explicit methods (SPEC 2.4)"},
+      {"dt_estimated, dt_predicted", "s: stability limits of the explicit methods (docs/numerics.md)"},
       {"wall_seconds, cpu_seconds", "s (cpu: this process, all threads)"},
       {"factor_flops", "floating-point operations of one factorisation of S (CHOLMOD's count)"},
       {"factor_nonzeros", "entries of one factor L"},
@@ -61,7 +61,7 @@ nlohmann::json drape_summary(const Scene& scene, const DrapeResult& r) {
   j["options"] = to_json(scene.options);
   j["units"] = summary_units(
       {{"residual, residual_floor",
-        "1: the static residual (SPEC 2.3), max over free particles of |spring force + weight| "
+        "1: the static residual (docs/equilibrium.md), max over free particles of |spring force + weight| "
         "/ mean particle weight; residual_floor: its round-off bound"},
        {"centre_sag_m", "m"},
        {"max_strain", "1: (L - L0) / L0 of the most stretched spring, a fraction (stdout: %)"},
