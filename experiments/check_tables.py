@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""Checks that every committed summary.md of the studies is what its summary.py makes of the
-committed CSV files: regenerates each into a temporary folder and compares bytes; also checks
+"""Checks that every committed summary.md of the studies (and of paper_repro/knit) is what its
+summary.py makes of the committed CSV files: regenerates each into a temporary folder and compares bytes; also checks
 that the study's README links to its summary.md. Standard library only; no knitsim run.
 
     python3 experiments/check_tables.py
@@ -24,11 +24,15 @@ def main():
     if not scripts:
         print("check_tables: no experiments/<study>/summary.py found")
         return 1
+    # Paper 2's figures keep their tables the same way, beside their own results.
+    scripts.append(os.path.join(expkit.ROOT, "paper_repro", "knit", "summary.py"))
     failures = []
     with tempfile.TemporaryDirectory() as tmp:
         for script in scripts:
             study = os.path.basename(os.path.dirname(script))
-            committed = os.path.join(expkit.committed_dir(study), "summary.md")
+            folder = (os.path.join(os.path.dirname(script), "results") if "paper_repro" in script
+                      else expkit.committed_dir(study))
+            committed = os.path.join(folder, "summary.md")
             shown = os.path.relpath(committed, expkit.ROOT)
             fresh = os.path.join(tmp, study + ".md")
             p = subprocess.run([sys.executable, script, "--output", fresh],
@@ -45,10 +49,11 @@ def main():
                     failures.append("%s: differs from what summary.py makes of the committed CSV "
                                     "(run experiments/tables.sh %s)" % (shown, study))
                     continue
-            readme = os.path.join(HERE, study, "README.md")
+            readme = os.path.join(os.path.dirname(script), "README.md")
             link = os.path.relpath(committed, os.path.dirname(readme))
             if not os.path.exists(readme) or link not in open(readme).read():
-                failures.append("experiments/%s/README.md: does not link %s" % (study, link))
+                failures.append("%s: does not link %s" % (os.path.relpath(readme, expkit.ROOT),
+                                                          link))
     for f in failures:
         print("check_tables: " + f)
     if failures:

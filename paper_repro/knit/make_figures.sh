@@ -15,6 +15,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 export KNITSIM=${KNITSIM:-build/knitsim}
+py=/usr/bin/python3   # Debian's, with the standard library the scripts need
+[ -x "$py" ] || py=python3
 OUT=${OUT:-out/knit_figures}
 CHARTS=models/charts
 [ -x "$KNITSIM" ] || { echo "make_figures.sh: no knitsim binary at $KNITSIM (set KNITSIM)" >&2; exit 1; }
@@ -29,7 +31,7 @@ run() {
   if [ "$status" -ne 0 ] && [ "$status" -ne 3 ]; then
     echo "make_figures.sh: knitsim knit failed on $chart (exit $status)" >&2; exit 1
   fi
-  python3 - "$dir/summary.json" "$name" "$variant" >> "$OUT/runs.csv" <<'PY'
+  "$py" - "$dir/summary.json" "$name" "$variant" >> "$OUT/runs.csv" <<'PY'
 import json, sys
 s = json.load(open(sys.argv[1]))
 y = s.get("yarn", {})
@@ -62,7 +64,7 @@ mkdir -p "$OUT/figures"
 for variant in paper stabilised contact; do
   cp "$OUT/plain_jersey-$variant/after.png" "$OUT/figures/fig8a_plain_jersey_$variant.png"
   cp "$OUT/single_tuck-$variant/before.png" "$OUT/figures/fig8b_single_tuck_before_$variant.png"
-  during=$(python3 - "$OUT/single_tuck-$variant/summary.json" <<'PY'
+  during=$("$py" - "$OUT/single_tuck-$variant/summary.json" <<'PY'
 import json, sys
 s = json.load(open(sys.argv[1]))
 half = 0.5 * s["max_displacement_over_r"]
@@ -77,7 +79,7 @@ PY
   cp "$OUT/several_misses-$variant/after.png" "$OUT/figures/fig10_several_misses_$variant.png"
 done
 # manifest.json: the script, git commit, the binary and its build stamp, machine load.
-python3 - "$OUT" "$OUT/single_tuck-paper" <<'PY'
+"$py" - "$OUT" "$OUT/single_tuck-paper" <<'PY'
 import sys, types
 sys.path.insert(0, "experiments")
 import expkit
@@ -85,5 +87,7 @@ expkit.write_manifest(types.SimpleNamespace(quick=False, out=sys.argv[1]), "knit
                       sample_run=types.SimpleNamespace(folder=sys.argv[2]),
                       command="paper_repro/knit/make_figures.sh")
 PY
-python3 paper_repro/knit/features.py "$OUT" > /dev/null   # $OUT/features.csv (single_tuck)
-echo "make_figures.sh: outputs in $OUT (runs.csv, manifest.json, features.csv, figures/)"
+# features.csv (single_tuck), stitch_features.csv (every tuck and miss), then summary.md
+"$py" paper_repro/knit/features.py "$OUT" > /dev/null
+"$py" paper_repro/knit/summary.py "$OUT" > /dev/null
+echo "make_figures.sh: outputs in $OUT (runs.csv, manifest.json, features.csv, stitch_features.csv, summary.md, figures/)"

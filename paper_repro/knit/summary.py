@@ -1,0 +1,115 @@
+#!/usr/bin/python3
+"""Tables of paper_repro/knit (paper 2's Figs. 8-10) from its CSV files only (runs.csv,
+features.csv, stitch_features.csv, manifest.json) -> summary.md; the README points at them.
+Standard library only.
+
+    summary.py [DIR] [--output FILE]     (default DIR: paper_repro/knit/results)
+"""
+import os
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "..", "experiments"))
+import expkit  # noqa: E402
+from expkit import md_table, provenance, read_json, read_rows  # noqa: E402
+
+VARIANTS = ("paper", "stabilised", "contact")
+R = "/ r"
+
+
+def runs_table(rows):
+    return md_table(["chart", "variant", "integrator", "status", "steps", "wall (s)",
+                     "max displacement " + R, "min clearance over the run " + R,
+                     "crossings changed"],
+                    [[r["chart"], r["variant"], r["integrator"], r["status"], r["steps"],
+                      r["wall_s"], r["max_displacement_over_r"], r["min_clearance_over_r"],
+                      r["crossings_changed"]] for r in rows])
+
+
+def single_tuck_table(rows):
+    return md_table(["variant", "held loop height, start -> end " + R, "its base rises " + R,
+                     "tuck head rises " + R,
+                     "lateral shift toward the tuck, k = 1, 2, 3, 4 " + R],
+                    [[r["variant"], "%s -> %s" % (r["held_loop_height_start_r"],
+                                                  r["held_loop_height_end_r"]),
+                      r["held_loop_base_rise_r"], r["tuck_head_rise_r"],
+                      ", ".join(r["lateral_dx_toward_tuck_r_d%d" % k] for k in range(1, 5))]
+                     for r in rows])
+
+
+def span_of(rows, key):
+    """'lo .. hi' of the non-empty values of `key`, or '' when there are none."""
+    v = sorted(float(r[key]) for r in rows if r[key] != "")
+    if not v:
+        return ""
+    return "%.2f" % v[0] if v[0] == v[-1] else "%.2f .. %.2f" % (v[0], v[-1])
+
+
+def stitch_overview(rows):
+    out = []
+    for chart in sorted({r["chart"] for r in rows}, key=lambda c: [r["chart"] for r in rows]
+                        .index(c)):
+        for variant in VARIANTS:
+            sel = [r for r in rows if r["chart"] == chart and r["variant"] == variant]
+            if not sel:
+                continue
+            out.append([chart, variant, len(sel),
+                        "%s -> %s" % (span_of(sel, "held_loop_height_rest_r"),
+                                      span_of(sel, "held_loop_height_end_r")),
+                        ("%s -> %s" % (span_of(sel, "tuck_loop_height_rest_r"),
+                                       span_of(sel, "tuck_loop_height_end_r"))
+                         if span_of(sel, "tuck_loop_height_end_r") else ""),
+                        ("%s -> %s" % (span_of(sel, "float_depth_rest_r"),
+                                       span_of(sel, "float_depth_end_r"))
+                         if span_of(sel, "float_depth_end_r") else "")])
+    return md_table(["chart", "variant", "stitches", "held loop height, rest -> end " + R,
+                     "tuck loop height, rest -> end " + R,
+                     "float depth behind the face, rest -> end " + R], out)
+
+
+def stitch_table(rows):
+    return md_table(["chart", "variant", "stitch", "wale", "course", "held loop rest -> end",
+                     "tuck loop rest -> end", "float depth rest -> end"],
+                    [[r["chart"], r["variant"], r["stitch"], r["wale"], r["course"],
+                      "%s -> %s" % (r["held_loop_height_rest_r"], r["held_loop_height_end_r"]),
+                      ("%s -> %s" % (r["tuck_loop_height_rest_r"], r["tuck_loop_height_end_r"])
+                       if r["tuck_loop_height_end_r"] else ""),
+                      ("%s -> %s" % (r["float_depth_rest_r"], r["float_depth_end_r"])
+                       if r["float_depth_end_r"] else "")] for r in rows])
+
+
+def build(folder):
+    runs = read_rows(folder, "runs.csv")
+    features = read_rows(folder, "features.csv")
+    stitches = read_rows(folder, "stitch_features.csv")
+    sections = [
+        ("Every run (runs.csv)", runs_table(runs) if runs else ""),
+        ("single_tuck: the held loop and the neighbouring wales (features.csv)",
+         single_tuck_table(features) if features else ""),
+        ("Tuck and miss stitches, per chart (stitch_features.csv)",
+         stitch_overview(stitches) if stitches else ""),
+        ("Every tuck and miss stitch (stitch_features.csv), / r",
+         stitch_table(stitches) if stitches else ""),
+        ("Provenance", provenance(read_json(folder, "manifest.json"))),
+    ]
+    return ("Paper 2's Figs. 8-10: measured features",
+            ["runs.csv", "features.csv", "stitch_features.csv", "manifest.json"], sections)
+
+
+def main(argv=None):
+    import argparse
+    p = argparse.ArgumentParser(prog="paper_repro/knit/summary.py",
+                                description="Write summary.md (tables) from the CSV files in DIR.")
+    p.add_argument("dir", nargs="?", default=os.path.join(HERE, "results"))
+    p.add_argument("--output")
+    a = p.parse_args(argv)
+    title, sources, sections = build(a.dir)
+    text = expkit.summary_text(title, "paper_repro/knit/summary.py", sources, sections)
+    output = a.output or os.path.join(a.dir, "summary.md")
+    with open(output, "w") as f:
+        f.write(text)
+    print("knit_figures: wrote %s" % output)
+
+
+if __name__ == "__main__":
+    main()
