@@ -34,6 +34,19 @@ def settled(r):
     return r["status"] == "equilibrium"
 
 
+def fnum(r, key):
+    """float of a CSV field; nan when empty or absent (rows of an older runs.csv)."""
+    v = r.get(key) or "nan"
+    return float(v)
+
+
+def loosest_first(r):
+    """Sort key: largest dt, loosest rtol or position_tol first."""
+    if by_position_tol(r):
+        return -fnum(r, "position_tol")
+    return -(fnum(r, "dt") or fnum(r, "rtol"))
+
+
 def build(out):
     runs = read_rows(out, "runs.csv")
     best = read_rows(out, "best.csv")
@@ -49,9 +62,12 @@ def build(out):
             "Per scene, the run every error is measured against; its Newton correction at the "
             "end estimates its own distance to the minimum, and the correction's round-off floor "
             "bounds what any stop can resolve.\n\n" + md_table(
-                ["scene", "integrator", "rtol", "atol", "equilibrium_tol", "status", "residual",
+                ["scene", "integrator", "rtol (or dt)", "atol", "equilibrium_tol", "status",
+                 "residual",
                  "Newton correction (m)", "its round-off floor (m)", "t_final (s)", "CPU (s)"],
-                [[r["scene"], r["integrator"], num(r["rtol"], exp=True), num(r["atol"], exp=True),
+                [[r["scene"], r["integrator"],
+                  setting(r) if fnum(r, "dt") > 0 else num(r["rtol"], exp=True),
+                  "—" if fnum(r, "dt") > 0 else num(r["atol"], exp=True),
                   num(r["equilibrium_tol"], exp=True), r["status"], num(r["residual"], 2),
                   num(r.get("newton_step_m", "nan"), 2), num(r.get("newton_floor_m", "nan"), 2),
                   num(r["t_final"]), num(r["cpu_seconds"])] for r in refs])))
@@ -59,26 +75,32 @@ def build(out):
     if best:
         rows = []
         for r in best:
+            shape = r.get("error_measure") == "shape_err_m"
+            level = num(r["error_level_m"], exp=True) + (" (shape)" if shape else "")
             if r["best"] == "none":
-                rows.append([r["scene"], num(r["error_level_m"], exp=True), "none", "—", "—",
-                             "—", "—", "—"])
+                rows.append([r["scene"], level, "none", "—", "—", "—", "—", "—"])
                 continue
-            rows.append([r["scene"], num(r["error_level_m"], exp=True), r["best"], setting(r),
-                         num(r["cpu_seconds"]), num(r["pos_err_m"], 2), r["runner_up"] or "—",
-                         "%.2f" % float(r["runner_up_cpu_ratio"]) if r["runner_up_cpu_ratio"]
-                         else "—"])
+            err = num(r["pos_err_m"], 2)
+            if shape:
+                err = "%s (shape %s)" % (err, num(r["shape_err_m"], 2))
+            rows.append([r["scene"], level, r["best"], setting(r),
+                         num(r["cpu_seconds"]), err, r["runner_up"] or "—",
+                         "%.2f" % float(r["runner_up_cpu_ratio"]) if r["runner_up"] else "—"])
         sections.append((
             "Cheapest run per accuracy level (best.csv)",
             "The cheapest measured run that settled within the error level (max position error, "
-            "m), and the next integrator's cheapest such run as a CPU ratio.\n\n" + md_table(
-                ["scene", "error level (m)", "cheapest", "setting", "CPU (s)", "position error (m)",
-                 "runner-up", "runner-up CPU / cheapest"], rows)))
+            "m; marked (shape): the shape error, max position error after the best in-plane "
+            "rigid fit), and the next integrator's cheapest such run as a CPU ratio.\n\n"
+            + md_table(["scene", "error level (m)", "cheapest", "setting", "CPU (s)",
+                        "position error (m)", "runner-up", "runner-up CPU / cheapest"], rows)))
 
+    shape_scenes = {r["scene"] for r in best if r.get("error_measure") == "shape_err_m"}
     for scene in scenes:
         sr = [r for r in measured if r["scene"] == scene]
         ok = [r for r in sr if settled(r)]
         if not sr:
             continue
+        err_key = "shape_err_m" if scene in shape_scenes else "pos_err_m"
         cheapest = min((float(r["cpu_seconds"]) for r in ok), default=math.nan)
         rows = []
         for integ in dict.fromkeys(r["integrator"] for r in sr):
@@ -92,34 +114,40 @@ def build(out):
                          setting(c) if c else "—", num(c["cpu_seconds"]) if c else "—",
                          c["steps"] if c else "—",
                          "%.3g" % (float(c["cpu_seconds"]) / cheapest) if c else "—",
-                         span([r["pos_err_m"] for r in iok], lambda v: num(v, 2)),
+                         span([r[err_key] for r in iok], lambda v: num(v, 2)),
                          "; ".join(others) or "—"])
         cpu_note = ""
-        if scene == "knit":
+        if scene.startswith("knit"):
             cpu_note = (" CPU: the integrator's, the run's less the yarn clearance measuring "
                         "`knitsim knit` does inside it (runs.csv run_cpu_seconds, "
-                        "clearance_cpu_seconds)." if "run_cpu_seconds" in sr[0] else
+                        "clearance_cpu_seconds)." if sr[0].get("run_cpu_seconds") else
                         " CPU: the run's, the yarn clearance measuring `knitsim knit` does "
                         "inside it included (this runs.csv predates the driver's subtracting "
                         "it, as experiments/transient does).")
+        shape_note = (" Shape error = the position error after the best in-plane rigid fit "
+                      "(rotation about z, translation); this scene's errors are of the shape."
+                      if err_key == "shape_err_m" else "")
         text = ("Measured runs only. Settled = status `equilibrium`; position error = max over "
-                "particles of |x - x_ref| at the end." + cpu_note + "\n\n" + md_table(
-                    ["integrator", "settled", "CPU of the settled runs (s)", "cheapest settled",
-                     "its CPU (s)", "its steps", "× the scene's cheapest", "position error of "
-                     "the settled runs (m)", "runs that did not settle"], rows))
-        far = [r for r in ok if float(r["pos_err_m"]) > FAR]
-        near = [r for r in ok if float(r["pos_err_m"]) <= FAR]
+                "particles of |x - x_ref| at the end." + shape_note + cpu_note + "\n\n" +
+                md_table(["integrator", "settled", "CPU of the settled runs (s)",
+                          "cheapest settled", "its CPU (s)", "its steps",
+                          "× the scene's cheapest", "%s error of the settled runs (m)"
+                          % ("shape" if err_key == "shape_err_m" else "position"),
+                          "runs that did not settle"], rows))
+        far = [r for r in ok if float(r[err_key]) > FAR]
+        near = [r for r in ok if float(r[err_key]) <= FAR]
         if far:
             text += ("\nSettled on another equilibrium (more than %s m from the reference): %s.\n"
                      % (num(FAR), ", ".join("%s %s (%s m)" % (r["integrator"], setting(r),
-                                                               num(r["pos_err_m"], 2))
+                                                               num(r[err_key], 2))
                                             for r in far)))
         if near:
             coeff = [r["coeff_err_pct"] for r in near
                      if math.isfinite(float(r["coeff_err_pct"]))]
-            text += ("\nAll %ssettled %s runs: position error %s m%s.\n"
+            text += ("\nAll %ssettled %s runs: %s error %s m%s.\n"
                      % ("other " if far else "", scene,
-                        span([r["pos_err_m"] for r in near], lambda v: num(v, 2)),
+                        "shape" if err_key == "shape_err_m" else "position",
+                        span([r[err_key] for r in near], lambda v: num(v, 2)),
                         "; Eq. 5 coefficient error %s %%" % span(coeff, lambda v: num(v, 2))
                         if coeff else ""))
         adaptive = [r for r in sr if float(r["dt"] or 0) == 0 and not by_position_tol(r)]
@@ -139,6 +167,37 @@ def build(out):
                      "the run did not settle):\n\n" + md_table(["rtol"] + integs, prow))
         sections.append(("%s: per integrator (runs.csv)" % scene, text))
 
+    for scene in sorted(shape_scenes):
+        sr = [r for r in measured if r["scene"] == scene]
+        ref = [r for r in refs if r["scene"] == scene]
+        picked = []
+        for integ in dict.fromkeys(r["integrator"] for r in sr):
+            picked += sorted((r for r in sr if r["integrator"] == integ), key=loosest_first)[:2]
+        rows = [["%s (reference)" % r["integrator"] if r in ref else r["integrator"], setting(r),
+                 r["status"], num(r["t_final"]), r["steps"],
+                 "0" if r in ref else num(r["shape_err_m"], 2),
+                 "0" if r in ref else num(r["rotation_deg"], 3),
+                 num(r["clearance_min_r"], 4), num(r["clearance_end_r"], 4),
+                 r["crossings_changed"] or "—", r["pairs_in_contact"] or "—",
+                 r["renewals_cut"] or "—"] for r in ref + picked]
+        low = min(sr, key=lambda r: fnum(r, "clearance_min_r"), default=None)
+        crossed = [r for r in sr if (r["crossings_changed"] or "0") != "0"]
+        sections.append((
+            "%s: where each method lands at its extremes (runs.csv, references.csv)" % scene,
+            "Per integrator its two loosest measured settings (largest dt, loosest rtol or "
+            "position_tol), against the reference: status, the end state's shape error and "
+            "in-plane rotation, the centrelines' clearance (minimum over the run, at the end; "
+            "in r, the loop radius), designed crossings changed at the end, and the contact's "
+            "pairs in contact and cut renewals.\n\n" + md_table(
+                ["integrator", "setting", "status", "t_final (s)", "steps", "shape error (m)",
+                 "in-plane rotation (°)", "min clearance (r)", "end clearance (r)",
+                 "crossings changed", "pairs in contact", "renewals cut"], rows) +
+            "\nOver all %d measured %s runs: lowest min clearance %s r (%s %s, %s); %d with a "
+            "designed crossing changed.\n" % (
+                len(sr), scene, num(low["clearance_min_r"], 4) if low else "—",
+                low["integrator"] if low else "—", setting(low) if low else "—",
+                low["status"] if low else "—", len(crossed))))
+
     ext = [r for r in runs if r["status"] == "extrapolated"]
     if ext:
         rows = [[r["scene"], r["integrator"], num(r["dt"]), num(r["t_final"], 4),
@@ -153,15 +212,30 @@ def build(out):
 
     for scene in scenes:
         sr = [r for r in measured if r["scene"] == scene]
+        yarn = scene in shape_scenes   # the knit columns of the scenes that have them
         rows = [[r["integrator"], setting(r), r["status"], num(r["t_final"]), r["steps"],
                  r["rhs_evals"], r["lin_setups"], num(r["cpu_seconds"]), num(r["residual"], 2),
-                 num(r["pos_err_m"], 2), num(r["coeff_err_pct"], 2)] for r in sr]
+                 num(r["pos_err_m"], 2)] +
+                ([num(r["shape_err_m"], 2), num(r["rotation_deg"], 3),
+                  num(r["clearance_min_r"], 4), r["crossings_changed"] or "—"] if yarn else
+                 [num(r["coeff_err_pct"], 2)]) for r in sr]
         sections.append((
             "%s: every measured run (runs.csv)" % scene,
             md_table(["integrator", "setting", "status", "t_final (s)", "steps", "RHS evaluations",
-                      "set-ups", "CPU (s)", "residual", "position error (m)",
-                      "Eq. 5 coefficient error (%)"], rows)))
-    sections.append(("Provenance", provenance(manifest)))
+                      "set-ups", "CPU (s)", "residual", "position error (m)"] +
+                     (["shape error (m)", "in-plane rotation (°)", "min clearance (r)",
+                       "crossings changed"] if yarn else ["Eq. 5 coefficient error (%)"]),
+                     rows)))
+    text = provenance(manifest)
+    for scene, m in (manifest.get("scene_runs") or {}).items():
+        build = m.get("knitsim_build") or {}
+        la = m.get("load_average") or []
+        text += ("- %s re-run alone: `%s`, knitsim build commit %s (%s), repository HEAD %s, "
+                 "written (UTC) %s, %s cores, load average %s, wall cap %s s\n"
+                 % (scene, m.get("command"), build.get("git_commit"), build.get("build_type"),
+                    m.get("git_commit"), m.get("created_utc"), m.get("nproc"),
+                    " / ".join("%.2f" % v for v in la), m.get("wall_cap_s")))
+    sections.append(("Provenance", text))
     return ("work_precision: tables", ["runs.csv", "best.csv", "references.csv", "manifest.json"],
             sections)
 
