@@ -40,6 +40,12 @@ def fnum(r, key):
     return float(v)
 
 
+def crossings(r):
+    """Designed crossings changed, '—' when not measured (empty, or -1: a diverged run)."""
+    v = r.get("crossings_changed") or ""
+    return v if v and int(v) >= 0 else "—"
+
+
 def loosest_first(r):
     """Sort key: largest dt, loosest rtol or position_tol first."""
     if by_position_tol(r):
@@ -178,10 +184,10 @@ def build(out):
                  "0" if r in ref else num(r["shape_err_m"], 2),
                  "0" if r in ref else num(r["rotation_deg"], 3),
                  num(r["clearance_min_r"], 4), num(r["clearance_end_r"], 4),
-                 r["crossings_changed"] or "—", r["pairs_in_contact"] or "—",
+                 crossings(r), r["pairs_in_contact"] or "—",
                  r["renewals_cut"] or "—"] for r in ref + picked]
         low = min(sr, key=lambda r: fnum(r, "clearance_min_r"), default=None)
-        crossed = [r for r in sr if (r["crossings_changed"] or "0") != "0"]
+        crossed = [r for r in sr if crossings(r) not in ("—", "0")]
         sections.append((
             "%s: where each method lands at its extremes (runs.csv, references.csv)" % scene,
             "Per integrator its two loosest measured settings (largest dt, loosest rtol or "
@@ -193,7 +199,7 @@ def build(out):
                  "in-plane rotation (°)", "min clearance (r)", "end clearance (r)",
                  "crossings changed", "pairs in contact", "renewals cut"], rows) +
             "\nOver all %d measured %s runs: lowest min clearance %s r (%s %s, %s); %d with a "
-            "designed crossing changed.\n" % (
+            "designed crossing changed (diverged runs measure neither).\n" % (
                 len(sr), scene, num(low["clearance_min_r"], 4) if low else "—",
                 low["integrator"] if low else "—", setting(low) if low else "—",
                 low["status"] if low else "—", len(crossed))))
@@ -217,7 +223,7 @@ def build(out):
                  r["rhs_evals"], r["lin_setups"], num(r["cpu_seconds"]), num(r["residual"], 2),
                  num(r["pos_err_m"], 2)] +
                 ([num(r["shape_err_m"], 2), num(r["rotation_deg"], 3),
-                  num(r["clearance_min_r"], 4), r["crossings_changed"] or "—"] if yarn else
+                  num(r["clearance_min_r"], 4), crossings(r)] if yarn else
                  [num(r["coeff_err_pct"], 2)]) for r in sr]
         sections.append((
             "%s: every measured run (runs.csv)" % scene,
