@@ -123,9 +123,9 @@ struct RunStats {
   int max_order_used = 0;
   // The end state's checks (solvers/equilibrium_check.hpp), where the stop was tested:
   //   certificate  "stable_minimum": K positive definite (no negative LDL^T pivot, smallest
-  //                eigenvalue above n eps ||K||) and the energy check holds; "not_minimum":
-  //                negative pivots (a saddle); "inconclusive": K singular (rigid-body or
-  //                mechanism modes); "" where the stop was never tested.
+  //                eigenvalue above n eps ||K||) and the energy check holds; "inconclusive":
+  //                K singular (rigid-body or mechanism modes: the residual decided); "" where
+  //                the stop did not pass (never tested, or at a saddle: negative pivots).
   std::string certificate;
   int negative_pivots = 0;
   double min_eigenvalue = 0.0;        // N/m, K's eigenvalue nearest 0

@@ -97,6 +97,8 @@ TEST_CASE("knit --set: messages name the keys the user types, nearest key sugges
                    "knit.areal_density = -1: must be > 0 g/m^2", tmp);
   // Before: "t_max = inf: must be > 0 s" and "rtol = nan: ..." (struct field names).
   expect_bad_input(base + "--set run.t_max=inf", "run.t_max = inf: must be in [1e-9, 1e15] s", tmp);
+  expect_bad_input(base + "--set run.position_tol=1",
+                   "run.position_tol = 1: must be in (0, 1e-2] m", tmp);
   expect_bad_input(base + "--rtol nan", "--rtol = nan: must be in (0, 1)", tmp);
   CHECK(!fs::exists(tmp.path / "out"));
 }
@@ -332,6 +334,12 @@ TEST_CASE("an unknown command is named; --version answers") {
   TempDir tmp("validation-command");
   // It used to say "A subcommand is required".
   expect_bad_input("frob --out x", "unknown command 'frob': one of drape, knit, list", tmp);
+  // Another command's flag names this command and the flag with its value, in order (CLI11
+  // listed them last-first and pointed at the top-level help).
+  expect_bad_input("drape --scene four_corner --optimizer lm --out x",
+                   "knitsim drape does not take '--optimizer lm' (its flags: knitsim drape --help)",
+                   tmp);
+  CHECK(!fs::exists(tmp.path / "x"));
   const Run version = run_knitsim("--version", tmp);
   CHECK(version.status == 0);
   CHECK(version.out.rfind("knitsim ", 0) == 0);

@@ -69,9 +69,13 @@ std::string human_summary(const Scene& scene, const DrapeResult& r, const std::s
   if (const std::string la = linear_algebra_summary(s); !la.empty())
     t.rows.push_back({"linear algebra", la});
   t.rows.insert(t.rows.end(),
-                {{"residual", format_number(s.residual, 3) + " (Newton correction " +
-                                  format_number(s.newton_step, 3) + " m, tol " +
-                                  format_number(scene.options.position_tol, 3) + " m)"},
+                {{"residual",
+                  format_number(s.residual, 3) +
+                      (s.certificate.empty()
+                           ? std::string(" (the stop did not pass: no Newton "
+                                         "correction)")
+                           : " (Newton correction " + format_number(s.newton_step, 3) + " m, tol " +
+                                 format_number(scene.options.position_tol, 3) + " m)")},
                  {"centre sag", format_number(100 * r.centre_sag, 4) + " cm"},
                  {"max strain", format_number(100 * r.max_strain, 3) + " %"},
                  {"wall", format_number(1e3 * s.wall_seconds, 4) + " ms"},

@@ -336,7 +336,9 @@ void run_lm_fit(const FitArgs& args, const Scene& base, const DrapeFitProblem& p
     Table t;
     t.columns = {"parameter", "fitted", "standard error", "if the others were known"};
     const char* units[kDrapeContinuous] = {" N/m", " N s/m", " %", " m"};
-    auto error = [](double v) { return std::isfinite(v) ? format_number(v, 3) : "none"; };
+    auto error = [](double v, const char* unit) {
+      return std::isfinite(v) ? format_number(v, 3) + unit : "none";
+    };
     if (fit.ok)
       t.rows.push_back({"k / L0 (determined)",
                         format_number(fit.params.stiffness / fit.params.natural_length, 6) +
@@ -346,8 +348,8 @@ void run_lm_fit(const FitArgs& args, const Scene& base, const DrapeFitProblem& p
     if (fit.ok) t.rows.push_back({"cells per side n", std::to_string(fit.params.cells()), "", ""});
     for (int g = 0; g < kDrapeContinuous && fit.ok; ++g)
       t.rows.push_back({drape_gene_names()[g], format_number(fit.best_x[g], 6) + units[g],
-                        error(id.parameters[g].standard_error),
-                        error(id.parameters[g].conditional_standard_error)});
+                        error(id.parameters[g].standard_error, units[g]),
+                        error(id.parameters[g].conditional_standard_error, units[g])});
     t.rows.push_back({"objective", format_number(fit.objective, 6) + " %", "", ""});
     t.rows.push_back({"evaluations", std::to_string(fit.evaluations), "", ""});
     t.rows.push_back({"cpu", format_number(fit.cpu_seconds, 4) + " s", "", ""});

@@ -125,7 +125,8 @@ std::vector<SetKey> set_keys(KnitParams& p, IntegratorOptions& o) {
           {"knit.bending", &p.bending_ratio},
           {"knit.contact", &p.contact_ratio},
           {"run.t_max", &o.t_max},
-          {"run.equilibrium_tol", &o.equilibrium_tol}};
+          {"run.equilibrium_tol", &o.equilibrium_tol},
+          {"run.position_tol", &o.position_tol}};
 }
 
 // The one --set key whose value is a name: knit.network = stabilised | paper.
@@ -705,7 +706,7 @@ void register_knit_command(CLI::App& app) {
                   "Override a parameter, e.g. knit.network=paper (repeatable); keys "
                   "knit.network (stabilised | paper), knit.loop_radius, knit.wale_stiffness, "
                   "knit.course_stiffness, knit.damping, knit.areal_density, knit.stabiliser, "
-                  "knit.bending, knit.contact, run.t_max, run.equilibrium_tol")
+                  "knit.bending, knit.contact, run.t_max, run.equilibrium_tol, run.position_tol")
       ->allow_extra_args(false)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_option("--integrator", args->integrator,

@@ -130,6 +130,16 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const CLI::RuntimeError& e) {
     return e.get_exit_code();
+  } catch (const CLI::ExtrasError&) {
+    // CLI11 lists the extras last-first ("lm --optimizer"): name them in order, and the
+    // command whose flags they are not.
+    const std::vector<CLI::App*> subs = app.get_subcommands();
+    const CLI::App* run = subs.empty() ? &app : subs.front();
+    std::string words;
+    for (const std::string& w : run->remaining()) words += (words.empty() ? "" : " ") + w;
+    const std::string name = subs.empty() ? "knitsim" : "knitsim " + run->get_name();
+    return fail(2, name + " does not take '" + knitsim::printable(words) + "' (its flags: " + name +
+                       " --help)");
   } catch (const CLI::ParseError& e) {
     return fail(2, std::string(e.what()) + " (see knitsim --help)");
   } catch (const std::invalid_argument& e) {
