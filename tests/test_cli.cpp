@@ -447,6 +447,9 @@ TEST_CASE("the lab-data example fits; upside-down lab data are warned about") {
   CHECK(std::abs(ratio / (600.0 / 0.04) - 1.0) < 0.05);
   CHECK(s["params"]["topology"] == "a");
   CHECK(s["objective"].get<double>() < 2.5);
+  // What each number is measured in, as drape's and knit's summaries say it.
+  CHECK(s["units"]["objective"].get<std::string>().rfind("%", 0) == 0);
+  CHECK(s["units"].contains("identifiability"));
   // The printout leads with what the edges determine and says why the rest is not.
   const size_t ratio_row = r.out.find("k / L0 (determined)");
   CHECK(ratio_row != std::string::npos);

@@ -127,6 +127,28 @@ void warn_if_upside_down(const DrapeFitProblem& problem, const std::string& targ
   if (!message.empty()) warn(message);
 }
 
+// summary.json's `units` of a fit (docs/summary_json.md): what each number is measured in.
+nlohmann::json fit_units(bool lm) {
+  nlohmann::json u = {
+      {"params, base_params, bounds, best_country",
+       "stiffness N/m; damping N s/m; elongation_limit %; natural_length m; the topology gene u "
+       "in [0, 3) (best_country's last entry, bounds.topology)"},
+      {"objective", "%: the Eq. 5 error of the fitted drape's edges against the target"},
+      {"wall_seconds, cpu_seconds", "s"},
+      {"evaluations, failed_evaluations", "counts of drapes"}};
+  if (lm) {
+    u["standard_errors, conditional_standard_errors"] = "the unit of each parameter (params)";
+    u["identifiability"] =
+        "sigma 1: the standard deviation of the Eq. 5 residuals (a fraction: the objective is "
+        "100 x their rms); stiffness_over_length_relative_error 1: a fraction; "
+        "condition_number 1; correlation_stiffness_natural_length 1";
+    u["starts"] = "screened, predicted, objective %; x as best_country";
+  } else {
+    u["history"] = "best, mean %: the imperialists' Eq. 5 costs per decade";
+  }
+  return u;
+}
+
 // One line on stdout: the fitted natural length also sets the mesh (n = round(W / L0) cells per
 // side) and the model sheet's side n L0, so a fitted L0 is a fitted mesh (docs/fitting.md).
 std::string mesh_note(const Scene& base, const DrapeParams& fitted) {
@@ -326,6 +348,7 @@ void run_lm_fit(const FitArgs& args, const Scene& base, const DrapeFitProblem& p
       {"correlation_stiffness_natural_length", finite_or_null(id.correlation_stiffness_length)},
       {"stiffness_over_length_relative_error", finite_or_null(id.ratio_relative_error)}};
   summary["starts"] = starts_json;
+  summary["units"] = fit_units(true);
   write_json_atomic(dir / "summary.json", summary);
   write_json_atomic(dir / "manifest.json", manifest(settings));
   if (!args.quiet) {
@@ -483,6 +506,7 @@ void run(const FitArgs& args) {
   summary["history"] = history_json;
   summary["fitted_drape_status"] = drape_status;
   if (options.ica.resume_from) summary["resumed_from_decade"] = options.ica.resume_from->decade;
+  summary["units"] = fit_units(false);
   write_json_atomic(dir / "summary.json", summary);
   write_json_atomic(dir / "manifest.json", manifest(settings));
 
