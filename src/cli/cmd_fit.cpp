@@ -9,11 +9,12 @@
 //   summary.json   params {stiffness, damping, elongation_limit, natural_length, topology},
 //                  objective (Eq. 5, percent), evaluations, failed_evaluations, status,
 //                  message, wall_seconds, best_country, history [{decade, best, mean,
-//                  empires, evaluations}], scene, target, integrator, ica options, bounds
+//                  empires, evaluations}], scene, target, integrator, ica options, bounds,
+//                  units (every field: docs/summary_json.md)
 //   history.csv    decade,best,mean,empires,evaluations (imperialist costs, paper 1 Fig. 13)
 //   drape/         the fitted drape re-run (write_drape_outputs: summary.json, nodes.csv,
-//                  drape.vtk, drape.png unless --no-pictures, manifest.json) plus edges.csv (its measured edges)
-//                  and target_edges.csv (the target's, as fitted)
+//                  drape.vtk, drape.png unless --no-pictures, manifest.json) plus edges.csv
+//                  (its measured edges) and target_edges.csv (the target's, as fitted)
 //   manifest.json
 //   ica_checkpoint.json  {config, state}: the ICA's whole state (IcaState) after the latest
 //                  decade, rewritten atomically after every decade; `--resume` continues from
@@ -108,23 +109,17 @@ void warn_about_fit(const FitArgs& args, const std::string& integrator) {
          "~10 min), against milliseconds with cvode-bdf or static");
 }
 
-// The warning when every edge of the target that can tell hangs above its pins (sags_upward):
+// One warning when every edge of the target that can tell hangs above its pins (sags_upward):
 // lab data with z growing downward (image rows), which the fit would chase to a box corner.
-// Empty when the target is the right way up. Printed before the fit and again after its table,
-// where a reader of the result meets it.
-std::string upside_down_warning(const DrapeFitProblem& problem, const std::string& target) {
+// Called before the fit and again after its result table, where a reader of the result looks.
+void warn_if_upside_down(const DrapeFitProblem& problem, const std::string& target) {
   int upward = 0, counted = 0;
   for (const EdgeFit& edge : problem.measured())
     if (const std::optional<bool> up = sags_upward(edge, problem.target_scene()))
       ++counted, upward += *up ? 1 : 0;
-  if (counted == 0 || upward < counted) return "";
-  return "--target " + target + ": every edge of " + problem.target_scene() +
-         " hangs above its pins; lab z must grow upward (negate image rows; docs/fitting.md)";
-}
-
-void warn_if_upside_down(const DrapeFitProblem& problem, const std::string& target) {
-  const std::string message = upside_down_warning(problem, target);
-  if (!message.empty()) warn(message);
+  if (counted > 0 && upward == counted)
+    warn("--target " + target + ": every edge of " + problem.target_scene() +
+         " hangs above its pins; lab z must grow upward (negate image rows; docs/fitting.md)");
 }
 
 // summary.json's `units` of a fit (docs/summary_json.md): what each number is measured in.
