@@ -360,23 +360,25 @@ def summary_text(title, script, sources, sections):
     return "\n".join(parts)
 
 
-def summary_main(study, build, argv=None):
-    """The command line of every experiments/<study>/summary.py:
+def summary_main(study, build, argv=None, script=None, folder=None):
+    """The command line of every experiments/<study>/summary.py (and paper_repro/knit's):
 
         summary.py [DIR] [--output FILE]
 
-    DIR: the folder whose CSV files are read (default: the study's committed folder,
-    committed_dir(study)); FILE: where summary.md goes (default DIR/summary.md).
+    DIR: the folder whose CSV files are read (default: `folder`, else the study's committed
+    folder, committed_dir(study)); FILE: where summary.md goes (default DIR/summary.md).
+    `script`: the script's path from the root (default experiments/<study>/summary.py).
     `build(DIR)` returns (title, sources, sections) for summary_text; returns the text written."""
-    p = argparse.ArgumentParser(prog="experiments/%s/summary.py" % study,
+    script = script or "experiments/%s/summary.py" % study
+    p = argparse.ArgumentParser(prog=script,
                                 description="Write the study's summary.md (tables of figures) "
                                             "from the CSV files in DIR.")
-    p.add_argument("dir", nargs="?", default=committed_dir(study),
+    p.add_argument("dir", nargs="?", default=folder or committed_dir(study),
                    help="folder with the study's CSV files (default: the committed one)")
     p.add_argument("--output", help="file to write (default DIR/summary.md)")
     a = p.parse_args(argv)
     title, sources, sections = build(a.dir)
-    text = summary_text(title, "experiments/%s/summary.py" % study, sources, sections)
+    text = summary_text(title, script, sources, sections)
     output = a.output or os.path.join(a.dir, "summary.md")
     with open(output, "w") as f:
         f.write(text)

@@ -10,8 +10,9 @@ head at level 3; the held loop on its needle is course 1 (lower point level 1, u
   lateral_dx_toward_tuck_r_d<k>: (x - x0) / r of the level-3 points k wales either side of
                       the tuck, signed + toward the tuck, averaged over the two sides.
 r = params.loop_radius from summary.json."""
-import csv, json, sys
+import csv, json, os, sys
 out = sys.argv[1]
+CHARTS = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "models", "charts")
 rows = []
 for variant in ("paper", "stabilised", "contact"):
     d = f"{out}/single_tuck-{variant}"
@@ -79,7 +80,7 @@ def stitch_rows(chart_name, variant):
     d = f"{out}/{chart_name}-{variant}"
     s = json.load(open(f"{d}/summary.json"))
     r = s["params"]["loop_radius"]
-    chart = read_chart(f"models/charts/{chart_name}.chart")
+    chart = read_chart(os.path.join(CHARTS, chart_name + ".chart"))
     P = {(int(p["wale"]), int(p["level"])): p for p in csv.DictReader(open(f"{d}/points.csv"))}
     lines = {"rest": vtk_centrelines(f"{d}/frames/centerlines_000.vtk"),
              "end": csv_centrelines(f"{d}/centerlines.csv")}

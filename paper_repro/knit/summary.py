@@ -96,20 +96,6 @@ def build(folder):
             ["runs.csv", "features.csv", "stitch_features.csv", "manifest.json"], sections)
 
 
-def main(argv=None):
-    import argparse
-    p = argparse.ArgumentParser(prog="paper_repro/knit/summary.py",
-                                description="Write summary.md (tables) from the CSV files in DIR.")
-    p.add_argument("dir", nargs="?", default=os.path.join(HERE, "results"))
-    p.add_argument("--output")
-    a = p.parse_args(argv)
-    title, sources, sections = build(a.dir)
-    text = expkit.summary_text(title, "paper_repro/knit/summary.py", sources, sections)
-    output = a.output or os.path.join(a.dir, "summary.md")
-    with open(output, "w") as f:
-        f.write(text)
-    print("knit_figures: wrote %s" % output)
-
-
 if __name__ == "__main__":
-    main()
+    expkit.summary_main("knit_figures", build, script="paper_repro/knit/summary.py",
+                        folder=os.path.join(HERE, "results"))
