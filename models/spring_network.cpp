@@ -114,6 +114,18 @@ SpringNetwork::SpringNetwork(SpringNetworkSpec spec) : spec_(std::move(spec)) {
     if (!(st.stiffness > 0.0) || !std::isfinite(st.stiffness))
       throw std::invalid_argument("spring network: stencil stiffness must be > 0 N/m");
   }
+  if (!(spec_.plane_stiffness >= 0.0) || !std::isfinite(spec_.plane_stiffness))
+    throw std::invalid_argument("spring network: plane_stiffness must be >= 0 N/m and finite");
+  if (planar()) {
+    bool flat = spec_.gravity.z == 0.0 && spec_.stencils.empty();
+    for (const Vec3& q : spec_.positions) flat = flat && q.z == 0.0;
+    for (const PinPath& pin : spec_.pin_paths)
+      flat = flat && pin.start.z == 0.0 && pin.end.z == 0.0;
+    if (!flat)
+      throw std::invalid_argument(
+          "spring network: a planar network (plane_stiffness > 0) needs every particle and pin at "
+          "z = 0, no gravity along z and no stencils");
+  }
   structure_ = std::make_shared<StiffnessStructure>();
   pin_pos_.resize(spec_.pinned.size());
   scratch_.resize(n);
@@ -230,6 +242,13 @@ inline Vec3 SpringNetwork::end_position(int particle, const double* x) const {
   return pin_pos_[pin_slot_[particle]];
 }
 
+// b's position minus a's; in the plane (z dropped) for a planar network (header, "Planar").
+inline Vec3 SpringNetwork::spring_vector(const Spring& s, const double* x) const {
+  Vec3 d = end_position(s.b, x) - end_position(s.a, x);
+  if (planar()) d.z = 0.0;
+  return d;
+}
+
 inline void SpringNetwork::spring_force_law(const Spring& s, double L, double& f,
                                             double& df) const {
   f = s.stiffness * (L - s.rest);
@@ -268,12 +287,12 @@ void SpringNetwork::net_force(double t, const double* x, double* force) const {
   for (int i = 0; i < n; i += 3) {
     force[i] = dof_mass_[i] * spec_.gravity.x;
     force[i + 1] = dof_mass_[i] * spec_.gravity.y;
-    force[i + 2] = dof_mass_[i] * spec_.gravity.z;
+    force[i + 2] = dof_mass_[i] * spec_.gravity.z - spec_.plane_stiffness * x[i + 2];
   }
   for (const Spring& s : spec_.springs) {
     const int fa = free_index_[s.a], fb = free_index_[s.b];
     if (fa < 0 && fb < 0) continue;
-    const Vec3 d = end_position(s.b, x) - end_position(s.a, x);
+    const Vec3 d = spring_vector(s, x);
     const double L = norm(d);
     double f, df;
     spring_force_law(s, L, f, df);
@@ -315,7 +334,7 @@ void SpringNetwork::net_force_tangent(double t, const double* x, const SpringNet
     const Spring& s = spec_.springs[si];
     const int fa = free_index_[s.a], fb = free_index_[s.b];
     if (fa < 0 && fb < 0) continue;
-    const Vec3 d = end_position(s.b, x) - end_position(s.a, x);
+    const Vec3 d = spring_vector(s, x);
     const double L = norm(d);
     double f, dfdL;
     spring_force_law(s, L, f, dfdL);
@@ -330,7 +349,8 @@ void SpringNetwork::net_force_tangent(double t, const double* x, const SpringNet
                                            s.rest * dp.elongation_limit));
     }
     Vec3 dF = (dfp / L) * d;  // on a
-    const Vec3 dd = pin_tangent(s.b) - pin_tangent(s.a);
+    Vec3 dd = pin_tangent(s.b) - pin_tangent(s.a);
+    if (planar()) dd.z = 0.0;
     if (dd.x != 0.0 || dd.y != 0.0 || dd.z != 0.0) {
       const Vec3 u = (1.0 / L) * d;
       dF = dF + ((dfdL - f / L) * dot(u, dd)) * u + (f / L) * dd;
@@ -367,7 +387,7 @@ void SpringNetwork::stiffness_values(double t, const double* x, double* values) 
     const Spring& s = spec_.springs[si];
     const int fa = free_index_[s.a], fb = free_index_[s.b];
     if (fa < 0 && fb < 0) continue;
-    const Vec3 d = end_position(s.b, x) - end_position(s.a, x);
+    const Vec3 d = spring_vector(s, x);
     const double L = norm(d);
     double f, df;
     spring_force_law(s, L, f, df);
@@ -376,6 +396,7 @@ void SpringNetwork::stiffness_values(double t, const double* x, double* values) 
     double B[9];
     for (int p = 0; p < 3; ++p)
       for (int q = 0; q < 3; ++q) B[3 * p + q] = (df - fl) * u[p] * u[q] + (p == q ? fl : 0.0);
+    if (planar()) B[8] = 0.0;  // its length does not depend on z
     // Blocks aa = -B, ab = +B, ba = +B, bb = -B; row r scaled by 1/m_r.
     const int* slot = &st.slots[si * 36];
     const int ends[2] = {fa, fb};
@@ -387,6 +408,13 @@ void SpringNetwork::stiffness_values(double t, const double* x, double* values) 
       for (int e = 0; e < 9; ++e) values[slot[blk * 9 + e]] += scale * B[e];
     }
   }
+  // The plane: -k_p / m on each free particle's z diagonal (the diagonal blocks are in the
+  // pattern).
+  if (planar())
+    for (int f = 0; f < free_count_; ++f) {
+      const int e = st.pattern.find(3 * f + 2, 3 * f + 2);
+      values[e] -= spec_.plane_stiffness * inv_mass_[3 * f + 2];
+    }
   // Stencils: block (i, j) = -k w_i w_j I, row i scaled by 1/m_i.
   for (size_t si = 0; si < spec_.stencils.size(); ++si) {
     const Stencil& s = spec_.stencils[si];
@@ -447,7 +475,7 @@ bool SpringNetwork::project(double t, double* x, double* /*v*/) const {
   for (const Spring& s : spec_.springs) {
     const int fa = free_index_[s.a], fb = free_index_[s.b];
     if (fa < 0 && fb < 0) continue;
-    const Vec3 d = end_position(s.b, x) - end_position(s.a, x);
+    const Vec3 d = spring_vector(s, x);
     const double Lmax = s.rest * (1.0 + spec_.elongation_limit);
     const double L2 = dot(d, d);
     if (!(L2 > Lmax * Lmax)) continue;  // the common case costs no square root
@@ -475,7 +503,7 @@ double SpringNetwork::potential_energy(double t, const double* x) const {
   double e = 0.0;
   for (const Spring& s : spec_.springs) {
     if (free_index_[s.a] < 0 && free_index_[s.b] < 0) continue;
-    const double L = norm(end_position(s.b, x) - end_position(s.a, x));
+    const double L = norm(spring_vector(s, x));
     e += 0.5 * s.stiffness * (L - s.rest) * (L - s.rest);
     if (spec_.elongation_limit > 0.0) {
       const double over = L - s.rest * (1.0 + spec_.elongation_limit);
@@ -490,8 +518,9 @@ double SpringNetwork::potential_energy(double t, const double* x) const {
     e += 0.5 * st.stiffness * dot(v, v);
   }
   for (int i = 0; i < dof(); i += 3)
-    e -= dof_mass_[i] *
-         (spec_.gravity.x * x[i] + spec_.gravity.y * x[i + 1] + spec_.gravity.z * x[i + 2]);
+    e += 0.5 * spec_.plane_stiffness * x[i + 2] * x[i + 2] -
+         dof_mass_[i] *
+             (spec_.gravity.x * x[i] + spec_.gravity.y * x[i + 1] + spec_.gravity.z * x[i + 2]);
   return e;
 }
 
@@ -505,7 +534,7 @@ double SpringNetwork::max_strain(double t, const double* x) const {
   update_pins(t);
   double worst = -1.0;
   for (const Spring& s : spec_.springs) {
-    const double L = norm(end_position(s.b, x) - end_position(s.a, x));
+    const double L = norm(spring_vector(s, x));
     worst = std::max(worst, (L - s.rest) / s.rest);
   }
   return worst;
@@ -521,6 +550,7 @@ std::string SpringNetwork::describe() const {
   os << particle_count() << " particles (" << free_count_ << " free), " << spec_.springs.size()
      << " springs, ";
   if (!spec_.stencils.empty()) os << spec_.stencils.size() << " bending stencils, ";
+  if (planar()) os << "planar, ";
   os << dof() << " dof, Jacobian nnz " << stiffness_pattern().nnz();
   return os.str();
 }

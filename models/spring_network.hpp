@@ -19,6 +19,13 @@
 //   block dF_i/dx_j = -k w_i w_j I. stiffness_values() writes these blocks row-scaled by 1/m_i
 //   (da_c/dx, MechanicalSystem).
 //
+// Planar (plane_stiffness k_p > 0; the knit's default): the particles move in the plane z = 0,
+//   held there by E_p = k_p/2 sum_i z_i^2, and each spring's length is that of its in-plane
+//   projection, L = |(x_b - x_a)_xy|, so no spring has z stiffness (B's z row and column are 0) and
+//   the z block of the stiffness is k_p I. A flat state stays flat as before (no force has a z
+//   component at z = 0); what changes is the z block: without the plane a compressed spring's
+//   f/L < 0 makes it indefinite, and solvers that test pivots (the equilibrium solver, the
+//   certificate) would read modes that the planar model does not have as saddles.
 // State: only free particles are degrees of freedom, 3 per particle in particle order
 // (x, y, z). Pinned particles follow a PinPath (fixed, or moved linearly in time).
 // Damping: absolute, per particle, gamma_i = c / m_i (paper 1 Eq. 4).
@@ -88,6 +95,8 @@ struct SpringNetworkSpec {
   // out its 6 rigid-body modes (MechanicalSystem::free_floating). Opt-in: a planar network whose
   // out-of-plane motion has no stiffness (paper 2's knit) would have those modes read as a saddle.
   bool free_floating = false;
+  // Planar (> 0; N/m): the particles move in the plane z = 0 (see "Planar" above).
+  double plane_stiffness = 0.0;
 };
 
 // A direction in the network's data (d(data)/dp for one parameter p), for the equilibrium
@@ -158,7 +167,9 @@ class SpringNetwork final : public MechanicalSystem {
   };
 
  private:
+  bool planar() const { return spec_.plane_stiffness > 0.0; }
   Vec3 end_position(int particle, const double* x) const;
+  Vec3 spring_vector(const Spring& s, const double* x) const;
   void update_pins(double t) const;
   void spring_force_law(const Spring& s, double L, double& f, double& df) const;
   Vec3 stencil_vector(const Stencil& st, const double* x) const;  // v = sum_i w_i x_i

@@ -561,9 +561,13 @@ TEST_CASE("out-of-plane bending (knit.bending): only rigid zero modes; a flat tu
   plain.network.initial_state(x.data(), v.data());
   CHECK(plain.network.static_residual(0.0, x.data()) < 1e-12);  // exactly at rest
   CHECK(plain.network.potential_energy(0.0, x.data()) == Approx(0.0).margin(1e-25));
-  // Without the stencils every point's z is a zero mode (56 points) besides the 3 in-plane rigid
-  // motions; with them only the 6 rigid motions are, and a free chart declares them.
-  CHECK(zero_modes(stiffness_spectrum(plain_flat.network, x)) == 56 + 3);
+  // Without the stencils the network is planar: the plane holds every point's z (k_p = k_w), so
+  // only the 3 in-plane rigid motions are zero modes; with them only the 6 rigid motions are, and
+  // a free chart declares them.
+  CHECK(plain_flat.network.spec().plane_stiffness == flat.wale_stiffness);
+  CHECK(plain.network.spec().plane_stiffness == 0.0);
+  CHECK(plain_flat.network.describe().find("planar") != std::string::npos);
+  CHECK(zero_modes(stiffness_spectrum(plain_flat.network, x)) == 3);
   CHECK(zero_modes(stiffness_spectrum(plain.network, x)) == 6);
   CHECK(plain.network.free_floating());
   CHECK(!plain_flat.network.free_floating());
@@ -581,6 +585,12 @@ TEST_CASE("out-of-plane bending (knit.bending): only rigid zero modes; a flat tu
   const Eigen::VectorXd spectrum = stiffness_spectrum(tuck.network, xs);
   INFO("lowest eigenvalues " << spectrum.head(3).transpose() << " N/m");
   CHECK(spectrum[0] < -1e-6 * spectrum.cwiseAbs().maxCoeff());
+  // In the planar model the same state is a minimum: the compressed springs have no z stiffness
+  // to lose there (without the plane their f / L < 0 made the z block indefinite).
+  const Eigen::VectorXd planar = stiffness_spectrum(tuck_flat.network, xs);
+  INFO("planar: lowest eigenvalues " << planar.head(4).transpose() << " N/m");
+  CHECK(planar[0] > -1e-9 * planar.cwiseAbs().maxCoeff());
+  CHECK(zero_modes(planar) == 3);
 
   bent.bending_ratio = 11.0;
   CHECK_THROWS_WITH(bent.validate(), "knit.bending = 11: must be in [0, 10]");

@@ -263,6 +263,60 @@ TEST_CASE("stencils: forces and Jacobian are the energy's derivatives, zero on r
   CHECK_THROWS_WITH(SpringNetwork(bad), Catch::Contains("stencil stiffness must be > 0"));
 }
 
+TEST_CASE("planar: springs measure in the plane, the plane holds z, the z block is k_p I") {
+  // A flat square with a diagonal, every spring compressed (rest 1.2 x its length): without the
+  // plane a compressed spring's z stiffness f/L is negative.
+  SpringNetworkSpec spec;
+  spec.positions = {{0, 0, 0}, {0.1, 0, 0}, {0.1, 0.1, 0}, {0, 0.1, 0}};
+  spec.masses.assign(4, 0.01);
+  for (auto [a, b] : {std::pair{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 2}})
+    spec.springs.push_back({a, b, 1.2 * norm(spec.positions[b] - spec.positions[a]), 50.0});
+  spec.gravity = {0.0, 0.0, 0.0};
+  spec.residual_force_scale = 1.0;
+  spec.plane_stiffness = 7.0;
+  const SpringNetwork net(spec);
+  const int n = net.dof();
+  std::vector<double> x(n), v(n), f(n), values(net.stiffness_pattern().nnz());
+  net.initial_state(x.data(), v.data());
+  // Flat: no z force; the z block is exactly -k_p / m on the diagonal, nothing else.
+  net.net_force(0.0, x.data(), f.data());
+  net.stiffness_values(0.0, x.data(), values.data());
+  const CscPattern& pat = net.stiffness_pattern();
+  for (int col = 0; col < n; ++col)
+    for (int k = pat.colptr[col]; k < pat.colptr[col + 1]; ++k) {
+      const int row = pat.rowind[k];
+      if (row % 3 != 2 && col % 3 != 2) continue;
+      CHECK(values[k] == (row == col ? -7.0 / 0.01 : 0.0));
+    }
+  for (int i = 2; i < n; i += 3) CHECK(f[i] == 0.0);
+  // Off the plane: forces are -grad E and the Jacobian is exact; the springs' lengths ignore z.
+  for (unsigned seed : {1u, 2u}) {
+    x = perturbed_state(net, 0.01, seed);
+    CHECK(check_stiffness_jacobian(net, 0.0, x.data()).max_relative_error < 1e-6);
+    net.net_force(0.0, x.data(), f.data());
+    for (int i = 0; i < n; ++i) {
+      const double h = 1e-7;
+      std::vector<double> xp = x, xm = x;
+      xp[i] += h;
+      xm[i] -= h;
+      const double grad =
+          (net.potential_energy(0.0, xp.data()) - net.potential_energy(0.0, xm.data())) / (2 * h);
+      CHECK(f[i] == Approx(-grad).margin(1e-7));
+    }
+    for (int i = 2; i < n; i += 3) CHECK(f[i] == Approx(-7.0 * x[i]).epsilon(1e-12));
+  }
+  // A planar network must start flat, and the plane takes no stencils or z gravity.
+  SpringNetworkSpec bad = spec;
+  bad.positions[2].z = 1e-3;
+  CHECK_THROWS_WITH(SpringNetwork(bad), Catch::Contains("planar network"));
+  bad = spec;
+  bad.gravity = {0.0, 0.0, -9.81};
+  CHECK_THROWS_WITH(SpringNetwork(bad), Catch::Contains("planar network"));
+  bad = spec;
+  bad.plane_stiffness = -1.0;
+  CHECK_THROWS_WITH(SpringNetwork(bad), Catch::Contains("plane_stiffness must be >= 0"));
+}
+
 TEST_CASE("every diagonal entry is in the stiffness pattern") {
   DrapeParams p;
   p.topology = 'c';
