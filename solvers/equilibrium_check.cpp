@@ -191,7 +191,11 @@ bool StiffnessProbe::leave_saddle(double t, double* x, double move) {
   if (mode.empty()) return false;
   double largest = 0.0;
   for (double d : mode) largest = std::max(largest, std::abs(d));
-  for (size_t i = 0; i < mode.size(); ++i) x[i] += move * mode[i] / largest;
+  std::vector<double> dx(mode.size());
+  for (size_t i = 0; i < mode.size(); ++i) dx[i] = move * mode[i] / largest;
+  const double admit = sys_->admissible_step(t, x, dx.data());
+  if (!(admit > 0.0)) return false;
+  for (size_t i = 0; i < mode.size(); ++i) x[i] += admit * dx[i];
   return true;
 }
 

@@ -59,9 +59,11 @@ class StiffnessProbe {
   // (power iteration on s I - K, s a Gershgorin bound; deterministic), its largest component
   // positive (the documented sign of a saddle escape). Empty if it did not converge.
   std::vector<double> negative_mode(double t, const double* x);
-  // Moves x (length dof) `move` metres, at its largest component, along negative_mode(t, x):
-  // how a saddle is left (the equilibrium solver; model.symmetry = auto on the whole sheet).
-  // False, x unchanged, where no negative mode is found.
+  // Moves x (length dof) `move` metres, at its largest component, along negative_mode(t, x),
+  // shortened to the fraction the model admits (MechanicalSystem::admissible_step: a contact
+  // barrier it would jump through): how a saddle is left (the equilibrium solver; model.symmetry =
+  // auto on the whole sheet). False, x unchanged, where no negative mode is found or the model
+  // admits none of the move.
   bool leave_saddle(double t, double* x, double move);
   long factorisations() const { return factorisations_; }
   // The gauge dofs of the last factorisation (empty unless the model is free-floating).
