@@ -421,6 +421,9 @@ KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
     // or gravity is certified on the rest (MechanicalSystem::free_floating).
     spec.free_floating = B > 0.0;
   }
+  // Without the bending stencils the model is planar: the plane holds the points with k_w
+  // (SpringNetwork's "Planar"; the value only sets the z block's scale, as z stays 0).
+  if (!p.out_of_plane_bending()) spec.plane_stiffness = p.wale_stiffness;
 
   const int count = static_cast<int>(points.size());
   const double total_mass = p.areal_density * 1e-3 * (W * w) * (C * h);  // kg
@@ -709,6 +712,14 @@ std::vector<ContactPoint> knit_contact_points(const KnitModel& m,
     }
     const std::array<double, 6> identity{1.0, 0.0, 0.0, 1.0, 0.0, 0.0};
     for (int e = 0; e < 6; ++e) p.weights[0][e] += identity[e] - rest_sum[e];
+    // Co-rotated (models/yarn_contact.hpp): the map turns with the direction from its largest
+    // particle to the one farthest from it.
+    double far = 0.0;
+    for (std::size_t q = 1; q < keep; ++q) {
+      const Vec3 e = pos[p.particles[q]] - pos[p.particles[0]];
+      const double len = std::hypot(e.x, e.y);
+      if (len > far) far = len, p.turn = {0, static_cast<int>(q)}, p.axis = {e.x / len, e.y / len};
+    }
     p.offset = Vec3{0.0, 0.0, 0.0};
     const Vec3 at_rest = position_of(p, pos);
     p.offset = v[k] - at_rest;

@@ -3,9 +3,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <unordered_set>
 #include <utility>
 
 namespace knitsim {
@@ -75,10 +77,10 @@ ContactNetwork::ContactNetwork(SpringNetwork network, YarnContactSpec contact)
         c.filter_keep > 0.0 && c.filter_keep < 1.0 && c.renew_keep > 0.0 && c.renew_keep < 1.0))
     throw std::invalid_argument("yarn contact: bad gap, skin, pattern radius or filter fraction");
   if (spec_.skin == 0.0) spec_.skin = c.touching - c.core;
-  if (spec_.pattern_radius == 0.0) spec_.pattern_radius = 2.0 * c.touching;
+  if (spec_.pattern_radius == 0.0) spec_.pattern_radius = 6.0 * c.touching;
   if (spec_.step_cap == 0.0) spec_.step_cap = 4.0 * c.touching;
   reach_ = spec_.touching + spec_.skin;
-  update_wmax();
+  check_points();
   if (c.refresh_tol < 0.0 || c.refresh_move < 0.0)
     throw std::invalid_argument("yarn contact: negative refresh tolerance or move");
   if (c.exact && c.linearise) {
@@ -108,17 +110,36 @@ ContactNetwork::ContactNetwork(SpringNetwork network, YarnContactSpec contact)
   std::vector<Box> boxes(pts_.size());
   for (std::size_t k = 0; k < pts_.size(); ++k)
     boxes[k] = around(pts_[k], 0.5 * spec_.pattern_radius);
+  // Points share their particle sets in runs along a yarn: pairs are kept per two distinct sets
+  // (a near pair of points adds the blocks between their sets' particles; every set also gets the
+  // blocks within it, for a point's own J^T H J and its map's curvature).
+  using Set = std::array<int, kContactParticles>;
+  std::vector<Set> sets;
+  sets.reserve(spec_.points.size());
+  for (const ContactPoint& p : spec_.points) sets.push_back(p.particles);
+  std::sort(sets.begin(), sets.end());
+  sets.erase(std::unique(sets.begin(), sets.end()), sets.end());
+  std::vector<std::uint32_t> set_of(spec_.points.size());
+  for (std::size_t k = 0; k < spec_.points.size(); ++k)
+    set_of[k] = static_cast<std::uint32_t>(
+        std::lower_bound(sets.begin(), sets.end(), spec_.points[k].particles) - sets.begin());
+  std::unordered_set<std::uint64_t> set_pairs;
+  for (std::uint64_t k = 0; k < sets.size(); ++k) set_pairs.insert(k << 32 | k);
   overlapping_boxes(boxes, spec_.pattern_radius, [&](int a, int b) {
     if (!may_pair(a, b) || norm(pts_[a] - pts_[b]) >= spec_.pattern_radius) return;
-    for (int i = 0; i < kContactParticles && spec_.points[a].particles[i] >= 0; ++i)
-      for (int j = 0; j < kContactParticles && spec_.points[b].particles[j] >= 0; ++j) {
-        const int fa = net_.free_index(spec_.points[a].particles[i]);
-        const int fb = net_.free_index(spec_.points[b].particles[j]);
+    const std::uint64_t sa = std::min(set_of[a], set_of[b]), sb = std::max(set_of[a], set_of[b]);
+    set_pairs.insert(sa << 32 | sb);
+  });
+  for (std::uint64_t key : set_pairs) {
+    const Set &p = sets[key >> 32], &q = sets[key & 0xffffffffu];
+    for (int i = 0; i < kContactParticles && p[i] >= 0; ++i)
+      for (int j = 0; j < kContactParticles && q[j] >= 0; ++j) {
+        const int fa = net_.free_index(p[i]), fb = net_.free_index(q[j]);
         if (fa < 0 || fb < 0) continue;
         blocks.emplace_back(fa, fb);
         blocks.emplace_back(fb, fa);
       }
-  });
+  }
   const int nf = dof() / 3;
   nodes_ = make_csc_pattern(nf, nf, std::move(blocks), /*with_diagonal=*/true);
   pattern_ = expand_node_pattern(nodes_);
@@ -136,24 +157,25 @@ bool ContactNetwork::may_pair(int a, int b) const {
   return p.yarn != q.yarn || std::abs(p.arc - q.arc) >= spec_.same_yarn_gap;
 }
 
-void ContactNetwork::update_wmax() const {
-  wmax_ = 0.0;
+void ContactNetwork::check_points() const {
   for (const ContactPoint& p : spec_.points) {
-    double w = 0.0;
     int count = 0;
     for (int i = 0; i < kContactParticles && p.particles[i] >= 0; ++i, ++count) {
       if (p.particles[i] >= net_.particle_count())
         throw std::invalid_argument("yarn contact: a point's particle is out of range");
-      double f2 = 0.0;
-      for (double v : p.weights[i]) {
+      for (double v : p.weights[i])
         if (!std::isfinite(v)) throw std::invalid_argument("yarn contact: a weight is not finite");
-        f2 += v * v;
-      }
-      w += std::sqrt(f2);
     }
     if (count == 0 || !is_finite(p.offset))
       throw std::invalid_argument("yarn contact: a point has no particle or a non-finite offset");
-    wmax_ = std::max(wmax_, w);
+    if (p.turn[0] >= 0 || p.turn[1] >= 0) {
+      const double a2 = p.axis[0] * p.axis[0] + p.axis[1] * p.axis[1];
+      if (p.turn[0] < 0 || p.turn[1] < 0 || p.turn[0] >= count || p.turn[1] >= count ||
+          p.turn[0] == p.turn[1] || !(std::abs(a2 - 1.0) < 1e-9))
+        throw std::invalid_argument(
+            "yarn contact: a point's turning pair must be two of its particles, its axis a unit "
+            "vector");
+    }
   }
 }
 
@@ -172,18 +194,59 @@ bool ContactNetwork::refresh(double t, const double* x) const {
   if (exact_.size() != spec_.points.size())
     throw std::logic_error("yarn contact: exact positions of another number of points");
   positions(t, x);
-  // Each straying yarn is renewed on its own: its points move from where they are to their exact
-  // positions, as far along that as the step filter allows (a renewal is a step of the points).
+  // Each straying yarn is renewed: its points move from where they are to their exact positions,
+  // as far along that as the step filter allows (a renewal is a step of the points). All at once
+  // where the filter admits every move whole (one sweep and one check of the pairs); else each on
+  // its own.
   long renewed = 0, cut = 0;
-  std::vector<Vec3> move(pts_.size());
+  std::vector<int> straying;
   for (int y = 0; y + 1 < static_cast<int>(yarn_begin_.size()); ++y) {
-    const int begin = yarn_begin_[y], end = yarn_begin_[y + 1];
     double drift = 0.0;
-    for (int k = begin; k < end; ++k) drift = std::max(drift, norm(exact_[k] - pts_[k]));
-    if (!(drift > spec_.refresh_tol)) continue;
-    std::vector<ContactPoint> fresh = spec_.linearise(particles, y);
-    if (static_cast<int>(fresh.size()) != end - begin)
+    for (int k = yarn_begin_[y]; k < yarn_begin_[y + 1]; ++k)
+      drift = std::max(drift, norm(exact_[k] - pts_[k]));
+    if (drift > spec_.refresh_tol) straying.push_back(y);
+  }
+  std::vector<std::vector<ContactPoint>> fresh(straying.size());
+  std::vector<Vec3> move(pts_.size());
+  for (std::size_t i = 0; i < straying.size(); ++i) {
+    const int y = straying[i], begin = yarn_begin_[y], end = yarn_begin_[y + 1];
+    fresh[i] = spec_.linearise(particles, y);
+    if (static_cast<int>(fresh[i].size()) != end - begin)
       throw std::logic_error("yarn contact: a renewed yarn has another number of points");
+    for (int k = begin; k < end; ++k) move[k] = exact_[k] - pts_[k];
+  }
+  // Installs fresh maps for straying[i], i in [i0, i1); returns the old ones.
+  auto install = [&](std::size_t i0, std::size_t i1) {
+    std::vector<ContactPoint> old;
+    for (std::size_t i = i0; i < i1; ++i) {
+      auto first = spec_.points.begin() + yarn_begin_[straying[i]];
+      old.insert(old.end(), first, first + fresh[i].size());
+      std::copy(fresh[i].begin(), fresh[i].end(), first);
+    }
+    listed_at_.clear();  // points moved: the near-pair list is rebuilt
+    return old;
+  };
+  auto restore = [&](std::size_t i0, std::size_t i1, const std::vector<ContactPoint>& old) {
+    auto from = old.begin();
+    for (std::size_t i = i0; i < i1; ++i) {
+      std::copy(from, from + fresh[i].size(), spec_.points.begin() + yarn_begin_[straying[i]]);
+      from += fresh[i].size();
+    }
+    listed_at_.clear();
+    positions(t, x);
+  };
+  bool batch = !straying.empty() && sweep_fraction(pts_, move, spec_.renew_keep) >= 1.0;
+  if (batch) {
+    const std::vector<ContactPoint> old = install(0, straying.size());
+    if (min_distance(t, x) > spec_.core) {  // pts_ now holds the renewed points
+      renewed = static_cast<long>(straying.size());
+    } else {
+      restore(0, straying.size(), old);
+      batch = false;
+    }
+  }
+  for (std::size_t i = 0; !batch && i < straying.size(); ++i) {
+    const int begin = yarn_begin_[straying[i]], end = yarn_begin_[straying[i] + 1];
     std::fill(move.begin(), move.end(), Vec3{0.0, 0.0, 0.0});
     for (int k = begin; k < end; ++k) move[k] = exact_[k] - pts_[k];
     const double s = sweep_fraction(pts_, move, spec_.renew_keep);
@@ -192,56 +255,107 @@ bool ContactNetwork::refresh(double t, const double* x) const {
       // Part way: the fresh map (its weights, the tangent here) moved to put each point s of the
       // way from where it is to its exact position; the rest is taken up at later checks.
       for (int k = begin; k < end; ++k)
-        fresh[k - begin].offset = fresh[k - begin].offset - (1.0 - s) * move[k];
+        fresh[i][k - begin].offset = fresh[i][k - begin].offset - (1.0 - s) * move[k];
     }
-    auto first = spec_.points.begin() + begin;
-    const std::vector<ContactPoint> old(first, first + (end - begin));
-    std::copy(fresh.begin(), fresh.end(), first);
-    listed_at_.clear();  // points moved: the near-pair list is rebuilt (wmax_ only sets when)
+    const std::vector<ContactPoint> old = install(i, i + 1);
     if (min_distance(t, x) > spec_.core) {  // pts_ now holds the renewed points
       ++renewed;
     } else {  // round-off at the filter's floor: the old points are kept
-      std::copy(old.begin(), old.end(), first);
-      listed_at_.clear();
-      positions(t, x);
+      restore(i, i + 1, old);
     }
   }
   if (renewed == 0) return false;
-  update_wmax();  // once, for the points kept (it also checks them)
+  check_points();                         // once, for the points kept (it also checks them)
   if (cut == 0) renewed_at_ = particles;  // a cut renewal is taken up again at the next check
   refreshes_ += renewed;
   return true;
 }
 
-Vec3 position_of(const ContactPoint& point, const std::vector<Vec3>& particles) {
-  Vec3 s = point.offset;
-  for (int i = 0; i < kContactParticles && point.particles[i] >= 0; ++i) {
-    const Vec3& q = particles[point.particles[i]];
-    const std::array<double, 6>& W = point.weights[i];
-    s.x += W[0] * q.x + W[1] * q.y;
-    s.y += W[2] * q.x + W[3] * q.y;
-    s.z += W[4] * q.x + W[5] * q.y;
+namespace {
+
+Vec3 rotate(double c, double s, Vec3 u) { return {c * u.x - s * u.y, s * u.x + c * u.y, u.z}; }
+
+// W (3 x 2 row-major) times the 2-vector (x, y).
+Vec3 times(const std::array<double, 6>& W, double x, double y) {
+  return {W[0] * x + W[1] * y, W[2] * x + W[3] * y, W[4] * x + W[5] * y};
+}
+
+PointTurn turned(const ContactPoint& point, const std::vector<Vec3>& particles) {
+  PointTurn t;
+  t.u = point.offset;
+  if (point.turn[0] >= 0) {
+    const Vec3& xi = particles[point.particles[point.turn[0]]];
+    const Vec3& xj = particles[point.particles[point.turn[1]]];
+    t.vx = xj.x - xi.x, t.vy = xj.y - xi.y;
+    t.v2 = t.vx * t.vx + t.vy * t.vy;
+    const double len = std::sqrt(t.v2);
+    t.c = (point.axis[0] * t.vx + point.axis[1] * t.vy) / len;
+    t.s = (point.axis[0] * t.vy - point.axis[1] * t.vx) / len;
+    t.gx = -t.vy / t.v2, t.gy = t.vx / t.v2;
+    t.turns = true;
   }
-  return s;
+  Vec3 wg2q{};  // sum_i W_i G2 q_i
+  for (int i = 0; i < kContactParticles && point.particles[i] >= 0; ++i) {
+    const Vec3& x = particles[point.particles[i]];
+    const double qx = t.c * x.x + t.s * x.y, qy = -t.s * x.x + t.c * x.y;
+    t.u = t.u + times(point.weights[i], qx, qy);
+    if (t.turns) wg2q = wg2q + times(point.weights[i], -qy, qx);
+  }
+  if (t.turns) t.a = Vec3{-t.u.y, t.u.x, 0.0} - wg2q;
+  return t;
+}
+
+// grad_k(phi) of the point's particle k (zero unless it is one of the turning pair).
+void turn_gradient(const ContactPoint& point, const PointTurn& t, int k, double& gx, double& gy) {
+  const double sign = k == point.turn[1] ? 1.0 : (k == point.turn[0] ? -1.0 : 0.0);
+  gx = t.turns ? sign * t.gx : 0.0;
+  gy = t.turns ? sign * t.gy : 0.0;
+}
+
+// dp/dx_k = R (W_k R2^T + a grad_k^T), 3 x 2 row-major.
+std::array<double, 6> jacobian(const ContactPoint& point, const PointTurn& t, int k) {
+  const std::array<double, 6>& W = point.weights[k];
+  double gx, gy;
+  turn_gradient(point, t, k, gx, gy);
+  // Columns of W R2^T + a grad^T (R2^T = [c s; -s c]), then rotated by R.
+  const Vec3 col0 =
+      Vec3{W[0] * t.c - W[1] * t.s, W[2] * t.c - W[3] * t.s, W[4] * t.c - W[5] * t.s} + gx * t.a;
+  const Vec3 col1 =
+      Vec3{W[0] * t.s + W[1] * t.c, W[2] * t.s + W[3] * t.c, W[4] * t.s + W[5] * t.c} + gy * t.a;
+  const Vec3 r0 = rotate(t.c, t.s, col0), r1 = rotate(t.c, t.s, col1);
+  return {r0.x, r1.x, r0.y, r1.y, r0.z, r1.z};
+}
+
+}  // namespace
+
+Vec3 position_of(const ContactPoint& point, const std::vector<Vec3>& particles) {
+  const PointTurn t = turned(point, particles);
+  return rotate(t.c, t.s, t.u);
+}
+
+std::array<double, 6> point_jacobian(const ContactPoint& point, const std::vector<Vec3>& particles,
+                                     int i) {
+  return jacobian(point, turned(point, particles), i);
 }
 
 void ContactNetwork::positions(double t, const double* x) const {
   net_.all_positions(t, x, pos_);
   pts_.resize(spec_.points.size());
-  for (std::size_t k = 0; k < spec_.points.size(); ++k)
-    pts_[k] = position_of(spec_.points[k], pos_);
+  turns_.resize(spec_.points.size());
+  for (std::size_t k = 0; k < spec_.points.size(); ++k) {
+    turns_[k] = turned(spec_.points[k], pos_);
+    pts_[k] = rotate(turns_[k].c, turns_[k].s, turns_[k].u);
+  }
 }
 
 void ContactNetwork::refresh_pairs() const {
-  if (listed_at_.size() == pos_.size()) {
+  if (listed_at_.size() == pts_.size()) {
     double moved = 0.0;
-    for (std::size_t i = 0; i < pos_.size(); ++i)
-      moved = std::max(
-          {moved, std::abs(pos_[i].x - listed_at_[i].x), std::abs(pos_[i].y - listed_at_[i].y)});
-    // A point moves at most wmax sqrt(2) moved; two points at most twice that.
-    if (2.0 * wmax_ * std::sqrt(2.0) * moved <= spec_.skin) return;
+    for (std::size_t k = 0; k < pts_.size(); ++k)
+      moved = std::max(moved, norm(pts_[k] - listed_at_[k]));
+    if (2.0 * moved <= spec_.skin) return;  // no two points came skin closer
   }
-  listed_at_ = pos_;
+  listed_at_ = pts_;
   ++rebuilds_;
   pairs_.clear();
   std::vector<Box> boxes(pts_.size());
@@ -307,14 +421,14 @@ double ContactNetwork::min_distance(double t, const double* x, int* in_contact) 
 
 namespace {
 
-// Adds W_i^T F (F a force on point p) to p's free particles' x and y, divided by their mass if
-// `mass` is given.
-void spread(const ContactPoint& p, const SpringNetwork& net, Vec3 F, double* out,
-            const std::vector<double>* mass) {
+// Adds (dp/dx_i)^T F (F a force on point p) to p's free particles' x and y, divided by their mass
+// if `mass` is given.
+void spread(const ContactPoint& p, const PointTurn& t, const SpringNetwork& net, Vec3 F,
+            double* out, const std::vector<double>* mass) {
   for (int i = 0; i < kContactParticles && p.particles[i] >= 0; ++i) {
     const int f = net.free_index(p.particles[i]);
     if (f < 0) continue;
-    const std::array<double, 6>& W = p.weights[i];
+    const std::array<double, 6> W = jacobian(p, t, i);
     const double s = mass ? 1.0 / (*mass)[3 * f] : 1.0;
     out[3 * f] += s * (W[0] * F.x + W[2] * F.y + W[4] * F.z);
     out[3 * f + 1] += s * (W[1] * F.x + W[3] * F.y + W[5] * F.z);
@@ -342,8 +456,8 @@ bool ContactNetwork::add_contact_forces(double t, const double* x, double* out,
                                         const std::vector<double>* mass) const {
   return for_each_contact(t, x, [&](const Pair& pr, Vec3 d, double D, double de, double) {
     const Vec3 F = (-de / D) * d;  // on a; b gets the opposite
-    spread(spec_.points[pr.a], net_, F, out, mass);
-    spread(spec_.points[pr.b], net_, -1.0 * F, out, mass);
+    spread(spec_.points[pr.a], turns_[pr.a], net_, F, out, mass);
+    spread(spec_.points[pr.b], turns_[pr.b], net_, -1.0 * F, out, mass);
   });
 }
 
@@ -369,69 +483,177 @@ void ContactNetwork::stiffness_values(double t, const double* x, double* values)
   std::fill(values, values + pattern_.nnz(), 0.0);
   for (std::size_t k = 0; k < net_values_.size(); ++k) values[net_entry_[k]] = net_values_[k];
   const std::vector<double>& m = net_.mass();
+  grad_.assign(spec_.points.size(), Vec3{0.0, 0.0, 0.0});
+  bool missed = false;
+  // Adds -block / m_r (2 x 2, row-major) to particle block (fr, fc): da/dx = -K / m.
+  auto add_block = [&](int particle_r, int particle_c, const double block[4]) {
+    const int fr = net_.free_index(particle_r), fc = net_.free_index(particle_c);
+    if (fr < 0 || fc < 0) return;
+    const int e_node = nodes_.find(fr, fc);
+    if (e_node < 0) {
+      missed = true;
+      return;
+    }
+    for (int p = 0; p < 2; ++p)
+      for (int q = 0; q < 2; ++q)
+        values[node_block_entry(nodes_, e_node, fc, p, q)] -= block[2 * p + q] / m[3 * fr];
+  };
+  std::array<std::array<double, 6>, kContactParticles> J[2];
   const bool finite =
       for_each_contact(t, x, [&](const Pair& pr, Vec3 d, double D, double de, double d2e) {
         const double u[3] = {d.x / D, d.y / D, d.z / D}, s = de / D;
-        // H = d2e u u^T + (de / D)(I - u u^T)
+        // H = d2e u u^T + (de / D)(I - u u^T), in p_a - p_b; the gradient in p_a is de u.
         double H[3][3];
         for (int p = 0; p < 3; ++p)
           for (int q = 0; q < 3; ++q) H[p][q] = (d2e - s) * u[p] * u[q] + (p == q ? s : 0.0);
-        bool missed = false;
+        grad_[pr.a] = grad_[pr.a] + s * d;
+        grad_[pr.b] = grad_[pr.b] - s * d;
+        missed = false;
         const ContactPoint* pt[2] = {&spec_.points[pr.a], &spec_.points[pr.b]};
+        const int index[2] = {pr.a, pr.b};
+        for (int A = 0; A < 2; ++A) {
+          const PointTurn& tA = turns_[index[A]];
+          for (int i = 0; i < kContactParticles && pt[A]->particles[i] >= 0; ++i)
+            J[A][i] = jacobian(*pt[A], tA, i);
+        }
         for (int A = 0; A < 2; ++A)
           for (int i = 0; i < kContactParticles && pt[A]->particles[i] >= 0; ++i) {
-            const int fr = net_.free_index(pt[A]->particles[i]);
-            if (fr < 0) continue;
-            const std::array<double, 6>& Wi = pt[A]->weights[i];
-            // G = Wi^T H, 2 x 3 (Wi row-major 3 x 2: Wi[2 k + p] is row k, column p)
+            const std::array<double, 6>& Ji = J[A][i];
+            // G = Ji^T H, 2 x 3 (Ji row-major 3 x 2: Ji[2 k + p] is row k, column p)
             double G[2][3];
             for (int p = 0; p < 2; ++p)
               for (int q = 0; q < 3; ++q)
-                G[p][q] = Wi[p] * H[0][q] + Wi[2 + p] * H[1][q] + Wi[4 + p] * H[2][q];
+                G[p][q] = Ji[p] * H[0][q] + Ji[2 + p] * H[1][q] + Ji[4 + p] * H[2][q];
             for (int B = 0; B < 2; ++B)
               for (int j = 0; j < kContactParticles && pt[B]->particles[j] >= 0; ++j) {
-                const int fc = net_.free_index(pt[B]->particles[j]);
-                if (fc < 0) continue;
-                const int e_node = nodes_.find(fr, fc);
-                if (e_node < 0) {
-                  missed = true;
-                  continue;
-                }
-                const std::array<double, 6>& Wj = pt[B]->weights[j];
-                // dF_r/dx_c = -s_r s_c Wi^T H Wj; the Jacobian row is divided by r's mass.
-                const double f = -(A == B ? 1.0 : -1.0) / m[3 * fr];
+                const std::array<double, 6>& Jj = J[B][j];
+                const double sign = A == B ? 1.0 : -1.0;  // d^2E/dx_r dx_c = s_r s_c Ji^T H Jj
+                double block[4];
                 for (int p = 0; p < 2; ++p)
                   for (int q = 0; q < 2; ++q)
-                    values[node_block_entry(nodes_, e_node, fc, p, q)] +=
-                        f * (G[p][0] * Wj[q] + G[p][1] * Wj[2 + q] + G[p][2] * Wj[4 + q]);
+                    block[2 * p + q] =
+                        sign * (G[p][0] * Jj[q] + G[p][1] * Jj[2 + q] + G[p][2] * Jj[4 + q]);
+                add_block(pt[A]->particles[i], pt[B]->particles[j], block);
               }
           }
         pattern_misses_ += missed;
       });
-  if (!finite) std::fill(values, values + pattern_.nnz(), std::nan(""));
+  if (!finite) {
+    std::fill(values, values + pattern_.nnz(), std::nan(""));
+    return;
+  }
+  // The maps' curvature (header, "Co-rotated points"): per turning point with a gradient g.
+  for (std::size_t k = 0; k < spec_.points.size(); ++k) {
+    const ContactPoint& pt = spec_.points[k];
+    const Vec3 g = grad_[k];
+    if (pt.turn[0] < 0 || (g.x == 0.0 && g.y == 0.0 && g.z == 0.0)) continue;
+    const PointTurn& tk = turns_[k];
+    const Vec3 gt = rotate(tk.c, -tk.s, g);  // R^T g
+    int count = 0;
+    while (count < kContactParticles && pt.particles[count] >= 0) ++count;
+    double n[kContactParticles][2], gr[kContactParticles][2];
+    double c = gt.y * tk.a.x - gt.x * tk.a.y;  // g~ . G a
+    for (int i = 0; i < count; ++i) {
+      const std::array<double, 6>& W = pt.weights[i];
+      // m = (G W - W G2)^T g~: G W has rows (-W_y, W_x, 0), W G2 columns (W_col1, -W_col0).
+      const double m0 = -W[2] * gt.x + W[0] * gt.y - (W[1] * gt.x + W[3] * gt.y + W[5] * gt.z);
+      const double m1 = -W[3] * gt.x + W[1] * gt.y + (W[0] * gt.x + W[2] * gt.y + W[4] * gt.z);
+      const Vec3& xi = pos_[pt.particles[i]];
+      const double qx = tk.c * xi.x + tk.s * xi.y, qy = -tk.s * xi.x + tk.c * xi.y;
+      c -= m0 * -qy + m1 * qx;  // m . G2 q
+      n[i][0] = tk.c * m0 - tk.s * m1;
+      n[i][1] = tk.s * m0 + tk.c * m1;
+      turn_gradient(pt, tk, i, gr[i][0], gr[i][1]);
+    }
+    const double ga = dot(gt, tk.a);
+    // d^2 phi / dv^2 = [2 vx vy, vy^2 - vx^2; vy^2 - vx^2, -2 vx vy] / |v|^4
+    const double v4 = tk.v2 * tk.v2;
+    const double P[4] = {2.0 * tk.vx * tk.vy / v4, (tk.vy * tk.vy - tk.vx * tk.vx) / v4,
+                         (tk.vy * tk.vy - tk.vx * tk.vx) / v4, -2.0 * tk.vx * tk.vy / v4};
+    missed = false;
+    for (int i = 0; i < count; ++i)
+      for (int j = 0; j < count; ++j) {
+        const bool ti = i == pt.turn[0] || i == pt.turn[1], tj = j == pt.turn[0] || j == pt.turn[1];
+        if (!ti && !tj) continue;
+        // d^2 phi / dx_i dx_j: +P on each turning particle's own block, -P between the two
+        const double sign = (ti && tj) ? (i == j ? 1.0 : -1.0) : 0.0;
+        double block[4];
+        for (int p = 0; p < 2; ++p)
+          for (int q = 0; q < 2; ++q)
+            block[2 * p + q] = n[i][p] * gr[j][q] + gr[i][p] * n[j][q] + c * gr[i][p] * gr[j][q] +
+                               ga * sign * P[2 * p + q];
+        add_block(pt.particles[i], pt.particles[j], block);
+      }
+    pattern_misses_ += missed;
+  }
 }
 
 double ContactNetwork::admissible_step(double t, const double* x, const double* dx) const {
   if (!pairs_of(t, x)) return 1.0;
   const std::vector<Vec3> start = pts_;
-  std::vector<double> end(x, x + dof());
-  for (int i = 0; i < dof(); ++i) end[i] += dx[i];
-  positions(t, end.data());
-  std::vector<Vec3> move(pts_.size());
+  std::vector<double> turn0(spec_.points.size());
+  for (std::size_t k = 0; k < spec_.points.size(); ++k) turn0[k] = turn_angle(static_cast<int>(k));
+  // The points at fraction s of the (capped) step, into pts_.
+  std::vector<double> y(x, x + dof());
+  double cap = 1.0;
+  auto points_at = [&](double s) {
+    for (int i = 0; i < dof(); ++i) y[i] = x[i] + s * cap * dx[i];
+    positions(t, y.data());
+  };
+  points_at(1.0);
   double longest = 0.0;
-  for (std::size_t k = 0; k < pts_.size(); ++k) {
-    move[k] = pts_[k] - start[k];
-    longest = std::max(longest, norm(move[k]));
+  for (std::size_t k = 0; k < pts_.size(); ++k)
+    longest = std::max(longest, norm(pts_[k] - start[k]));
+  if (!(longest < std::numeric_limits<double>::infinity())) {
+    positions(t, x);
+    return 0.0;
   }
-  pts_ = start;  // the cached points describe x again (the pair list is x's)
-  if (!(longest < std::numeric_limits<double>::infinity())) return 0.0;
   // A step that moves a point by more than step_cap is cut to that first (a yarn jumping several
   // diameters in one Newton step is not trusted, the swept boxes stay small, and renewable
   // points stray less from their exact positions within one step).
-  const double cap = longest > spec_.step_cap ? spec_.step_cap / longest : 1.0;
-  for (Vec3& m : move) m = cap * m;
-  return cap * sweep_fraction(start, move, spec_.filter_keep);
+  if (longest > spec_.step_cap) {
+    cap = spec_.step_cap / longest;
+    points_at(1.0);
+  }
+  // Co-rotated points move on curves: the step is swept as chords between exact states, each
+  // turning no point more than kChordTurn (its path's sagitta ~ kChordTurn^2 / 8 of its reach).
+  double turn = 0.0;
+  bool turning = false;
+  for (std::size_t k = 0; k < spec_.points.size(); ++k) {
+    if (spec_.points[k].turn[0] < 0) continue;
+    turning = true;
+    turn = std::max(turn, std::abs(std::remainder(turn_angle(static_cast<int>(k)) - turn0[k],
+                                                  2.0 * 3.14159265358979323846)));
+  }
+  const int chords =
+      std::min(kMaxChords, std::max(1, static_cast<int>(std::ceil(turn / kChordTurn))));
+  double fraction = 1.0;
+  std::vector<Vec3> from = start, move(start.size());
+  for (int c = 0; c < chords; ++c) {
+    if (chords > 1) points_at(double(c + 1) / chords);
+    for (std::size_t k = 0; k < pts_.size(); ++k) move[k] = pts_[k] - from[k];
+    const double f = sweep_fraction(from, move, spec_.filter_keep);
+    if (f < 1.0) {
+      fraction = (c + f) / chords;
+      break;
+    }
+    from = pts_;
+  }
+  // The end of a bent path is checked exactly on x's near pairs (a pair further apart would have
+  // had to move more than the skin, which the chords see): halved while a pair is inside a core.
+  if (turning)
+    for (int halve = 0; fraction > 0.0; ++halve) {
+      points_at(fraction);
+      bool clear = true;
+      for (const Pair& pr : pairs_) clear = clear && norm(pts_[pr.a] - pts_[pr.b]) > spec_.core;
+      if (clear) break;
+      fraction = halve < 40 ? 0.5 * fraction : 0.0;
+    }
+  positions(t, x);  // the cached points describe x again
+  return cap * fraction;
 }
+
+double ContactNetwork::turn_angle(int k) const { return std::atan2(turns_[k].s, turns_[k].c); }
 
 double ContactNetwork::sweep_fraction(const std::vector<Vec3>& start, const std::vector<Vec3>& move,
                                       double keep) const {

@@ -13,6 +13,21 @@
 // at z = 0); a network whose particles leave the plane must not use it (build_knit refuses contact
 // with knit.bending). Each point carries its yarn's id and its arc length along that yarn at rest.
 //
+// Co-rotated points (turn set; the knit's): a plain map is exact under translations only, so a
+// free chart's energy changed as it turned in its plane and the chart drifted round. A
+// co-rotated point's map turns with one direction of its own particles, v = x_j - x_i:
+//     p = R(phi) (o + sum_i W_i R(phi)^T x_i,xy),   phi = the angle from `axis` to v,
+// R(phi) the rotation about z (depth unchanged). At the state where the map was made phi = 0 and
+// p is the plain map; p(R x + t) = R p(x) + t exactly for every rotation R about z and
+// translation t in the plane (the weights sum to [I; 0]), so the barrier's energy does not change
+// under the chart's rigid motions in its plane. Derivatives (q_i = R^T x_i, u = o + sum W_i q_i,
+// G and G2 the 3-D and 2-D generators of rotation about z):
+//     dp/dx_k = R (W_k R^T + a grad_k(phi)^T),   a = G u - sum_i W_i G2 q_i,
+// with grad_j(phi) = G2 v / |v|^2 = -grad_i(phi); the Hessian adds, for the energy's gradient g
+// at p (g~ = R^T g), the curvature of the map:
+//     n_k grad_l^T + grad_k n_l^T + c grad_k grad_l^T + (g~ . a) d^2 phi / dx_k dx_l,
+//     n_k = R2 (G W_k - W_k G2)^T g~,  c = g~ . G a - sum_k (R2^T n_k) . G2 q_k.
+//
 // Pairs. Two points interact if they lie on different yarns, or on one yarn at least
 // same_yarn_gap apart along it (neighbouring pieces of one bend never do). Energy of a pair at
 // distance D = |p_a - p_b|, with the gap g = (D - d0) / (d - d0):
@@ -26,13 +41,12 @@
 // (i, j) of d^2E/dx^2 gets s_i s_j W_i^T H W_j, s = +1 for a's particles, -1 for b's).
 //
 // Near pairs (a Verlet list): pairs closer than d + skin are listed at a state and reused while
-// no particle has moved more than skin / (2 sqrt(2) W) since (W the largest sum_i |W_i|_F of a
-// point);
-// the list is rebuilt on a front-view (x, y) grid. The sparse pattern is fixed at construction:
-// the network's, plus the particle blocks of every pair closer than pattern_radius at the start.
-// A pair that comes into contact later on particles whose block is not in the pattern still gets
-// its forces and energy; the Jacobian then misses that block (counted: pattern_misses()), which
-// slows Newton but does not change the state reached.
+// no point has moved more than skin / 2 since; the list is rebuilt on a front-view (x, y) grid. The
+// sparse pattern is fixed at construction: the network's, plus the particle blocks of every pair
+// closer than pattern_radius at the start (between the two points' particles and within each
+// point's). A pair that comes into contact later on particles whose block is not in the pattern
+// still gets its forces and energy; the Jacobian then misses that block (counted:
+// pattern_misses()), which slows Newton but does not change the state reached.
 //
 // Renewal (refresh; optional): the points approximate positions the caller can compute exactly
 // (the knit's centreline vertices), to first order about a state. Given both functions, refresh
@@ -50,8 +64,11 @@
 //
 // Step filter (admissible_step): a step that moves some point more than step_cap is cut to that;
 // then the largest fraction of it along which no pair's distance falls below
-// d0 + filter_keep (D_start - d0), found exactly (linear motion of two
-// points: a quadratic in the fraction); pairs by their swept boxes on the grid. The equilibrium
+// d0 + filter_keep (D_start - d0), found exactly for the straight move of each point from its start
+// to its end (a quadratic in the fraction). A co-rotated point's path bends: the step is swept as
+// chords between exact states, each turning no point more than kChordTurn, and the admitted end
+// is checked exactly (halved while a pair is inside a core). Pairs by their swept boxes on the
+// grid. The equilibrium
 // solver and implicit-euler shorten their steps by it, so no step jumps through the barrier.
 // The SUNDIALS methods have no such hook: a state inside the core gives a non-finite
 // acceleration, which they treat as a recoverable failure (a smaller step).
@@ -86,10 +103,30 @@ struct ContactPoint {
   Vec3 offset;       // o, m (its z is the point's depth)
   int yarn = 0;      // which yarn the point lies on
   double arc = 0.0;  // arc length along its yarn at rest, m
+  // Co-rotation (see "Co-rotated points" above): the point's map turns with the direction of
+  // x_j - x_i, (i, j) = turn (indices into `particles`; -1: the map does not turn), by the angle
+  // from `axis` (a unit vector in the plane, that direction where the map was made).
+  std::array<int, 2> turn{-1, -1};
+  std::array<double, 2> axis{1.0, 0.0};
 };
 
-// p = o + sum_i W_i x_i,xy of a contact point, given the positions of all particles (m).
+// A point's co-rotation at a state (see "Co-rotated points" above): R(phi) as (c, s), u and a in
+// the turned frame, grad_j(phi) of its second turning particle (the first's is minus that), v and
+// |v|^2. A plain point has c = 1, s = 0 and turns = false.
+struct PointTurn {
+  double c = 1.0, s = 0.0;
+  Vec3 u, a;                            // m
+  double gx = 0.0, gy = 0.0;            // 1/m
+  double vx = 0.0, vy = 0.0, v2 = 1.0;  // m, m^2
+  bool turns = false;
+};
+
+// p(x) of a contact point (plain or co-rotated), given the positions of all particles (m).
 Vec3 position_of(const ContactPoint& point, const std::vector<Vec3>& particles);
+// dp/dx_i,xy of the point's particle i (the i-th of `particles`), 3 x 2 row-major, at the given
+// positions of all particles.
+std::array<double, 6> point_jacobian(const ContactPoint& point, const std::vector<Vec3>& particles,
+                                     int i);
 
 struct YarnContactSpec {
   std::vector<ContactPoint> points;
@@ -98,7 +135,7 @@ struct YarnContactSpec {
   double stiffness = 0.0;       // kappa, N/m
   double same_yarn_gap = 0.0;   // m: points of one yarn closer than this along it never pair
   double skin = 0.0;            // m: the near-pair list's margin (0: (d - d0))
-  double pattern_radius = 0.0;  // m: pairs this close at the start have Jacobian blocks (0: 2 d)
+  double pattern_radius = 0.0;  // m: pairs this close at the start have Jacobian blocks (0: 6 d)
   double filter_keep = 0.2;     // a step keeps at least this fraction of a pair's gap to d0
   double step_cap = 0.0;        // m: a step moves no point further than this (0: 4 d)
   // Renewal (see above; both set, or the points are never renewed). `exact` writes every point's
@@ -160,7 +197,7 @@ class ContactNetwork final : public MechanicalSystem {
   void refresh_pairs() const;                       // the near-pair list at pos_, if stale
   bool pairs_of(double t, const double* x) const;   // positions + list; false if not finite
   bool may_pair(int a, int b) const;
-  void update_wmax() const;  // wmax_ of the current points; throws on a bad point
+  void check_points() const;  // throws std::invalid_argument on a bad point
   // Calls on_contact(pair, p_a - p_b, D, dE/dD, d2E/dD2) for every pair closer than d at (t, x);
   // false (stopping) if the state is not finite or a pair is inside its core.
   template <class OnContact>
@@ -176,16 +213,20 @@ class ContactNetwork final : public MechanicalSystem {
   // their swept boxes. The step filter keeps filter_keep, a renewal renew_keep.
   double sweep_fraction(const std::vector<Vec3>& start, const std::vector<Vec3>& move,
                         double keep) const;
+  double turn_angle(int k) const;  // point k's phi at pts_'s state (0 for a plain point), rad
+  static constexpr double kChordTurn = 0.02;  // rad: the largest turn of a point per swept chord
+  static constexpr int kMaxChords = 64;
 
   SpringNetwork net_;
   mutable YarnContactSpec spec_;  // its points are renewed by refresh
-  double reach_ = 0.0;          // d + skin
-  mutable double wmax_ = 1.0;   // the largest sum |w| of a point
+  double reach_ = 0.0;            // d + skin
   CscPattern nodes_;            // the free particles' block pattern
   CscPattern pattern_;          // nodes_ expanded to 3 x 3 blocks
   std::vector<int> net_entry_;  // per value of the network's pattern, its place in pattern_
   std::vector<int> yarn_begin_;  // per yarn, its first point (and the end last)
-  mutable std::vector<Vec3> pos_, pts_, listed_at_, exact_, renewed_at_;
+  mutable std::vector<Vec3> pos_, pts_, listed_at_, exact_, renewed_at_;  // listed_at_: points
+  mutable std::vector<PointTurn> turns_;  // per point, at pts_'s state
+  mutable std::vector<Vec3> grad_;  // per point, dE/dp summed over its pairs (stiffness_values)
   mutable std::vector<Pair> pairs_;
   mutable std::vector<double> net_values_, force_;
   mutable long pattern_misses_ = 0, rebuilds_ = 0, refreshes_ = 0, cut_renewals_ = 0;
