@@ -157,7 +157,7 @@ TEST_CASE("knitsim knit: paper 2's network by name warns once that it is a mecha
 }
 
 TEST_CASE(
-    "knitsim knit: with yarn contact the default integrator is implicit-euler and the "
+    "knitsim knit: with yarn contact the default integrator is equilibrium and the "
     "summary reports the contact") {
   const TempDir tmp("knit-contact");
   std::string err;
@@ -167,7 +167,9 @@ TEST_CASE(
   CHECK(summary["contact"].is_null());
   REQUIRE(run_small_chart(tmp, "--no-pictures --set knit.contact=10", err) == 0);
   summary = nlohmann::json::parse(slurp(tmp.path / "out" / "summary.json"));
-  CHECK(summary["integrator"] == "implicit-euler");
+  CHECK(summary["integrator"] == "equilibrium");
+  CHECK(summary["status"] == "equilibrium");
+  CHECK(summary["stats"]["fallbacks"] == 0);
   const auto& c = summary["contact"];
   REQUIRE(c.is_object());
   CHECK(c["points"].get<int>() > 0);

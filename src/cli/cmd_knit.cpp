@@ -710,7 +710,7 @@ void register_knit_command(CLI::App& app) {
       ->allow_extra_args(false)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_option("--integrator", args->integrator,
-                  "Integrator (knitsim list integrators); default cvode-bdf, implicit-euler with "
+                  "Integrator (knitsim list integrators); default cvode-bdf, equilibrium with "
                   "knit.contact > 0");
   CLI::Option* velocity_atol = add_run_options(cmd, args->options);
   velocity_atol->description(velocity_atol->get_description() +

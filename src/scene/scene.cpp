@@ -374,7 +374,7 @@ std::string scene_description(const std::string& toml_text) {
 std::string default_integrator() { return "equilibrium"; }
 
 std::string default_knit_integrator(bool yarn_contact) {
-  return yarn_contact ? "implicit-euler" : "cvode-bdf";
+  return yarn_contact ? "equilibrium" : "cvode-bdf";
 }
 
 namespace {

@@ -94,9 +94,10 @@ std::string scene_description(const std::string& toml_text);
 std::string default_integrator();
 // The knit model's: cvode-bdf, which keeps a flat chart in its plane; on paper 2's network (a
 // mechanism, its stiffness singular) the overdamped flow of `equilibrium` crawls along the zero
-// modes (docs/knit.md, "Out-of-plane bending"). With yarn contact: implicit-euler, whose steps
+// modes (docs/knit.md, "Out-of-plane bending"). With yarn contact: equilibrium, whose flow steps
 // the contact's filter cuts (cvode-bdf crawls on the barrier's stiff, lightly damped modes and
-// restarts at each renewal of the contact points: docs/knit.md, "Yarn contact").
+// restarts at each renewal of the contact points; implicit-euler lets an unpinned chart slide:
+// docs/knit.md, "Yarn contact").
 std::string default_knit_integrator(bool yarn_contact = false);
 
 // One drape run and the quantities every report of it shows.
