@@ -95,8 +95,13 @@ CourseGeometry course_geometry(const KnitModel& m, const std::vector<Vec3>& x, i
     f.ey = unit(x[m.loops[l].upper] - f.B);
     Vec3 d{1.0, 0.0, 0.0};
     if (W > 1) d = g.frames[std::min(i + 1, W - 1)].B - g.frames[std::max(i - 1, 0)].B;
+    // Planar (no out-of-plane bending): e_x is e_y turned by -90 degrees in the plane, so n = +z
+    // always; from d, a loop whose e_y turns past the course direction (its upper point pulled
+    // below its base) would be mirrored through the fabric (n = -z), its yarn jumping through its
+    // neighbours.
     Vec3 ex = d - dot(d, f.ey) * f.ey;
-    if (!(norm(ex) > 1e-12 * norm(d))) ex = cross(f.ey, Vec3{0.0, 0.0, 1.0});  // degenerate
+    if (!m.params.out_of_plane_bending() || !(norm(ex) > 1e-12 * norm(d)))
+      ex = cross(f.ey, Vec3{0.0, 0.0, 1.0});
     f.ex = unit(ex);
     f.n = cross(f.ex, f.ey);
   }

@@ -94,8 +94,12 @@
 //   B    the loop's lower point (knit) or, for tucks and misses, the linear interpolation
 //        between the nearest knits' lower points of the course;
 //   e_y  unit(U - B) (knit, tuck); for a miss interpolated like B;
-//   e_x  unit component of B(i+1) - B(i-1) orthogonal to e_y (one-sided at the edges);
-//   n    e_x x e_y (+z at rest: towards the viewer of the front view).
+//   e_x  e_y x z, e_y turned -90 degrees in the plane (the planar model, knit.bending = 0); with
+//        the out-of-plane bending the unit component of B(i+1) - B(i-1) orthogonal to e_y
+//        (one-sided at the edges). The two agree at rest and while no loop's e_y turns past
+//        the course direction; past it the second mirrors the loop through the fabric (random
+//        chart 014: a top-course tuck's head jumped from 3.3 r behind to 4 r in front);
+//   n    e_x x e_y (+z at rest: towards the viewer of the front view; always +z when planar).
 // Knit loop, with P = U(i,j):
 //   T1 = B - r e_x,  T7 = B + r e_x                (feet, z = 0)
 //   T3 = P - 3r e_x, T5 = P + 3r e_x, T4 = P + r e_y - r n   (head, behind)

@@ -313,6 +313,32 @@ TEST_CASE("type-value points reproduce the SPEC 2.9 rest geometry exactly") {
   CHECK_THROWS_AS(type_value_points(t, std::vector<Vec3>(3)), std::invalid_argument);
 }
 
+TEST_CASE("planar: a loop whose upper point falls below its base turns in the plane, never "
+          "through the fabric") {
+  // The tuck of KKKKK / KTKMK / KKKKK hangs from U = P(1, 2); pull U 3 h down, below the tuck's
+  // base B (the course-1 knits' lower points interpolated). Its head stays behind the face
+  // (T4.z = -(r + 3r + 2r back), as at rest): n stays +z and the loop turns by 180 degrees. With
+  // the out-of-plane bending the frame follows B(i+1) - B(i-1) and mirrors it in front.
+  for (const double bending : {0.0, 1.0}) {
+    KnitParams p;
+    p.bending_ratio = bending;
+    const KnitModel t = model_of("KKKKK\nKTKMK\nKKKKK\n", p);
+    const double r = p.loop_radius, h = 7.0 * r;
+    std::vector<Vec3> x = t.rest_positions();
+    const KnitLoop& tuck = t.loops[t.loop(1, 1)];
+    const double rest_head = type_value_points(t, x)[t.loop(1, 1)].t[3].z;  // k = 4 (no T1)
+    CHECK(rest_head < -2.0 * r);
+    x[tuck.upper].y -= 3.0 * h;
+    const LoopTypeValues tv = type_value_points(t, x)[t.loop(1, 1)];
+    REQUIRE(tv.k[3] == 4);
+    INFO("bending " << bending << ": head z " << tv.t[3].z / r << " r");
+    if (bending == 0.0)
+      CHECK(tv.t[3].z == Approx(rest_head).epsilon(1e-12));
+    else
+      CHECK(tv.t[3].z > 2.0 * r);
+  }
+}
+
 TEST_CASE("plain jersey intermeshes: the head of loop (i,j-1) links through loop (i,j)") {
   // In the front view (x, y) the yarn of course 1 crosses the upper part T2..T6 of loop
   // (1,0) (its upper legs and head) four times; walking along it from left to right the old

@@ -78,12 +78,20 @@ TEST_CASE("plain jersey at rest: clearance 1.212 r, crossings invariant under ri
   CHECK(crossings.size() == 160);
   CHECK(check_crossings(crossings, lines).changed == 0);
 
-  // A rigid motion changes no clearance; one in the plane, or a slight tilt, no crossing's order.
+  // A rigid motion changes no clearance: one in the plane for the default (planar) model, one in
+  // space with the out-of-plane bending (whose loop frames follow the points out of the plane);
+  // one in the plane, or a slight tilt of the yarns, no crossing's order.
   const Vec3 shift{3e-3, -1e-3, 2e-3};
   std::vector<Vec3> moved = rest;
-  const Vec3 axis = (1.0 / std::sqrt(3.0)) * Vec3{1, 1, 1};
-  for (Vec3& p : moved) p = rotate(p, axis, 0.7) + shift;
+  for (Vec3& p : moved) p = rotate(p, Vec3{0, 0, 1}, 0.7) + Vec3{shift.x, shift.y, 0.0};
   CHECK(yarn_clearance(m, yarn_polylines(m, moved)).over_r == Approx(c.over_r).epsilon(1e-9));
+  KnitParams bent;
+  bent.bending_ratio = 1.0;
+  const KnitModel mb = build_knit(parse_knit_chart(chart_file("plain_jersey.chart")), bent);
+  const Vec3 axis = (1.0 / std::sqrt(3.0)) * Vec3{1, 1, 1};
+  moved = rest;
+  for (Vec3& p : moved) p = rotate(p, axis, 0.7) + shift;
+  CHECK(yarn_clearance(mb, yarn_polylines(mb, moved)).over_r == Approx(c.over_r).epsilon(1e-9));
   YarnPolylines in_plane = lines;
   for (auto& course : in_plane.vertices)
     for (Vec3& p : course) p = rotate(rotate(p, Vec3{0, 0, 1}, 0.7), Vec3{1, 0, 0}, 0.05) + shift;
