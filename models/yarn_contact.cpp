@@ -296,10 +296,9 @@ PointTurn turned(const ContactPoint& point, const std::vector<Vec3>& particles) 
   }
   Vec3 wg2q{};  // sum_i W_i G2 q_i
   for (int i = 0; i < kContactParticles && point.particles[i] >= 0; ++i) {
-    const Vec3& x = particles[point.particles[i]];
-    const double qx = t.c * x.x + t.s * x.y, qy = -t.s * x.x + t.c * x.y;
-    t.u = t.u + times(point.weights[i], qx, qy);
-    if (t.turns) wg2q = wg2q + times(point.weights[i], -qy, qx);
+    const Vec3 q = rotate(t.c, -t.s, particles[point.particles[i]]);  // R^T x_i
+    t.u = t.u + times(point.weights[i], q.x, q.y);
+    if (t.turns) wg2q = wg2q + times(point.weights[i], -q.y, q.x);
   }
   if (t.turns) t.a = Vec3{-t.u.y, t.u.x, 0.0} - wg2q;
   return t;
@@ -331,11 +330,6 @@ std::array<double, 6> jacobian(const ContactPoint& point, const PointTurn& t, in
 Vec3 position_of(const ContactPoint& point, const std::vector<Vec3>& particles) {
   const PointTurn t = turned(point, particles);
   return rotate(t.c, t.s, t.u);
-}
-
-std::array<double, 6> point_jacobian(const ContactPoint& point, const std::vector<Vec3>& particles,
-                                     int i) {
-  return jacobian(point, turned(point, particles), i);
 }
 
 void ContactNetwork::positions(double t, const double* x) const {
@@ -558,9 +552,8 @@ void ContactNetwork::stiffness_values(double t, const double* x, double* values)
       // m = (G W - W G2)^T g~: G W has rows (-W_y, W_x, 0), W G2 columns (W_col1, -W_col0).
       const double m0 = -W[2] * gt.x + W[0] * gt.y - (W[1] * gt.x + W[3] * gt.y + W[5] * gt.z);
       const double m1 = -W[3] * gt.x + W[1] * gt.y + (W[0] * gt.x + W[2] * gt.y + W[4] * gt.z);
-      const Vec3& xi = pos_[pt.particles[i]];
-      const double qx = tk.c * xi.x + tk.s * xi.y, qy = -tk.s * xi.x + tk.c * xi.y;
-      c -= m0 * -qy + m1 * qx;  // m . G2 q
+      const Vec3 q = rotate(tk.c, -tk.s, pos_[pt.particles[i]]);  // R^T x_i
+      c -= m0 * -q.y + m1 * q.x;                                  // m . G2 q
       n[i][0] = tk.c * m0 - tk.s * m1;
       n[i][1] = tk.s * m0 + tk.c * m1;
       turn_gradient(pt, tk, i, gr[i][0], gr[i][1]);
@@ -595,10 +588,12 @@ double ContactNetwork::admissible_step(double t, const double* x, const double* 
   for (std::size_t k = 0; k < spec_.points.size(); ++k) turn0[k] = turn_angle(static_cast<int>(k));
   // The points at fraction s of the (capped) step, into pts_.
   std::vector<double> y(x, x + dof());
-  double cap = 1.0;
+  double cap = 1.0, at = -1.0;  // at: the fraction pts_ holds
   auto points_at = [&](double s) {
+    if (s == at) return;
     for (int i = 0; i < dof(); ++i) y[i] = x[i] + s * cap * dx[i];
     positions(t, y.data());
+    at = s;
   };
   points_at(1.0);
   double longest = 0.0;
@@ -613,6 +608,7 @@ double ContactNetwork::admissible_step(double t, const double* x, const double* 
   // points stray less from their exact positions within one step).
   if (longest > spec_.step_cap) {
     cap = spec_.step_cap / longest;
+    at = -1.0;
     points_at(1.0);
   }
   // Co-rotated points move on curves: the step is swept as chords between exact states, each
@@ -630,7 +626,7 @@ double ContactNetwork::admissible_step(double t, const double* x, const double* 
   double fraction = 1.0;
   std::vector<Vec3> from = start, move(start.size());
   for (int c = 0; c < chords; ++c) {
-    if (chords > 1) points_at(double(c + 1) / chords);
+    points_at(double(c + 1) / chords);
     for (std::size_t k = 0; k < pts_.size(); ++k) move[k] = pts_[k] - from[k];
     const double f = sweep_fraction(from, move, spec_.filter_keep);
     if (f < 1.0) {

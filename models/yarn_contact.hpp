@@ -123,10 +123,6 @@ struct PointTurn {
 
 // p(x) of a contact point (plain or co-rotated), given the positions of all particles (m).
 Vec3 position_of(const ContactPoint& point, const std::vector<Vec3>& particles);
-// dp/dx_i,xy of the point's particle i (the i-th of `particles`), 3 x 2 row-major, at the given
-// positions of all particles.
-std::array<double, 6> point_jacobian(const ContactPoint& point, const std::vector<Vec3>& particles,
-                                     int i);
 
 struct YarnContactSpec {
   std::vector<ContactPoint> points;
