@@ -93,15 +93,18 @@ CourseGeometry course_geometry(const KnitModel& m, const std::vector<Vec3>& x, i
     if (l < 0) continue;  // misses: interpolated below
     Frame& f = g.frames[i];
     f.ey = unit(x[m.loops[l].upper] - f.B);
-    Vec3 d{1.0, 0.0, 0.0};
-    if (W > 1) d = g.frames[std::min(i + 1, W - 1)].B - g.frames[std::max(i - 1, 0)].B;
     // Planar (no out-of-plane bending): e_x is e_y turned by -90 degrees in the plane, so n = +z
-    // always; from d, a loop whose e_y turns past the course direction (its upper point pulled
+    // always; from the course direction d, a loop whose e_y turns past it (its upper point pulled
     // below its base) would be mirrored through the fabric (n = -z), its yarn jumping through its
-    // neighbours.
-    Vec3 ex = d - dot(d, f.ey) * f.ey;
-    if (!m.params.out_of_plane_bending() || !(norm(ex) > 1e-12 * norm(d)))
-      ex = cross(f.ey, Vec3{0.0, 0.0, 1.0});
+    // neighbours. With the bending the points leave the plane and e_x follows d (the planar e_x
+    // where d is degenerate).
+    Vec3 ex = cross(f.ey, Vec3{0.0, 0.0, 1.0});
+    if (m.params.out_of_plane_bending()) {
+      Vec3 d{1.0, 0.0, 0.0};
+      if (W > 1) d = g.frames[std::min(i + 1, W - 1)].B - g.frames[std::max(i - 1, 0)].B;
+      const Vec3 across = d - dot(d, f.ey) * f.ey;
+      if (norm(across) > 1e-12 * norm(d)) ex = across;
+    }
     f.ex = unit(ex);
     f.n = cross(f.ex, f.ey);
   }
