@@ -92,6 +92,15 @@ CourseGeometry course_geometry(const KnitModel& m, const std::vector<Vec3>& x, i
     const int l = m.loop(i, j);
     if (l < 0) continue;  // misses: interpolated below
     Frame& f = g.frames[i];
+    // Planar tuck: the frame of the course between its knits, not of U - B, which the held loop
+    // shrinks to zero in the top course (see the header).
+    if (m.chart.at(i, j) == Stitch::Tuck && !m.params.out_of_plane_bending()) {
+      const Vec3 d = g.frames[right[i]].B - g.frames[left[i]].B;
+      f.ex = unit(Vec3{d.x, d.y, 0.0});
+      f.ey = cross(Vec3{0.0, 0.0, 1.0}, f.ex);
+      f.n = cross(f.ex, f.ey);
+      continue;
+    }
     f.ey = unit(x[m.loops[l].upper] - f.B);
     // Planar (no out-of-plane bending): e_x is e_y turned by -90 degrees in the plane, so n = +z
     // always; from the course direction d, a loop whose e_y turns past it (its upper point pulled

@@ -93,12 +93,15 @@
 // a fixed function of the current points. Per course and wale a local frame (B, e_x, e_y, n):
 //   B    the loop's lower point (knit) or, for tucks and misses, the linear interpolation
 //        between the nearest knits' lower points of the course;
-//   e_y  unit(U - B) (knit, tuck); for a miss interpolated like B;
-//   e_x  e_y x z, e_y turned -90 degrees in the plane (the planar model, knit.bending = 0); with
+//   e_y  unit(U - B) (knit; tuck with the bending); for a miss interpolated like B; for a tuck
+//        in the planar model z x e_x (below): a tuck's U is not tied to B by a spring, and in
+//        the top course the held loop pulls U down through B, where unit(U - B) turns the loop
+//        by 180 degrees (random charts 014 and 020: yarns through each other mid-run);
+//   e_x  e_y x z, e_y turned -90 degrees in the plane (the planar model, knit.bending = 0); for a
+//        planar tuck the in-plane unit direction between the knits its B interpolates; with
 //        the out-of-plane bending the unit component of B(i+1) - B(i-1) orthogonal to e_y
-//        (one-sided at the edges). The two agree at rest and while no loop's e_y turns past
-//        the course direction; past it the second mirrors the loop through the fabric (random
-//        chart 014: a top-course tuck's head jumped from 3.3 r behind to 4 r in front);
+//        (one-sided at the edges). All agree at rest; with the bending, a loop whose e_y turns
+//        past the course direction is mirrored through the fabric (the planar e_x's reason);
 //   n    e_x x e_y (+z at rest: towards the viewer of the front view; always +z when planar).
 // Knit loop, with P = U(i,j):
 //   T1 = B - r e_x,  T7 = B + r e_x                (feet, z = 0)

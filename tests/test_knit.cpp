@@ -313,12 +313,16 @@ TEST_CASE("type-value points reproduce the SPEC 2.9 rest geometry exactly") {
   CHECK_THROWS_AS(type_value_points(t, std::vector<Vec3>(3)), std::invalid_argument);
 }
 
-TEST_CASE("planar: a loop whose upper point falls below its base turns in the plane, never "
-          "through the fabric") {
-  // The tuck of KKKKK / KTKMK / KKKKK hangs from U = P(1, 2); pull U 3 h down, below the tuck's
-  // base B (the course-1 knits' lower points interpolated). Its head stays behind the face
-  // (T4.z = -(r + 3r + 2r back), as at rest): n stays +z and the loop turns by 180 degrees. With
-  // the out-of-plane bending the frame follows B(i+1) - B(i-1) and mirrors it in front.
+TEST_CASE(
+    "planar: a tuck's frame follows its course, so a tuck whose upper point passes its "
+    "base neither turns nor goes through the fabric") {
+  // The tuck of KKKKK / KTKMK / KKKKK hangs from U = P(1, 2); pull U down past the tuck's base
+  // B (the course-1 knits' lower points interpolated), as the held loop pulls a top-course
+  // tuck's U. Planar: the frame comes from the course direction, so the tuck's points follow U
+  // continuously (U at B +/- 0.01 h: points within 0.03 h, where e_y = unit(U - B) turned the
+  // loop by 180 degrees), and 3 h below B its head is still behind the face and its head's left
+  // point still on the left. With the out-of-plane bending the frame is unit(U - B) and the
+  // component of B(i+1) - B(i-1) across it, which mirrors the loop in front.
   for (const double bending : {0.0, 1.0}) {
     KnitParams p;
     p.bending_ratio = bending;
@@ -326,16 +330,30 @@ TEST_CASE("planar: a loop whose upper point falls below its base turns in the pl
     const double r = p.loop_radius, h = 7.0 * r;
     std::vector<Vec3> x = t.rest_positions();
     const KnitLoop& tuck = t.loops[t.loop(1, 1)];
-    const double rest_head = type_value_points(t, x)[t.loop(1, 1)].t[3].z;  // k = 4 (no T1)
-    CHECK(rest_head < -2.0 * r);
-    x[tuck.upper].y -= 3.0 * h;
-    const LoopTypeValues tv = type_value_points(t, x)[t.loop(1, 1)];
-    REQUIRE(tv.k[3] == 4);
-    INFO("bending " << bending << ": head z " << tv.t[3].z / r << " r");
-    if (bending == 0.0)
-      CHECK(tv.t[3].z == Approx(rest_head).epsilon(1e-12));
-    else
-      CHECK(tv.t[3].z > 2.0 * r);
+    const LoopTypeValues rest = type_value_points(t, x)[t.loop(1, 1)];
+    REQUIRE(rest.k[3] == 4);  // no T1
+    CHECK(rest.t[3].z < -2.0 * r);
+    const Vec3 base = 0.5 * (x[t.loops[t.loop(0, 1)].lower] + x[t.loops[t.loop(2, 1)].lower]);
+    auto tuck_at = [&](double dy) {
+      std::vector<Vec3> moved = x;
+      moved[tuck.upper].y = base.y + dy;
+      return type_value_points(t, moved)[t.loop(1, 1)];
+    };
+    if (bending == 0.0) {
+      const LoopTypeValues above = tuck_at(0.01 * h), below = tuck_at(-0.01 * h);
+      double jump = 0.0;
+      for (size_t k = 0; k < above.t.size(); ++k)
+        jump = std::max(jump, norm(above.t[k] - below.t[k]));
+      CHECK(jump < 0.03 * h);
+    }
+    const LoopTypeValues low = tuck_at(-3.0 * h);
+    INFO("bending " << bending << ": head z " << low.t[3].z / r << " r");
+    if (bending == 0.0) {
+      CHECK(low.t[3].z == Approx(rest.t[3].z).epsilon(1e-12));
+      CHECK(low.t[2].x < low.t[4].x);  // T3 left of T5
+    } else {
+      CHECK(low.t[3].z > 2.0 * r);
+    }
   }
 }
 
