@@ -286,8 +286,8 @@ void KnitParams::validate() const {
     bad("knit.contact", contact_ratio, "must be in [0, 100]");
   if (contact_ratio > 0.0 && bending_ratio > 0.0 && !mechanism())
     bad("knit.bending", bending_ratio,
-        "must be 0 with knit.contact > 0 (the contact keeps the chart in its plane; set "
-        "knit.contact=0 to bend it out of the plane)");
+        "must be 0 with knit.contact > 0 (the contact, on by default, keeps the chart in its "
+        "plane; set knit.contact=0 to bend it out of the plane)");
   if (max_points < 1) bad("max_points", static_cast<double>(max_points), "must be >= 1");
 }
 

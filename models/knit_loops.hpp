@@ -140,7 +140,7 @@
 // experiments/random_charts; figures and limits: docs/knit.md, "Rest geometry of tucks and
 // misses".
 //
-// Yarn contact (knit.contact = c > 0; off by default; docs/knit.md, "Yarn contact"): the
+// Yarn contact (knit.contact = c > 0; c = 10 by default; docs/knit.md, "Yarn contact"): the
 // barrier of models/yarn_contact.hpp between the yarn polylines' rest vertices (below), each the
 // first-order Taylor map of its vertex about the rest state in the (x, y) of the (up to 8)
 // interlacing points it depends on most (weights by central differences at set-up, the rest
@@ -218,11 +218,11 @@ struct KnitParams {
   // default) = off: the chart stays in its plane. Needs the stabiliser (s > 0).
   double bending_ratio = 0.0;
   // c, dimensionless, in [0, 100]: the yarn contact's barrier stiffness kappa = c k_w (see
-  // "Yarn contact" above). 0 (the default) = off: on 2 of 50 random charts the centreline still
-  // comes closer than its contact points, and contact costs 4x the CPU on single_tuck and tucks40
-  // (docs/knit.md, "Yarn contact"). Contact needs the stabiliser and keeps the chart in its plane,
-  // so it excludes the out-of-plane bending.
-  double contact_ratio = 0.0;
+  // "Yarn contact" above); 10 (the default) keeps yarns a diameter apart on every committed and
+  // random chart (docs/knit.md, "Yarn contact"); 0 = off (about 4x less CPU, yarns may pass
+  // through each other). Contact needs the stabiliser (ignored without, like the paper
+  // network's) and keeps the chart in its plane, so knit.bending > 0 needs knit.contact = 0.
+  double contact_ratio = 10.0;
   long max_points = 4'000'000;  // refuse larger charts before allocating
 
   // Throws std::invalid_argument naming the field by its `knit --set` key (knit.loop_radius,

@@ -271,6 +271,30 @@ bool ContactNetwork::refresh(double t, const double* x) const {
   return true;
 }
 
+bool ContactNetwork::renew(double t, const double* x) {
+  if (yarn_begin_.empty() || !spec_.linearise) return false;
+  net_.all_positions(t, x, pos_);
+  for (const Vec3& p : pos_)
+    if (!is_finite(p)) return false;
+  const std::vector<Vec3> particles = pos_;
+  const std::vector<ContactPoint> old = spec_.points;
+  for (int y = 0; y + 1 < static_cast<int>(yarn_begin_.size()); ++y) {
+    const std::vector<ContactPoint> fresh = spec_.linearise(particles, y);
+    if (static_cast<int>(fresh.size()) != yarn_begin_[y + 1] - yarn_begin_[y])
+      throw std::logic_error("yarn contact: a renewed yarn has another number of points");
+    std::copy(fresh.begin(), fresh.end(), spec_.points.begin() + yarn_begin_[y]);
+  }
+  listed_at_.clear();
+  if (!(min_distance(t, x) > spec_.core)) {
+    spec_.points = old;
+    listed_at_.clear();
+    return false;
+  }
+  check_points();
+  renewed_at_ = particles;
+  return true;
+}
+
 namespace {
 
 Vec3 rotate(double c, double s, Vec3 u) { return {c * u.x - s * u.y, s * u.x + c * u.y, u.z}; }

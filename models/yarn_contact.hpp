@@ -171,6 +171,11 @@ class ContactNetwork final : public MechanicalSystem {
   double admissible_step(double t, const double* x, const double* dx) const override;
   bool refresh(double t, const double* x) const override;
   std::string describe() const override;
+  // Every yarn's points re-linearised about (t, x), whole (no step filter): for a run that
+  // starts from a saved state (--continue), whose points at rest would not stand for the yarn
+  // there. False, with the points left as they were, if the state is not finite, renewal is
+  // not set up, or the renewed points put a pair inside its core.
+  bool renew(double t, const double* x);
 
   const SpringNetwork& network() const { return net_; }
   const YarnContactSpec& contact() const { return spec_; }

@@ -326,6 +326,7 @@ TEST_CASE(
   for (const double bending : {0.0, 1.0}) {
     KnitParams p;
     p.bending_ratio = bending;
+    p.contact_ratio = 0.0;  // the bending leaves the plane the contact keeps
     const KnitModel t = model_of("KKKKK\nKTKMK\nKKKKK\n", p);
     const double r = p.loop_radius, h = 7.0 * r;
     std::vector<Vec3> x = t.rest_positions();
@@ -426,6 +427,7 @@ TEST_CASE("centrelines interpolate the yarn points and follow the deformed point
 TEST_CASE("knit Jacobian matches finite differences (tuck, miss, stacked tucks; bending)") {
   KnitParams bending;
   bending.bending_ratio = 1.0;
+  bending.contact_ratio = 0.0;
   for (const char* name : {"single_tuck.chart", "several_misses.chart", "several_tucks.chart"})
     for (const KnitParams& p : {paper_network(), bending}) {
       const KnitModel m = model_of(chart_file(name), p);
@@ -595,6 +597,7 @@ TEST_CASE("stabiliser: a plain chart stays at rest; shear and bending springs ha
 TEST_CASE("out-of-plane bending (knit.bending): only rigid zero modes; a flat tuck is a saddle") {
   KnitParams flat, bent;
   bent.bending_ratio = 1.0;
+  bent.contact_ratio = 0.0;
   CHECK(KnitParams{}.bending_ratio == 0.0);  // off by default: the chart stays in its plane
   const KnitModel plain_flat = model_of(chart_file("plain_jersey.chart"), flat);
   const KnitModel plain = model_of(chart_file("plain_jersey.chart"), bent);

@@ -51,7 +51,8 @@ TEST_CASE("knitsim knit: a small tuck chart settles and its outputs agree with t
   std::string err;
   const int status =
       run_knit("--chart '" + (tmp / "small.chart").string() +
-                   "' --set knit.stabiliser=0.1 --frames 3 --step-history --newton-solver ldl "
+                   "' --set knit.stabiliser=0.1 --set knit.contact=0 --frames 3 --step-history "
+                   "--newton-solver ldl "
                    "--max-order 3 --quiet --out '" +
                    out.string() + "'",
                err);
@@ -65,11 +66,13 @@ TEST_CASE("knitsim knit: a small tuck chart settles and its outputs agree with t
 
   // --no-pictures: the same run without a PNG anywhere, the same points.
   const fs::path bare = tmp / "bare";
-  REQUIRE(run_knit("--chart '" + (tmp / "small.chart").string() +
-                       "' --set knit.stabiliser=0.1 --frames 3 --newton-solver ldl --max-order 3 "
-                       "--no-pictures --quiet --out '" +
-                       bare.string() + "'",
-                   err) == 0);
+  REQUIRE(run_knit(
+              "--chart '" + (tmp / "small.chart").string() +
+                  "' --set knit.stabiliser=0.1 --set knit.contact=0 --frames 3 --newton-solver ldl "
+                  "--max-order 3 "
+                  "--no-pictures --quiet --out '" +
+                  bare.string() + "'",
+              err) == 0);
   for (const auto& e : fs::recursive_directory_iterator(bare))
     CHECK(e.path().extension() != ".png");
   CHECK(fs::exists(bare / "frames/centerlines_002.vtk"));
@@ -77,6 +80,7 @@ TEST_CASE("knitsim knit: a small tuck chart settles and its outputs agree with t
 
   KnitParams p;
   p.stabiliser_ratio = 0.1;
+  p.contact_ratio = 0.0;
   const KnitModel m = build_knit(parse_knit_chart(chart_text), p);
   const auto summary = nlohmann::json::parse(slurp(out / "summary.json"));
   CHECK(summary["status"] == "equilibrium");
@@ -161,12 +165,13 @@ TEST_CASE(
     "summary reports the contact") {
   const TempDir tmp("knit-contact");
   std::string err;
-  REQUIRE(run_small_chart(tmp, "--no-pictures", err) == 0);
+  REQUIRE(run_small_chart(tmp, "--no-pictures --set knit.contact=0", err) == 0);
   auto summary = nlohmann::json::parse(slurp(tmp.path / "out" / "summary.json"));
   CHECK(summary["integrator"] == "cvode-bdf");
   CHECK(summary["contact"].is_null());
-  REQUIRE(run_small_chart(tmp, "--no-pictures --set knit.contact=10", err) == 0);
+  REQUIRE(run_small_chart(tmp, "--no-pictures", err) == 0);  // contact on by default
   summary = nlohmann::json::parse(slurp(tmp.path / "out" / "summary.json"));
+  CHECK(summary["params"]["contact_ratio"] == 10.0);
   CHECK(summary["integrator"] == "equilibrium");
   CHECK(summary["status"] == "equilibrium");
   CHECK(summary["stats"]["fallbacks"] == 0);
@@ -177,6 +182,12 @@ TEST_CASE(
   CHECK(c["renewals_cut"] == 0);
   CHECK(c["min_point_distance_over_r"].get<double>() > kContactCore);
   CHECK(summary["yarn"]["clearance_min_over_r"].get<double>() >= 0.9);
+  // The equilibrium solver's flow leaves t at 0: the frames run over its checks, the end last
+  // (they used to be the start and the first check only).
+  const auto& frames = summary["frames"];
+  REQUIRE(frames.size() == 4);  // --frames' default
+  CHECK(frames.back()["check"].get<int>() == summary["stats"]["steps"].get<int>());
+  CHECK(frames.back()["max_displacement_over_r"] == summary["max_displacement_over_r"]);
   REQUIRE(run_small_chart(tmp,
                           "--no-pictures --set knit.contact=10 --integrator verlet "
                           "--set run.t_max=1e-5",

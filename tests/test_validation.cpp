@@ -274,8 +274,8 @@ TEST_CASE("an integrator option refused at run start names its flag and leaves n
   TempDir tmp("validation-run-start");
   const fs::path chart = tmp.path / "c.chart";
   std::ofstream(chart) << "KKK\nKTK\nKKK\n";
-  for (const std::string& cmd :
-       {std::string("drape --integrator cvode-bdf"), "knit --chart '" + chart.string() + "'"}) {
+  for (const std::string& cmd : {std::string("drape --integrator cvode-bdf"),
+                                 "knit --integrator cvode-bdf --chart '" + chart.string() + "'"}) {
     expect_bad_input(cmd + " --max-order 9 --out '" + (tmp.path / "o").string() + "'",
                      "--max-order = 9: must be in 0..5 for cvode-bdf", tmp);
     CHECK(!fs::exists(tmp.path / "o"));

@@ -472,7 +472,10 @@ TEST_CASE("yarn contact: refused with the paper's network's absence and with ben
   p.network = KnitNetwork::Paper;  // paper 2's network has no contact
   CHECK_FALSE(p.yarn_contact());
   CHECK(chart_model("single_tuck.chart", p).contact == nullptr);
-  CHECK(chart_model("single_tuck.chart", KnitParams{}).contact == nullptr);  // off by default
+  CHECK(chart_model("single_tuck.chart", KnitParams{}).contact != nullptr);  // on by default
+  p = KnitParams{};
+  p.contact_ratio = 0.0;
+  CHECK(chart_model("single_tuck.chart", p).contact == nullptr);
 }
 
 TEST_CASE("yarn contact: single_tuck relaxed with contact keeps its yarns apart", "[contact]") {

@@ -87,6 +87,7 @@ TEST_CASE("plain jersey at rest: clearance 1.212 r, crossings invariant under ri
   CHECK(yarn_clearance(m, yarn_polylines(m, moved)).over_r == Approx(c.over_r).epsilon(1e-9));
   KnitParams bent;
   bent.bending_ratio = 1.0;
+  bent.contact_ratio = 0.0;
   const KnitModel mb = build_knit(parse_knit_chart(chart_file("plain_jersey.chart")), bent);
   const Vec3 axis = (1.0 / std::sqrt(3.0)) * Vec3{1, 1, 1};
   moved = rest;

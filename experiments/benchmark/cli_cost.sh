@@ -33,7 +33,7 @@ import statistics, subprocess, sys, time
 exe, n, out, chart = sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4]
 cases = {"drape four_corner": ["drape", "--quiet"],
          "drape two_corner": ["drape", "--scene", "two_corner", "--quiet"],
-         "knit single_tuck": ["knit", "--chart", chart, "--quiet"]}
+         "knit single_tuck": ["knit", "--chart", chart, "--set", "knit.contact=0", "--quiet"]}
 print("case,median_wall_ms_pictures,median_wall_ms_no_pictures,ratio")
 for name, args in cases.items():
     wall = {"pictures": [], "no_pictures": []}

@@ -33,13 +33,15 @@ ERROR_LEVELS = [1e-3, 1e-5, 1e-7, 1e-9]  # m, accuracy levels of best.csv
 POSITION_TOLS = [1e-4, 1e-6, 1e-8, 1e-10]
 
 
-# knit_contact: the same chart with the yarn-contact barrier (docs/knit.md "Yarn contact").
+# knit: the stabilised network without contact; knit_contact: the same chart with the
+# yarn-contact barrier at its default stiffness (docs/knit.md "Yarn contact"), both named.
+NO_CONTACT = ["--set", "knit.contact=0"]
 CONTACT = ["--set", "knit.contact=10"]
 
 
 def scene_args(scene):
     if scene == "knit":
-        return ["knit", "--chart", CHART]
+        return ["knit", "--chart", CHART] + NO_CONTACT
     if scene == "knit_contact":
         return ["knit", "--chart", CHART] + CONTACT
     return ["drape", "--scene", scene]

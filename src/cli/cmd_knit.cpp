@@ -34,11 +34,12 @@
 // frame is the rest state, the last usually the end state); most of the writing's cost is the
 // pictures (--no-pictures skips them).
 // Frames: the start and states at the residual checks of the run, --frames of them evenly
-// spaced in log time (first = the start, then from the first check to the last). The recorder
+// spaced in log time (first = the start, then from the first check to the last; the equilibrium
+// solver, whose flow leaves t where it started, in log of the check's count). The recorder
 // keeps a check's state when log t has advanced by `spacing` since the last kept one; past
 // 2 x frames states it drops every other one and doubles `spacing`, so memory is bounded
-// whatever the number of checks. summary.json lists each frame's t, residual and largest
-// displacement.
+// whatever the number of checks. summary.json lists each frame's check, t, residual and
+// largest displacement.
 //
 // Network: the stabilised default or, by knit.network = paper (or knit.stabiliser = 0), paper 2's
 // bare network, which prints one warning line (a mechanism: its steady state depends on the
@@ -213,13 +214,20 @@ class FrameRecorder final : public RunObserver {
     double t = 0.0;
     double residual = 0.0;
     std::vector<double> x;  // free dofs
+    long check = 0;         // 0: the start; k: the k-th residual check
+    double clock = 0.0;     // t, or the check where t stands still (the equilibrium solver)
   };
 
   FrameRecorder(int frames, RunObserver* next) : frames_(frames), next_(next) {}
 
+  // Checks are kept log-spaced in t; the equilibrium solver's flow does not advance t, and its
+  // checks are log-spaced in their count.
   void record(double t, const double* x, int n, double residual) {
-    last_ = {t, residual, std::vector<double>(x, x + n)};
-    if (kept_.size() < 2 || std::log(t / kept_.back().t) >= spacing_) kept_.push_back(last_);
+    const long check = kept_.empty() ? 0 : last_.check + 1;
+    const double clock = kept_.empty() || t != kept_.front().t ? t : static_cast<double>(check);
+    last_ = {t, residual, std::vector<double>(x, x + n), check, clock};
+    if (kept_.size() < 2 || std::log(clock / kept_.back().clock) >= spacing_)
+      kept_.push_back(last_);
     if (static_cast<int>(kept_.size()) > 2 * frames_ + 1) {
       std::vector<Frame> half{std::move(kept_[0])};  // the start, then every other check
       for (size_t k = 1; k < kept_.size(); k += 2) half.push_back(std::move(kept_[k]));
@@ -236,7 +244,7 @@ class FrameRecorder final : public RunObserver {
   // `frames` states evenly spaced over the recorded checks, the last check included.
   std::vector<Frame> frames() const {
     std::vector<Frame> all = kept_;
-    if (all.back().t != last_.t) all.push_back(last_);
+    if (all.back().check != last_.check) all.push_back(last_);
     if (static_cast<int>(all.size()) <= frames_) return all;
     std::vector<Frame> out;
     for (int k = 0; k < frames_; ++k) {
@@ -362,6 +370,7 @@ struct KnitMeasures {
   double end_clearance = 0.0;
   YarnClearance min_clearance;  // over the measured states of the run, start and end included
   double t_min_clearance = 0.0;
+  long check_min_clearance = 0;  // the residual check of the minimum (0: the start)
   int measured_states = 0;
   double measure_cpu_seconds = 0.0;  // the clearance over the run, inside stats.cpu_seconds
   double min_resolution = 0.0;  // 2 A tau: a deeper dip between measured states would be seen
@@ -372,6 +381,7 @@ nlohmann::json measures_json(const KnitMeasures& k) {
   const YarnClearance& c = k.min_clearance;
   return {{"clearance_min_over_r", c.over_r},
           {"clearance_min_t", k.t_min_clearance},
+          {"clearance_min_check", k.check_min_clearance},
           {"clearance_min_courses", {c.a.course, c.b.course}},
           {"clearance_min_where", {c.where.x, c.where.y, c.where.z}},
           {"clearance_end_over_r", k.end_clearance},
@@ -470,13 +480,16 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
     std::snprintf(stem, sizeof stem, "%03zu", f);
     const std::vector<Vec3> fp = all_points(m, frames[f].t, frames[f].x);
     const std::vector<CurveSamples>& fl = centerlines_of(fp);
-    const std::string label = name + ": frame " + stem + ", t = " + format_number(frames[f].t, 4) +
-                              " s, residual " + format_number(frames[f].residual, 3);
+    const std::string label = name + ": frame " + stem + ", check " +
+                              std::to_string(frames[f].check) +
+                              ", t = " + format_number(frames[f].t, 4) + " s, residual " +
+                              format_number(frames[f].residual, 3);
     write_file_atomic(dir / "frames" / (std::string("centerlines_") + stem + ".vtk"),
                       centerlines_vtk("knitsim knit " + label, fl));
     if (!args.no_pictures)
       render_front(dir / "frames" / (std::string("frame_") + stem + ".png"), m, fp, fl, label);
     frame_list.push_back({{"index", f},
+                          {"check", frames[f].check},
                           {"t", frames[f].t},
                           {"residual", frames[f].residual},
                           {"max_displacement_over_r", max_displacement_over_r(m, fp)}});
@@ -524,7 +537,8 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
                        "clearance_*_over_r 1: smallest segment-to-segment distance "
                        "between yarn centreline pieces of different courses (or one "
                        "course, >= pi r apart along it) / loop radius, 2 = at least 2; "
-                       "clearance_min_t s; clearance_min_where m; "
+                       "clearance_min_t s; clearance_min_check: its residual check (0: the "
+                       "start); clearance_min_where m; "
                        "clearance_min_resolution_over_r 1: a dip between measured "
                        "states shallower than this can be missed; "
                        "clearance_cpu_seconds s: the measuring inside the run, part of "
@@ -587,6 +601,13 @@ void run(const KnitArgs& args) {
                                   std::to_string(from.x.size()) + " unknowns; this chart has " +
                                   std::to_string(x.size()));
     t0 = from.t, x = from.x, v = from.v;
+    // The contact points were made at rest: linearised afresh about the saved state, they stand
+    // for the yarn there (the run goes on from the same state, not with the same points).
+    if (model.contact && !model.contact->renew(t0, x.data()))
+      throw std::invalid_argument("--continue " + args.continue_from +
+                                  ": the saved state's yarns lie inside the contact's core "
+                                  "(closer than " +
+                                  format_number(kContactCore, 3) + " r); it cannot go on");
   }
 
   const std::string name = fs::path(args.chart).stem().string();
@@ -628,6 +649,7 @@ void run(const KnitArgs& args) {
     clearance.observe(stats.t_final, x.data(), true);
     measures.min_clearance = clearance.minimum();
     measures.t_min_clearance = clearance.t_of_minimum();
+    measures.check_min_clearance = clearance.check_of_minimum();
     measures.measured_states = clearance.measured_states();
     measures.min_resolution = clearance.resolution_over_r();
     const std::vector<Vec3> end = all_points(model, stats.t_final, x);
@@ -650,8 +672,9 @@ void run(const KnitArgs& args) {
   if (measures.crossings.changed > 0 || measures.min_clearance.over_r < kClearanceWarning)
     warn("yarns overlap: clearance down to " + format_number(measures.min_clearance.over_r, 3) +
          " r (courses " + std::to_string(measures.min_clearance.a.course) + " and " +
-         std::to_string(measures.min_clearance.b.course) +
-         ", at t = " + format_number(measures.t_min_clearance, 3) + " s), " +
+         std::to_string(measures.min_clearance.b.course) + ", at check " +
+         std::to_string(measures.check_min_clearance) +
+         ", t = " + format_number(measures.t_min_clearance, 3) + " s), " +
          std::to_string(measures.crossings.changed) + " of " +
          std::to_string(measures.crossings.designed) +
          " designed crossings changed over/under order");
@@ -710,8 +733,8 @@ void register_knit_command(CLI::App& app) {
       ->allow_extra_args(false)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_option("--integrator", args->integrator,
-                  "Integrator (knitsim list integrators); default cvode-bdf, equilibrium with "
-                  "knit.contact > 0");
+                  "Integrator (knitsim list integrators); default equilibrium with yarn contact "
+                  "(knit.contact > 0, the default), else cvode-bdf");
   CLI::Option* velocity_atol = add_run_options(cmd, args->options);
   velocity_atol->description(velocity_atol->get_description() +
                              "; not given: 0.001 (stabilised network), or 0 (paper network)");

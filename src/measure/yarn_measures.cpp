@@ -274,6 +274,7 @@ void ClearanceOverRun::observe(double t, const double* x, bool force) {
   if (measured_ == 1 || std::isnan(c.over_r) || c.over_r < min_.over_r) {
     min_ = c;
     t_min_ = t;
+    check_min_ = checks_;
   }
 }
 
@@ -282,6 +283,7 @@ void ClearanceOverRun::on_step(double t, double h, int order) {
 }
 
 void ClearanceOverRun::on_check(double t, const double* x, const double* v, double residual) {
+  ++checks_;
   observe(t, x, false);
   if (next_) next_->on_check(t, x, v, residual);
 }

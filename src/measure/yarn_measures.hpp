@@ -113,6 +113,9 @@ class ClearanceOverRun final : public RunObserver {
   void on_check(double t, const double* x, const double* v, double residual) override;
   const YarnClearance& minimum() const { return min_; }
   double t_of_minimum() const { return t_min_; }
+  // The residual check of the minimum (0: the start): where t stands still (the equilibrium
+  // solver's flow) the only place of it.
+  long check_of_minimum() const { return check_min_; }
   int measured_states() const { return measured_; }
   double amplification() const { return amplification_; }  // A, see above; 0 before 2 states
   // 2 A tau: a dip below minimum() deeper than this would have been measured (see above), in r.
@@ -130,6 +133,7 @@ class ClearanceOverRun final : public RunObserver {
   YarnClearance last_clearance_;
   YarnClearance min_;
   double t_min_ = 0.0;
+  long checks_ = 0, check_min_ = 0;
   double amplification_ = 0.0;
   int measured_ = 0;
   double cpu_seconds_ = 0.0;
