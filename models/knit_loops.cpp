@@ -434,13 +434,14 @@ KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
                   B / (w * w * w));
         }
       }
-    // With the stencils the only zero-energy modes are the rigid motions: a chart without pins
-    // or gravity is certified on the rest (MechanicalSystem::free_floating).
-    spec.free_floating = B > 0.0;
   }
   // Without the bending stencils the model is planar: the plane holds the points with k_w
   // (SpringNetwork's "Planar"; the value only sets the z block's scale, as z stays 0).
   if (!p.out_of_plane_bending()) spec.plane_stiffness = p.wale_stiffness;
+  // The stabilised network's only zero-energy modes are its rigid motions (6 with the stencils,
+  // the 3 in the plane without): a chart without pins or gravity is certified on the rest
+  // (MechanicalSystem::free_floating, planar). Paper 2's mechanism has more.
+  spec.free_floating = !p.mechanism();
 
   const int count = static_cast<int>(points.size());
   const double total_mass = p.areal_density * 1e-3 * (W * w) * (C * h);  // kg

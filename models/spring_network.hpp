@@ -128,6 +128,7 @@ class SpringNetwork final : public MechanicalSystem {
   double residual_roundoff(double t, const double* x) const override;
   double equilibrium_start_time() const override { return pin_move_time_; }
   bool free_floating() const override;  // spec.free_floating, with no pins and no gravity
+  bool planar() const override { return spec_.plane_stiffness > 0.0; }
   bool project(double t, double* x, double* v) const override;
   double potential_energy(double t, const double* x) const override;
   std::string describe() const override;
@@ -167,7 +168,6 @@ class SpringNetwork final : public MechanicalSystem {
   };
 
  private:
-  bool planar() const { return spec_.plane_stiffness > 0.0; }
   Vec3 end_position(int particle, const double* x) const;
   Vec3 spring_vector(const Spring& s, const double* x) const;
   void update_pins(double t) const;

@@ -166,6 +166,7 @@ class ContactNetwork final : public MechanicalSystem {
   }
   double equilibrium_start_time() const override { return net_.equilibrium_start_time(); }
   bool free_floating() const override { return net_.free_floating(); }
+  bool planar() const override { return net_.planar(); }
   bool project(double t, double* x, double* v) const override { return net_.project(t, x, v); }
   double potential_energy(double t, const double* x) const override;
   double admissible_step(double t, const double* x, const double* dx) const override;

@@ -39,9 +39,10 @@ Eigen::VectorXd start_vector(int n) {
 
 // Six dofs of a free-floating state x (3 per particle) at which its rigid-body modes are
 // independent: the first pivots of a column-pivoted QR of the modes' transpose (3 translations
-// and 3 rotations about the centroid, each scaled to unit norm). Holding these dofs removes the
-// modes: K restricted to the others has K's nonzero inertia when the modes span its null space.
-std::vector<int> gauge_dofs(const double* x, int n) {
+// and 3 rotations about the centroid, each scaled to unit norm); three for a planar model (the
+// translations in x and y, the rotation about z). Holding these dofs removes the modes: K
+// restricted to the others has K's nonzero inertia when the modes span its null space.
+std::vector<int> gauge_dofs(const double* x, int n, bool planar) {
   const int particles = n / 3;
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
   for (int p = 0; p < particles; ++p) centroid += Eigen::Vector3d(x + 3 * p);
@@ -55,11 +56,13 @@ std::vector<int> gauge_dofs(const double* x, int n) {
       modes.block<1, 3>(3 + a, 3 * p) = u.transpose();
     }
   }
-  for (int k = 0; k < 6; ++k)
+  if (planar) modes = Eigen::MatrixXd(modes({0, 1, 5}, Eigen::all));  // x, y, about z
+  for (int k = 0; k < modes.rows(); ++k)
     if (modes.row(k).norm() > 0.0) modes.row(k).normalize();
   Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(modes);
   std::vector<int> dofs;
-  for (int k = 0; k < std::min(6, n); ++k) dofs.push_back(qr.colsPermutation().indices()[k]);
+  for (int k = 0; k < std::min(static_cast<int>(modes.rows()), n); ++k)
+    dofs.push_back(qr.colsPermutation().indices()[k]);
   return dofs;
 }
 
@@ -168,7 +171,7 @@ void StiffnessProbe::fill_stiffness(double t, const double* x) {
   // Rows and columns of the gauge dofs become those of a stiff support: zero off the diagonal,
   // K's largest diagonal entry on it (6 eigenvalues there, far from the smallest).
   const int n = sys_->dof();
-  gauge_ = gauge_dofs(x, n);
+  gauge_ = gauge_dofs(x, n, sys_->planar());
   std::vector<char> held(n, 0);
   for (int g : gauge_) held[g] = 1;
   double diagonal = 0.0;

@@ -10,11 +10,12 @@
 // floor (one solve against the forces' round-off, MechanicalSystem::residual_roundoff) where
 // that is larger, at a state where K is positive definite (LDL^T with no negative pivot).
 // A free-floating model (MechanicalSystem::free_floating: no pins, no external field) has the
-// 6 rigid-body modes in K's null space; they are factored out by holding 6 gauge dofs (where
-// the modes are independent) fixed in K, the forces and the Newton correction, so a free knit
-// chart is certified on its deformations. Where K is still singular (mechanism modes: its
-// smallest eigenvalue within n eps ||K||_inf of 0) the static residual decides
-// (equilibrium_threshold, solvers/integrator.hpp), and the certificate is inconclusive.
+// 6 rigid-body modes in K's null space (3 for a planar model: MechanicalSystem::planar); they are
+// factored out by holding as many gauge dofs (where the modes are independent) fixed in K, the
+// forces and the Newton correction, so a free knit chart is certified on its deformations. Where K
+// is still singular (mechanism modes: its smallest eigenvalue within n eps ||K||_inf of 0) the
+// static residual decides (equilibrium_threshold, solvers/integrator.hpp), and the certificate is
+// inconclusive.
 #pragma once
 
 #include <Eigen/SparseCore>

@@ -609,15 +609,17 @@ TEST_CASE("out-of-plane bending (knit.bending): only rigid zero modes; a flat tu
   CHECK(plain.network.static_residual(0.0, x.data()) < 1e-12);  // exactly at rest
   CHECK(plain.network.potential_energy(0.0, x.data()) == Approx(0.0).margin(1e-25));
   // Without the stencils the network is planar: the plane holds every point's z (k_p = k_w), so
-  // only the 3 in-plane rigid motions are zero modes; with them only the 6 rigid motions are, and
-  // a free chart declares them.
+  // only the 3 in-plane rigid motions are zero modes; with them only the 6 rigid motions are; a
+  // free chart declares them either way.
   CHECK(plain_flat.network.spec().plane_stiffness == flat.wale_stiffness);
   CHECK(plain.network.spec().plane_stiffness == 0.0);
   CHECK(plain_flat.network.describe().find("planar") != std::string::npos);
   CHECK(zero_modes(stiffness_spectrum(plain_flat.network, x)) == 3);
   CHECK(zero_modes(stiffness_spectrum(plain.network, x)) == 6);
   CHECK(plain.network.free_floating());
-  CHECK(!plain_flat.network.free_floating());
+  CHECK(!plain.network.planar());
+  CHECK(plain_flat.network.free_floating());
+  CHECK(plain_flat.network.planar());
   CHECK(plain.network.describe().find("124 bending stencils") != std::string::npos);
 
   // A tuck's flat steady state (every integrator keeps z = 0 from the flat start: no force has a

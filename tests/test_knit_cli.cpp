@@ -97,7 +97,9 @@ TEST_CASE("knitsim knit: a small tuck chart settles and its outputs agree with t
   CHECK(summary["points"] == m.points.size());
   CHECK(summary["springs"] == m.network.spec().springs.size());
   CHECK(summary["springs_by_kind"]["tuck"] == m.count(KnitSpringKind::Tuck));
-  CHECK(summary["residual"].get<double>() <= 1e-8);
+  // The free stabilised chart stops in positions, certified with its in-plane rigid motions held.
+  CHECK(summary["stats"]["certificate"] == "stable_minimum");
+  CHECK(summary["residual"].get<double>() <= 1e-6);
   CHECK(summary["frames"].size() == 3);
   CHECK(summary["frames"][0]["t"] == 0.0);
   // The yarn measures: the minimum over the run is no larger than the rest and end values,

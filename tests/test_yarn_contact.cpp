@@ -457,6 +457,12 @@ TEST_CASE("yarn contact: the equilibrium solver and implicit-euler stay outside 
     CHECK(s.fallbacks == 0);
     CHECK(s.steps < 60);
     CHECK(m.contact->min_distance(0.0, x.data()) > m.contact->contact().core);
+    // The free planar chart is certified on its deformations: its 3 in-plane rigid motions are
+    // held (MechanicalSystem::planar), the rest of K is positive definite (it was singular: the
+    // stop fell back to the static residual, certificate inconclusive).
+    CHECK(s.certificate == "stable_minimum");
+    CHECK(s.negative_pivots == 0);
+    CHECK(s.min_eigenvalue > s.eigenvalue_threshold);
   }
 }
 

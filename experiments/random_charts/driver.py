@@ -35,7 +35,8 @@ CSV = "random_charts.csv"
 FIELDS = ["chart", "seed", "tucks", "misses", "longest_float", "longest_hold", "tuck_stack",
           "miss_over_tuck", "exit_code", "status", "clearance_min_over_r",
           "clearance_end_over_r", "clearance_rest_over_r", "clearance_min_resolution_over_r",
-          "crossings_changed", "crossings_designed", "clearance_min_t", "max_displacement_over_r",
+          "crossings_changed", "crossings_designed", "clearance_min_t", "clearance_min_check",
+          "max_displacement_over_r",
           "t_final", "steps", "cpu_seconds", "run_cpu_seconds", "clearance_cpu_seconds",
           "wall_seconds", "error", "rows"]
 
@@ -86,7 +87,7 @@ def row_of(name, seed, chart, code, summary, stderr, cpu, wall):
         r["status"] = summary.get("status", stats.get("status", ""))
         for k in ("clearance_min_over_r", "clearance_end_over_r", "clearance_rest_over_r",
                   "clearance_min_resolution_over_r", "crossings_changed", "crossings_designed",
-                  "clearance_min_t", "clearance_cpu_seconds"):
+                  "clearance_min_t", "clearance_min_check", "clearance_cpu_seconds"):
             r[k] = yarn.get(k, "")
         r["max_displacement_over_r"] = summary.get("max_displacement_over_r", "")
         r["t_final"] = summary.get("t_final", "")

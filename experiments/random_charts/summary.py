@@ -14,9 +14,9 @@ from expkit import (md_table, median, num, percentile, provenance, read_json,  #
 
 STUDY = "random_charts"
 CSV = "random_charts.csv"
-# The same charts with yarn contact (run.sh -- --set knit.contact=10), its CSV and manifest
+# The same charts without yarn contact (run.sh -- --set knit.contact=0), its CSV and manifest
 # renamed: the second part of summary.md when present.
-CONTACT_CSV, CONTACT_MANIFEST = "random_charts_contact.csv", "manifest_contact.json"
+BARE_CSV, BARE_MANIFEST = "random_charts_no_contact.csv", "manifest_no_contact.json"
 WORST = 5
 WARN = 0.9  # r: knitsim's warning threshold and the clearance target
 
@@ -137,10 +137,11 @@ def worst_table(rows, key):
                     key=lambda r: (value(r, key), r["chart"]))[:WORST]
     return md_table(
         ["chart", "tucks", "misses", "misses above a tuck", "longest hold", "status",
-         "minimum clearance (r)", "at t (s)", "at the end (r)", "at rest (r)",
+         "minimum clearance (r)", "at check", "at t (s)", "at the end (r)", "at rest (r)",
          "resolution (r)", "crossings changed", "CPU (s)"],
         [[r["chart"], r["tucks"], r["misses"], r["miss_over_tuck"], r["longest_hold"],
-          r["status"], num(r["clearance_min_over_r"]), num(r["clearance_min_t"]),
+          r["status"], num(r["clearance_min_over_r"]), r.get("clearance_min_check") or "—",
+          num(r["clearance_min_t"]),
           num(r["clearance_end_over_r"]), num(r["clearance_rest_over_r"]),
           num(r["clearance_min_resolution_over_r"]), crossings(r), num(r["cpu_seconds"])]
          for r in ranked])
@@ -172,17 +173,18 @@ def build(folder):
         ("Provenance", provenance(manifest)),
     ]
     sources = [CSV, "manifest.json"]
-    contact = read_rows(folder, CONTACT_CSV)
-    if contact:
-        cm = read_json(folder, CONTACT_MANIFEST)
+    bare = read_rows(folder, BARE_CSV)
+    if bare:
+        bm = read_json(folder, BARE_MANIFEST)
         sections += [
-            ("With yarn contact: runs (%s)" % CONTACT_CSV, runs_section(contact, cm)),
-            ("With yarn contact: distribution over the charts", distribution_section(contact)),
-            ("With yarn contact: worst %d charts by minimum clearance over the run" % WORST,
-             worst_table(contact, "clearance_min_over_r") + "\n" + drawn_section(contact)),
-            ("With yarn contact: provenance", provenance(cm, CONTACT_MANIFEST)),
+            ("Without yarn contact: runs (%s)" % BARE_CSV, runs_section(bare, bm)),
+            ("Without yarn contact: distribution over the charts", distribution_section(bare)),
+            ("Without yarn contact: clearance at rest by chart feature", feature_section(bare)),
+            ("Without yarn contact: worst %d charts by minimum clearance over the run" % WORST,
+             worst_table(bare, "clearance_min_over_r") + "\n" + drawn_section(bare)),
+            ("Without yarn contact: provenance", provenance(bm, BARE_MANIFEST)),
         ]
-        sources += [CONTACT_CSV, CONTACT_MANIFEST]
+        sources += [BARE_CSV, BARE_MANIFEST]
     return ("Random 12 x 12 charts through `knitsim knit`", sources, sections)
 
 

@@ -76,6 +76,10 @@ class MechanicalSystem {
   // its null space; the equilibrium certificate factors them out. Default: false (a model whose
   // other zero-stiffness modes would then read as a saddle must not declare it).
   virtual bool free_floating() const { return false; }
+  // True when the model holds its particles in the plane z = 0 by an out-of-plane stiffness of
+  // its own (SpringNetwork's planar mode): a free-floating planar model has 3 rigid-body modes
+  // (the translations in the plane and the turn about z), not 6.
+  virtual bool planar() const { return false; }
 
   // Equilibrium may only be declared from this time on (e.g. after prescribed pin motion).
   virtual double equilibrium_start_time() const { return 0.0; }
