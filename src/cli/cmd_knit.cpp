@@ -459,9 +459,12 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
     }
   write_file_atomic(dir / "centerlines.csv", csv);
 
-  const std::string state = std::string(to_string(stats.status)) +
-                            " at t = " + format_number(stats.t_final, 4) + " s (" +
-                            stats.integrator + ")";
+  // The equilibrium solver's flow leaves t where it started: its steps say how far it went.
+  const std::string when = stats.t_final > t_start
+                               ? " at t = " + format_number(stats.t_final, 4) + " s"
+                               : " after " + std::to_string(stats.steps) + " steps";
+  const std::string state =
+      std::string(to_string(stats.status)) + when + " (" + stats.integrator + ")";
   write_file_atomic(dir / "centerlines.vtk",
                     centerlines_vtk("knitsim knit " + name + ": " + state, lines));
   if (!args.no_pictures) {
@@ -689,7 +692,9 @@ void run(const KnitArgs& args) {
                             std::to_string(model.network.spec().springs.size()) + " springs"},
               {"integrator", stats.integrator},
               {"status", std::string(to_string(stats.status)) + " (" + stats.message + ")"},
-              {"t_final", format_number(stats.t_final, 6) + " s"},
+              {"t_final",
+               format_number(stats.t_final, 6) + " s" +
+                   (stats.t_final > t0 || stats.steps == 0 ? "" : " (its steps do not advance t)")},
               {"steps", std::to_string(stats.steps) + " (RHS " + std::to_string(stats.rhs_evals) +
                             ", Jac " + std::to_string(stats.jac_evals) + ")"}};
     if (const std::string la = linear_algebra_summary(stats); !la.empty())
