@@ -75,10 +75,11 @@
 //            resists a z displacement to first order (the stiffness's z block is zero; tension
 //            stiffens it, compression softens it below zero). No force has a z component at
 //            z = 0, so every integrator keeps a flat start flat: the chart stays in its plane.
-//   bending  (knit.bending = b > 0, off by default) the yarn's out-of-plane bending as
-//            quadratic stencils (SpringNetwork's Stencil) on the bending springs' triples and the
-//            shear springs' quads, B = b s k_w h^3 / 12: second differences along wales (B/h^3)
-//            and levels (B/w^3), each quad's twist (B (w + h) / (w h)^2). Zero at rest and on
+//   bending  (knit.bending = b > 0, off by default; needs knit.contact = 0) the yarn's
+//            out-of-plane bending as quadratic stencils (SpringNetwork's Stencil) on the bending
+//            springs' triples and the shear springs' quads, B = b s k_w h^3 / 12: second
+//            differences along wales (B/h^3) and levels (B/w^3), each quad's twist
+//            (B (w + h) / (w h)^2). Zero at rest and on
 //            every rigid motion; with them the only zero modes are the 6 rigid motions (without
 //            them, in the plane, the 3 in-plane ones), and a free chart declares them
 //            (MechanicalSystem::free_floating, planar). Measured consequence
