@@ -198,6 +198,25 @@ TEST_CASE(
   CHECK(summary["integrator"] == "verlet");  // an explicit --integrator is kept
 }
 
+TEST_CASE("knitsim knit: stdout names the certificate and what decided the stop") {
+  // The default free chart is certified in positions (its planar rigid modes held): the
+  // residual line gives the Newton correction against position_tol. Paper 2's network is a
+  // mechanism (K singular): the residual decided, which the line says instead.
+  const TempDir tmp("knit-stdout");
+  std::ofstream(tmp.path / "small.chart") << "KKKKK\nKKTKK\nKKKKK\n";
+  const std::string base =
+      "knit --chart '" + (tmp.path / "small.chart").string() + "' --no-pictures --out '";
+  Run r = run_knitsim(base + (tmp.path / "a").string() + "'", tmp);
+  REQUIRE(r.status == 0);
+  CHECK(r.out.find("certificate       stable_minimum") != std::string::npos);
+  CHECK(r.out.find("(Newton correction ") != std::string::npos);
+  CHECK(r.out.find("its steps do not advance t") != std::string::npos);
+  r = run_knitsim(base + (tmp.path / "b").string() + "' --set knit.network=paper", tmp);
+  REQUIRE(r.status == 0);
+  CHECK(r.out.find("certificate       inconclusive") != std::string::npos);
+  CHECK(r.out.find("the residual decided the stop") != std::string::npos);
+}
+
 TEST_CASE("knitsim knit: a run that ends in a non-finite state still writes its outputs") {
   // Springs of 1e299 N/m overflow the forces in a few steps: the run ends `diverged` (exit 3)
   // and summary.json and points.csv are written; the non-finite state has no centrelines (they

@@ -61,7 +61,7 @@ std::string human_summary(const Scene& scene, const DrapeResult& r, const std::s
                               : std::string())},
             {"integrator", s.integrator},
             {"status", std::string(to_string(s.status)) + " (" + s.message + ")"},
-            {"certificate", s.certificate.empty() ? std::string("none") : s.certificate},
+            {"certificate", certificate_summary(s)},
             {"t_final", format_number(s.t_final, 6) + " s"},
             {"steps", std::to_string(s.steps) + " (RHS " + std::to_string(s.rhs_evals) + ", Jac " +
                           std::to_string(s.jac_evals) + ", LS setups " +
@@ -69,13 +69,7 @@ std::string human_summary(const Scene& scene, const DrapeResult& r, const std::s
   if (const std::string la = linear_algebra_summary(s); !la.empty())
     t.rows.push_back({"linear algebra", la});
   t.rows.insert(t.rows.end(),
-                {{"residual",
-                  format_number(s.residual, 3) +
-                      (s.certificate.empty()
-                           ? std::string(" (the stop did not pass: no Newton "
-                                         "correction)")
-                           : " (Newton correction " + format_number(s.newton_step, 3) + " m, tol " +
-                                 format_number(scene.options.position_tol, 3) + " m)")},
+                {{"residual", residual_summary(s, scene.options.position_tol)},
                  {"centre sag", format_number(100 * r.centre_sag, 4) + " cm"},
                  {"max strain", format_number(100 * r.max_strain, 3) + " %"},
                  {"wall", format_number(1e3 * s.wall_seconds, 4) + " ms"},

@@ -692,6 +692,7 @@ void run(const KnitArgs& args) {
                             std::to_string(model.network.spec().springs.size()) + " springs"},
               {"integrator", stats.integrator},
               {"status", std::string(to_string(stats.status)) + " (" + stats.message + ")"},
+              {"certificate", certificate_summary(stats)},
               {"t_final",
                format_number(stats.t_final, 6) + " s" +
                    (stats.t_final > t0 || stats.steps == 0 ? "" : " (its steps do not advance t)")},
@@ -701,8 +702,7 @@ void run(const KnitArgs& args) {
       t.rows.push_back({"linear algebra", la});
     t.rows.insert(
         t.rows.end(),
-        {{"residual", format_number(stats.residual, 3) + " (tol " +
-                          format_number(opt.equilibrium_tol, 3) + ")"},
+        {{"residual", residual_summary(stats, opt.position_tol)},
          {"max displacement",
           format_number(max_displacement_over_r(model, all_points(model, stats.t_final, x)), 4) +
               " r"},

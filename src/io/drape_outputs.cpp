@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <nlohmann/json.hpp>
 
 #include "src/base/files.hpp"
@@ -25,6 +26,19 @@ std::string linear_algebra_summary(const RunStats& s) {
          format_number(s.factor_flops, 3) + " flops each, " +
          format_number(s.factor_flops * static_cast<double>(s.factorisations) / 1e9, 3) +
          " GFlop in all)";
+}
+
+std::string certificate_summary(const RunStats& s) {
+  return s.certificate.empty() ? std::string("none") : s.certificate;
+}
+
+std::string residual_summary(const RunStats& s, double position_tol) {
+  const std::string r = format_number(s.residual, 3);
+  if (s.certificate.empty()) return r + " (the stop did not pass: no Newton correction)";
+  if (std::abs(s.min_eigenvalue) <= s.eigenvalue_threshold)
+    return r + " (the stiffness is singular: the residual decided the stop)";
+  return r + " (Newton correction " + format_number(s.newton_step, 3) + " m, tol " +
+         format_number(position_tol, 3) + " m)";
 }
 
 nlohmann::json summary_units(const nlohmann::json& model) {

@@ -19,6 +19,13 @@ namespace knitsim {
 // the few KLU factorisations of K (the same pattern) of its Newton polish.
 std::string linear_algebra_summary(const RunStats& s);
 
+// The "certificate" and "residual" lines of drape's and knit's summaries: the certificate, or
+// "none" where the stop did not pass; the static residual with the stop's own figure beside it
+// (the Newton correction and position_tol, m), or that the residual decided (a singular
+// stiffness), or that the stop did not pass.
+std::string certificate_summary(const RunStats& s);
+std::string residual_summary(const RunStats& s, double position_tol);
+
 // summary.json's "units": what each number of a run summary is measured in, for a reader
 // without the source. `model` maps the model's own numbers (drape or knit: the residual's
 // scale, centre_sag_m, params, ...) to their units; times, steps and cost figures are shared.
