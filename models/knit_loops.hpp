@@ -79,12 +79,11 @@
 //            out-of-plane bending as quadratic stencils (SpringNetwork's Stencil) on the bending
 //            springs' triples and the shear springs' quads, B = b s k_w h^3 / 12: second
 //            differences along wales (B/h^3) and levels (B/w^3), each quad's twist
-//            (B (w + h) / (w h)^2). Zero at rest and on
-//            every rigid motion; with them the only zero modes are the 6 rigid motions (without
-//            them, in the plane, the 3 in-plane ones), and a free chart declares them
-//            (MechanicalSystem::free_floating, planar). Measured consequence
-//            (docs/knit.md): a tuck's or miss's flat steady state is then a saddle, and the
-//            fabric puckers; without yarn contact its yarns pass through each other there.
+//            (B (w + h) / (w h)^2). Zero at rest and on every rigid motion; with them the only
+//            zero modes are the 6 rigid motions (without them, in the plane, the 3 in-plane
+//            ones), and a free chart declares them (MechanicalSystem::free_floating, planar).
+//            Measured consequence (docs/knit.md): a tuck's or miss's flat steady state is then
+//            a saddle, and the fabric puckers; its yarns pass through each other there.
 //   paper    paper 2's network exactly (wale, course, tuck and float springs; s is ignored):
 //            a mechanism, see above. knit.stabiliser = 0 gives the same network. `knitsim knit`
 //            prints one warning line for it.
