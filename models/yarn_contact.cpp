@@ -130,15 +130,30 @@ ContactNetwork::ContactNetwork(SpringNetwork network, YarnContactSpec contact)
     const std::uint64_t sa = std::min(set_of[a], set_of[b]), sb = std::max(set_of[a], set_of[b]);
     set_pairs.insert(sa << 32 | sb);
   });
+  // Each free particle's blocks: the particles of every set near a set it belongs to, each once
+  // (a marker per particle; near sets share most of their particles, so listing every set pair's
+  // 8 x 8 blocks would list each block many times over).
+  std::vector<std::vector<std::uint32_t>> near_sets(sets.size());
   for (std::uint64_t key : set_pairs) {
-    const Set &p = sets[key >> 32], &q = sets[key & 0xffffffffu];
-    for (int i = 0; i < kContactParticles && p[i] >= 0; ++i)
-      for (int j = 0; j < kContactParticles && q[j] >= 0; ++j) {
-        const int fa = net_.free_index(p[i]), fb = net_.free_index(q[j]);
-        if (fa < 0 || fb < 0) continue;
-        blocks.emplace_back(fa, fb);
-        blocks.emplace_back(fb, fa);
-      }
+    const auto sa = static_cast<std::uint32_t>(key >> 32), sb = static_cast<std::uint32_t>(key);
+    near_sets[sa].push_back(sb);
+    if (sb != sa) near_sets[sb].push_back(sa);
+  }
+  std::vector<std::vector<std::uint32_t>> sets_of(net_.particle_count());
+  for (std::uint32_t k = 0; k < sets.size(); ++k)
+    for (int i = 0; i < kContactParticles && sets[k][i] >= 0; ++i) sets_of[sets[k][i]].push_back(k);
+  std::vector<int> marked(net_.particle_count(), -1);
+  for (int p = 0; p < net_.particle_count(); ++p) {
+    const int fa = net_.free_index(p);
+    if (fa < 0) continue;
+    for (std::uint32_t own : sets_of[p])
+      for (std::uint32_t other : near_sets[own])
+        for (int j = 0; j < kContactParticles && sets[other][j] >= 0; ++j) {
+          const int q = sets[other][j], fb = net_.free_index(q);
+          if (fb < 0 || marked[q] == p) continue;
+          marked[q] = p;
+          blocks.emplace_back(fa, fb);
+        }
   }
   const int nf = dof() / 3;
   nodes_ = make_csc_pattern(nf, nf, std::move(blocks), /*with_diagonal=*/true);
@@ -181,15 +196,15 @@ void ContactNetwork::check_points() const {
 
 bool ContactNetwork::refresh(double t, const double* x) const {
   if (yarn_begin_.empty() || !(spec_.refresh_tol > 0.0)) return false;
-  net_.all_positions(t, x, pos_);
+  std::vector<Vec3> particles;
+  net_.all_positions(t, x, particles);
   double moved = 0.0;
-  for (std::size_t i = 0; i < pos_.size(); ++i) {
-    if (!is_finite(pos_[i])) return false;
-    moved = std::max(
-        {moved, std::abs(pos_[i].x - renewed_at_[i].x), std::abs(pos_[i].y - renewed_at_[i].y)});
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    const Vec3& p = particles[i];
+    if (!is_finite(p)) return false;
+    moved = std::max({moved, std::abs(p.x - renewed_at_[i].x), std::abs(p.y - renewed_at_[i].y)});
   }
   if (moved < spec_.refresh_move) return false;
-  const std::vector<Vec3> particles = pos_;
   spec_.exact(particles, exact_);
   if (exact_.size() != spec_.points.size())
     throw std::logic_error("yarn contact: exact positions of another number of points");
@@ -223,7 +238,7 @@ bool ContactNetwork::refresh(double t, const double* x) const {
       old.insert(old.end(), first, first + fresh[i].size());
       std::copy(fresh[i].begin(), fresh[i].end(), first);
     }
-    listed_at_.clear();  // points moved: the near-pair list is rebuilt
+    points_changed();
     return old;
   };
   auto restore = [&](std::size_t i0, std::size_t i1, const std::vector<ContactPoint>& old) {
@@ -232,7 +247,7 @@ bool ContactNetwork::refresh(double t, const double* x) const {
       std::copy(from, from + fresh[i].size(), spec_.points.begin() + yarn_begin_[straying[i]]);
       from += fresh[i].size();
     }
-    listed_at_.clear();
+    points_changed();
     positions(t, x);
   };
   bool batch = !straying.empty() && sweep_fraction(pts_, move, spec_.renew_keep) >= 1.0;
@@ -273,10 +288,10 @@ bool ContactNetwork::refresh(double t, const double* x) const {
 
 bool ContactNetwork::renew(double t, const double* x) {
   if (yarn_begin_.empty() || !spec_.linearise) return false;
-  net_.all_positions(t, x, pos_);
-  for (const Vec3& p : pos_)
+  std::vector<Vec3> particles;
+  net_.all_positions(t, x, particles);
+  for (const Vec3& p : particles)
     if (!is_finite(p)) return false;
-  const std::vector<Vec3> particles = pos_;
   const std::vector<ContactPoint> old = spec_.points;
   for (int y = 0; y + 1 < static_cast<int>(yarn_begin_.size()); ++y) {
     const std::vector<ContactPoint> fresh = spec_.linearise(particles, y);
@@ -284,10 +299,10 @@ bool ContactNetwork::renew(double t, const double* x) {
       throw std::logic_error("yarn contact: a renewed yarn has another number of points");
     std::copy(fresh.begin(), fresh.end(), spec_.points.begin() + yarn_begin_[y]);
   }
-  listed_at_.clear();
+  points_changed();
   if (!(min_distance(t, x) > spec_.core)) {
     spec_.points = old;
-    listed_at_.clear();
+    points_changed();
     return false;
   }
   check_points();
@@ -356,7 +371,13 @@ Vec3 position_of(const ContactPoint& point, const std::vector<Vec3>& particles) 
   return rotate(t.c, t.s, t.u);
 }
 
+void ContactNetwork::points_changed() const {
+  listed_at_.clear();
+  cached_ = false;
+}
+
 void ContactNetwork::positions(double t, const double* x) const {
+  if (cached_ && t == cached_t_ && std::equal(cached_x_.begin(), cached_x_.end(), x)) return;
   net_.all_positions(t, x, pos_);
   pts_.resize(spec_.points.size());
   turns_.resize(spec_.points.size());
@@ -364,6 +385,9 @@ void ContactNetwork::positions(double t, const double* x) const {
     turns_[k] = turned(spec_.points[k], pos_);
     pts_[k] = rotate(turns_[k].c, turns_[k].s, turns_[k].u);
   }
+  cached_x_.assign(x, x + dof());
+  cached_t_ = t;
+  cached_ = true;
 }
 
 void ContactNetwork::refresh_pairs() const {
@@ -607,7 +631,15 @@ void ContactNetwork::stiffness_values(double t, const double* x, double* values)
 
 double ContactNetwork::admissible_step(double t, const double* x, const double* dx) const {
   if (!pairs_of(t, x)) return 1.0;
-  const std::vector<Vec3> start = pts_;
+  // x's particles, points and turns, put back at the end (the cache then describes x again).
+  const std::vector<Vec3> start = pts_, start_pos = pos_;
+  const std::vector<PointTurn> start_turns = turns_;
+  auto back_to_x = [&] {
+    pos_ = start_pos, pts_ = start, turns_ = start_turns;
+    cached_x_.assign(x, x + dof());
+    cached_t_ = t;
+    cached_ = true;
+  };
   std::vector<double> turn0(spec_.points.size());
   for (std::size_t k = 0; k < spec_.points.size(); ++k) turn0[k] = turn_angle(static_cast<int>(k));
   // The points at fraction s of the (capped) step, into pts_.
@@ -624,7 +656,7 @@ double ContactNetwork::admissible_step(double t, const double* x, const double* 
   for (std::size_t k = 0; k < pts_.size(); ++k)
     longest = std::max(longest, norm(pts_[k] - start[k]));
   if (!(longest < std::numeric_limits<double>::infinity())) {
-    positions(t, x);
+    back_to_x();
     return 0.0;
   }
   // A step that moves a point by more than step_cap is cut to that first (a yarn jumping several
@@ -669,7 +701,7 @@ double ContactNetwork::admissible_step(double t, const double* x, const double* 
       if (clear) break;
       fraction = halve < 40 ? 0.5 * fraction : 0.0;
     }
-  positions(t, x);  // the cached points describe x again
+  back_to_x();
   return cap * fraction;
 }
 

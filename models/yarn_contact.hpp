@@ -195,7 +195,10 @@ class ContactNetwork final : public MechanicalSystem {
   struct Pair {
     int a, b;
   };
-  void positions(double t, const double* x) const;  // particles, then points, into pos_, pts_
+  // Particles, then points, into pos_, pts_ (and turns_); kept for the next call at the same
+  // (t, x) (cached_x_, cached_t_) until points_changed().
+  void positions(double t, const double* x) const;
+  void points_changed() const;  // the points' maps changed: positions and near pairs are stale
   void refresh_pairs() const;                       // the near-pair list at pos_, if stale
   bool pairs_of(double t, const double* x) const;   // positions + list; false if not finite
   bool may_pair(int a, int b) const;
@@ -228,6 +231,9 @@ class ContactNetwork final : public MechanicalSystem {
   std::vector<int> yarn_begin_;  // per yarn, its first point (and the end last)
   mutable std::vector<Vec3> pos_, pts_, listed_at_, exact_, renewed_at_;  // listed_at_: points
   mutable std::vector<PointTurn> turns_;  // per point, at pts_'s state
+  mutable std::vector<double> cached_x_;  // the state pos_, pts_ and turns_ describe, if cached_
+  mutable double cached_t_ = 0.0;
+  mutable bool cached_ = false;
   mutable std::vector<Vec3> grad_;  // per point, dE/dp summed over its pairs (stiffness_values)
   mutable std::vector<Pair> pairs_;
   mutable std::vector<double> net_values_, force_;

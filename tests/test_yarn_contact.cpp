@@ -415,6 +415,32 @@ TEST_CASE("yarn contact: inside the core the energy is infinite and forces are n
   CHECK(one_yarn.contact_energy(0.0, x.data()) == 0.0);
 }
 
+TEST_CASE("yarn contact: a state's points are kept for the next call and renewed maps are seen",
+          "[contact]") {
+  const KnitModel m = chart_model("single_tuck.chart", with_contact());
+  ContactNetwork& net = *m.contact;
+  const double r = m.params.loop_radius;
+  const std::vector<double> x = tuck_in_contact(m);  // pairs in contact
+  std::vector<double> y = x;
+  y[0] += 0.1 * r;
+  const double before = net.min_distance(0.0, x.data());
+  REQUIRE(before > net.contact().core);
+  REQUIRE(before < net.contact().touching);
+  // The step filter evaluates other states; x's points are put back, not recomputed.
+  std::vector<double> dx(net.dof(), 0.0), a0(net.dof()), a1(net.dof());
+  for (int i = 0; i < net.dof(); i += 3) dx[i + 1] = 0.3 * r * std::sin(0.7 * i);
+  net.conservative_acceleration(0.0, x.data(), a0.data());
+  net.admissible_step(0.0, x.data(), dx.data());
+  net.conservative_acceleration(0.0, x.data(), a1.data());
+  CHECK(a1 == a0);
+  // Renewed maps at the same state: the next call sees them, as a call after another state does.
+  REQUIRE(net.renew(0.0, x.data()));
+  const double renewed = net.min_distance(0.0, x.data());
+  CHECK(renewed != before);
+  net.min_distance(0.0, y.data());
+  CHECK(net.min_distance(0.0, x.data()) == renewed);
+}
+
 TEST_CASE("yarn contact: the step filter keeps every pair outside the core", "[contact]") {
   const KnitModel m = chart_model("single_tuck.chart", with_contact());
   const std::vector<double> x = tuck_in_contact(m);
