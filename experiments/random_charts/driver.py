@@ -36,7 +36,7 @@ FIELDS = ["chart", "seed", "tucks", "misses", "longest_float", "longest_hold", "
           "miss_over_tuck", "exit_code", "status", "clearance_min_over_r",
           "clearance_end_over_r", "clearance_rest_over_r", "clearance_min_resolution_over_r",
           "crossings_changed", "crossings_designed", "clearance_min_t", "clearance_min_check",
-          "max_displacement_over_r",
+          "max_displacement_over_r", "pattern_misses",
           "t_final", "steps", "cpu_seconds", "run_cpu_seconds", "clearance_cpu_seconds",
           "wall_seconds", "error", "rows"]
 
@@ -90,6 +90,7 @@ def row_of(name, seed, chart, code, summary, stderr, cpu, wall):
                   "clearance_min_t", "clearance_min_check", "clearance_cpu_seconds"):
             r[k] = yarn.get(k, "")
         r["max_displacement_over_r"] = summary.get("max_displacement_over_r", "")
+        r["pattern_misses"] = (summary.get("contact") or {}).get("pattern_misses", "")
         r["t_final"] = summary.get("t_final", "")
         r["steps"] = stats.get("steps", "")
         r["run_cpu_seconds"] = stats.get("cpu_seconds", "")
