@@ -38,27 +38,47 @@ void overlapping_boxes(const std::vector<Box>& boxes, double cell, OnPair on_pai
   const long nx = cells_along(x1 - x0), ny = cells_along(y1 - y0);
   auto ix = [&](double x) { return std::min(nx - 1, static_cast<long>((x - x0) / cell)); };
   auto iy = [&](double y) { return std::min(ny - 1, static_cast<long>((y - y0) / cell)); };
-  // Counting sort of (cell, box) entries: a box enters every cell it overlaps (at most 4, as
-  // no box is wider than a cell).
+  // Each box's cells (i0, i1, j0, j1), and a counting sort of (cell, box) entries: a box enters
+  // every cell it overlaps (at most 4, as no box is wider than a cell). The entries carry their
+  // box, so a cell's pairs are tested on contiguous memory.
+  struct Cells {
+    int i0, i1, j0, j1;
+  };
+  std::vector<Cells> cells(n);
   std::vector<long> start(nx * ny + 1, 0);
-  for (const Box& b : boxes)
-    for (long j = iy(b.y0); j <= iy(b.y1); ++j)
-      for (long i = ix(b.x0); i <= ix(b.x1); ++i) ++start[j * nx + i + 1];
+  for (int k = 0; k < n; ++k) {
+    const Box& b = boxes[k];
+    Cells& c = cells[k];
+    c = {static_cast<int>(ix(b.x0)), static_cast<int>(ix(b.x1)), static_cast<int>(iy(b.y0)),
+         static_cast<int>(iy(b.y1))};
+    for (long j = c.j0; j <= c.j1; ++j)
+      for (long i = c.i0; i <= c.i1; ++i) ++start[j * nx + i + 1];
+  }
   for (long c = 0; c < nx * ny; ++c) start[c + 1] += start[c];
-  std::vector<int> entries(start.back());
-  std::vector<long> fill(start.begin(), start.end() - 1);
-  for (int k = 0; k < n; ++k)
-    for (long j = iy(boxes[k].y0); j <= iy(boxes[k].y1); ++j)
-      for (long i = ix(boxes[k].x0); i <= ix(boxes[k].x1); ++i) entries[fill[j * nx + i]++] = k;
+  struct Entry {
+    Box box;
+    int i0, j0, k;
+  };
+  std::vector<Entry> entries(start.back());
+  {
+    std::vector<long> fill(start.begin(), start.end() - 1);
+    for (int k = 0; k < n; ++k) {
+      const Cells& c = cells[k];
+      for (long j = c.j0; j <= c.j1; ++j)
+        for (long i = c.i0; i <= c.i1; ++i) entries[fill[j * nx + i]++] = {boxes[k], c.i0, c.j0, k};
+    }
+  }
   for (long c = 0; c < nx * ny; ++c)
     for (long p = start[c]; p < start[c + 1]; ++p)
       for (long q = p + 1; q < start[c + 1]; ++q) {
-        const Box& a = boxes[entries[p]];
-        const Box& b = boxes[entries[q]];
+        const Entry& ea = entries[p];
+        const Entry& eb = entries[q];
+        const Box& a = ea.box;
+        const Box& b = eb.box;
         if (a.x1 < b.x0 || b.x1 < a.x0 || a.y1 < b.y0 || b.y1 < a.y0) continue;
         // Report the pair only in the cell holding the corner (max x0, max y0) of the overlap.
-        if (ix(std::max(a.x0, b.x0)) + nx * iy(std::max(a.y0, b.y0)) != c) continue;
-        on_pair(std::min(entries[p], entries[q]), std::max(entries[p], entries[q]));
+        if (std::max(ea.i0, eb.i0) + nx * std::max(ea.j0, eb.j0) != c) continue;
+        on_pair(std::min(ea.k, eb.k), std::max(ea.k, eb.k));
       }
 }
 
@@ -81,6 +101,7 @@ ContactNetwork::ContactNetwork(SpringNetwork network, YarnContactSpec contact)
   if (spec_.step_cap == 0.0) spec_.step_cap = 4.0 * c.touching;
   reach_ = spec_.touching + spec_.skin;
   check_points();
+  points_changed();
   if (c.refresh_tol < 0.0 || c.refresh_move < 0.0)
     throw std::invalid_argument("yarn contact: negative refresh tolerance or move");
   if (c.exact && c.linearise) {
@@ -167,9 +188,7 @@ ContactNetwork::ContactNetwork(SpringNetwork network, YarnContactSpec contact)
 }
 
 bool ContactNetwork::may_pair(int a, int b) const {
-  const ContactPoint& p = spec_.points[a];
-  const ContactPoint& q = spec_.points[b];
-  return p.yarn != q.yarn || std::abs(p.arc - q.arc) >= spec_.same_yarn_gap;
+  return yarn_of_[a] != yarn_of_[b] || std::abs(arc_of_[a] - arc_of_[b]) >= spec_.same_yarn_gap;
 }
 
 void ContactNetwork::check_points() const {
@@ -374,6 +393,10 @@ Vec3 position_of(const ContactPoint& point, const std::vector<Vec3>& particles) 
 void ContactNetwork::points_changed() const {
   listed_at_.clear();
   cached_ = false;
+  yarn_of_.resize(spec_.points.size());
+  arc_of_.resize(spec_.points.size());
+  for (std::size_t k = 0; k < spec_.points.size(); ++k)
+    yarn_of_[k] = spec_.points[k].yarn, arc_of_[k] = spec_.points[k].arc;
 }
 
 void ContactNetwork::positions(double t, const double* x) const {

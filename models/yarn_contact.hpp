@@ -198,7 +198,8 @@ class ContactNetwork final : public MechanicalSystem {
   // Particles, then points, into pos_, pts_ (and turns_); kept for the next call at the same
   // (t, x) (cached_x_, cached_t_) until points_changed().
   void positions(double t, const double* x) const;
-  void points_changed() const;  // the points' maps changed: positions and near pairs are stale
+  // The points' maps changed: positions and near pairs are stale, yarn_of_ and arc_of_ renewed.
+  void points_changed() const;
   void refresh_pairs() const;                       // the near-pair list at pos_, if stale
   bool pairs_of(double t, const double* x) const;   // positions + list; false if not finite
   bool may_pair(int a, int b) const;
@@ -234,6 +235,8 @@ class ContactNetwork final : public MechanicalSystem {
   mutable std::vector<double> cached_x_;  // the state pos_, pts_ and turns_ describe, if cached_
   mutable double cached_t_ = 0.0;
   mutable bool cached_ = false;
+  mutable std::vector<int> yarn_of_;    // per point, its yarn (may_pair reads these, not points)
+  mutable std::vector<double> arc_of_;  // per point, its arc length, m
   mutable std::vector<Vec3> grad_;  // per point, dE/dp summed over its pairs (stiffness_values)
   mutable std::vector<Pair> pairs_;
   mutable std::vector<double> net_values_, force_;
