@@ -213,6 +213,14 @@ void ContactNetwork::check_points() const {
   }
 }
 
+std::vector<ContactPoint> ContactNetwork::linearised(const std::vector<Vec3>& particles,
+                                                     int y) const {
+  std::vector<ContactPoint> fresh = spec_.linearise(particles, y);
+  if (static_cast<int>(fresh.size()) != yarn_begin_[y + 1] - yarn_begin_[y])
+    throw std::logic_error("yarn contact: a renewed yarn has another number of points");
+  return fresh;
+}
+
 bool ContactNetwork::refresh(double t, const double* x) const {
   if (yarn_begin_.empty() || !(spec_.refresh_tol > 0.0)) return false;
   std::vector<Vec3> particles;
@@ -244,9 +252,7 @@ bool ContactNetwork::refresh(double t, const double* x) const {
   std::vector<Vec3> move(pts_.size());
   for (std::size_t i = 0; i < straying.size(); ++i) {
     const int y = straying[i], begin = yarn_begin_[y], end = yarn_begin_[y + 1];
-    fresh[i] = spec_.linearise(particles, y);
-    if (static_cast<int>(fresh[i].size()) != end - begin)
-      throw std::logic_error("yarn contact: a renewed yarn has another number of points");
+    fresh[i] = linearised(particles, y);
     for (int k = begin; k < end; ++k) move[k] = exact_[k] - pts_[k];
   }
   // Installs fresh maps for straying[i], i in [i0, i1); returns the old ones.
@@ -313,9 +319,7 @@ bool ContactNetwork::renew(double t, const double* x) {
     if (!is_finite(p)) return false;
   const std::vector<ContactPoint> old = spec_.points;
   for (int y = 0; y + 1 < static_cast<int>(yarn_begin_.size()); ++y) {
-    const std::vector<ContactPoint> fresh = spec_.linearise(particles, y);
-    if (static_cast<int>(fresh.size()) != yarn_begin_[y + 1] - yarn_begin_[y])
-      throw std::logic_error("yarn contact: a renewed yarn has another number of points");
+    const std::vector<ContactPoint> fresh = linearised(particles, y);
     std::copy(fresh.begin(), fresh.end(), spec_.points.begin() + yarn_begin_[y]);
   }
   points_changed();

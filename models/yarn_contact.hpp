@@ -203,6 +203,8 @@ class ContactNetwork final : public MechanicalSystem {
   void refresh_pairs() const;                       // the near-pair list at pos_, if stale
   bool pairs_of(double t, const double* x) const;   // positions + list; false if not finite
   bool may_pair(int a, int b) const;
+  // Yarn y's points linearised about the particles' positions (spec linearise, its count checked).
+  std::vector<ContactPoint> linearised(const std::vector<Vec3>& particles, int y) const;
   void check_points() const;  // throws std::invalid_argument on a bad point
   // Calls on_contact(pair, p_a - p_b, D, dE/dD, d2E/dD2) for every pair closer than d at (t, x);
   // false (stopping) if the state is not finite or a pair is inside its core.
