@@ -51,9 +51,10 @@ if [ "${1:-}" = "--build-only" ]; then
 fi
 build knitsim
 # The optimizers study's driver (experiments/optimizers), a target only where pagmo2 was found
-# (CMakeLists.txt); without it run_all.sh reports that study as failed.
-targets=$(cmake --build "$BUILD_DIR" --target help 2>/dev/null || true)
-if grep -qw knitsim_optimizers <<< "$targets"; then
+# (CMakeLists.txt); without it run_all.sh reports that study as failed. The target list is read
+# from the file every CMake generator writes (`--target help` lists no top-level target with
+# Ninja).
+if grep -qs '/knitsim_optimizers\.dir$' "$BUILD_DIR/CMakeFiles/TargetDirectories.txt"; then
   build knitsim_optimizers
 fi
 
