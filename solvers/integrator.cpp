@@ -304,6 +304,7 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
       os << "static residual " << r << " below " << threshold
          << " (the stop in positions does not apply: the stiffness is singular)";
       stats.certificate = "inconclusive";
+      stats.residual_decided = true;
     } else {
       if (p.negative_pivots > 0) return "";  // a saddle: not yet
       const double tol = std::max(opt.position_tol, p.newton_floor);
@@ -315,6 +316,7 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
       else
         os << "position_tol " << tol << " m";
       stats.certificate = "stable_minimum";
+      stats.residual_decided = false;
     }
     stats.negative_pivots = p.negative_pivots;
     stats.min_eigenvalue = p.min_eigenvalue;

@@ -127,6 +127,8 @@ struct RunStats {
   //                K singular (rigid-body or mechanism modes: the residual decided); "" where
   //                the stop did not pass (never tested, or at a saddle: negative pivots).
   std::string certificate;
+  bool residual_decided = false;  // the stop was the static residual (K singular), not the
+                                  // Newton correction
   int negative_pivots = 0;
   double min_eigenvalue = 0.0;        // N/m, K's eigenvalue nearest 0
   double eigenvalue_threshold = 0.0;  // N/m, n eps ||K||_inf

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <array>
-#include <cmath>
 #include <nlohmann/json.hpp>
 
 #include "src/base/files.hpp"
@@ -35,8 +34,7 @@ std::string certificate_summary(const RunStats& s) {
 std::string residual_summary(const RunStats& s, double position_tol) {
   const std::string r = format_number(s.residual, 3);
   if (s.certificate.empty()) return r + " (the stop did not pass: no Newton correction)";
-  if (std::abs(s.min_eigenvalue) <= s.eigenvalue_threshold)
-    return r + " (the stiffness is singular: the residual decided the stop)";
+  if (s.residual_decided) return r + " (the stiffness is singular: the residual decided the stop)";
   return r + " (Newton correction " + format_number(s.newton_step, 3) + " m, tol " +
          format_number(position_tol, 3) + " m)";
 }
