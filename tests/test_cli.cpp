@@ -118,7 +118,7 @@ TEST_CASE("a settled drape: exit 0, summary, nodes, VTK, PNG and manifest agree"
   const double flops = summary["factor_flops"].get<double>();
   CHECK(flops >= summary["factor_nonzeros"].get<double>() + 96);
   CHECK(r.out.find("linear algebra  " + std::to_string(summary["factorisations"].get<long>()) +
-                   " factorisations of S (block LDL^T, " + format_number(flops, 3) +
+                   " symmetric factorisations (block LDL^T, " + format_number(flops, 3) +
                    " flops each") != std::string::npos);
 
   // nodes.csv: (n+1)^2 rows; the 4 corners pinned at z = 0; the centre sag is theirs.
@@ -232,7 +232,7 @@ TEST_CASE("output writers: tables, VTK, atomic files and output folders") {
   st.factorization = "block";
   st.factor_flops = 2.12e9;
   CHECK(linear_algebra_summary(st) ==
-        "125 factorisations of S (block LDL^T, 2.12e+09 flops each, 265 GFlop in all)");
+        "125 symmetric factorisations (block LDL^T, 2.12e+09 flops each, 265 GFlop in all)");
   st.factorization = "supernodal";
   CHECK(linear_algebra_summary(st).find("(supernodal LL^T, ") != std::string::npos);
 

@@ -159,7 +159,8 @@ def runs_section(folder, prefix):
                           num(r["factor_nonzeros"]), num(r["factor_flops"]), r["factorisations"],
                           "%s GFlop" % num(work, 3), num(r["cpu_median"]),
                           "%.2g GFlop/s" % (work / float(r["cpu_median"]))])
-        text += ("\nOne factorisation of S: `factor_nonzeros` = nnz(L), `factor_flops` = "
+        text += ("\nOne symmetric factorisation (S of docs/numerics.md, or C / h + K for the "
+                 "equilibrium solver): `factor_nonzeros` = nnz(L), `factor_flops` = "
                  "CHOLMOD's count; their work = factorisations × flops.\n\n"
                  + md_table(["particles", "unknowns", "solver", "nnz(L)",
                              "flops per factorisation", "factorisations", "their work",

@@ -20,7 +20,7 @@ namespace fs = std::filesystem;
 
 std::string linear_algebra_summary(const RunStats& s) {
   if (s.factorisations == 0 || !(s.factor_flops > 0.0)) return "";
-  return std::to_string(s.factorisations) + " factorisations of S (" + s.factorization +
+  return std::to_string(s.factorisations) + " symmetric factorisations (" + s.factorization +
          (s.factorization == "supernodal" ? " LL^T, " : " LDL^T, ") +
          format_number(s.factor_flops, 3) + " flops each, " +
          format_number(s.factor_flops * static_cast<double>(s.factorisations) / 1e9, 3) +
@@ -45,7 +45,7 @@ nlohmann::json summary_units(const nlohmann::json& model) {
       {"dt", "s: the fixed step of euler, verlet, implicit-euler; 0 for adaptive integrators"},
       {"dt_estimated, dt_predicted", "s: stability limits of the explicit methods (docs/numerics.md)"},
       {"wall_seconds, cpu_seconds", "s (cpu: this process, all threads)"},
-      {"factor_flops", "floating-point operations of one factorisation of S (CHOLMOD's count)"},
+      {"factor_flops", "floating-point operations of one symmetric factorisation (CHOLMOD's count)"},
       {"factor_nonzeros", "entries of one factor L"},
       {"steps, rhs_evals, jac_evals, lin_setups, lin_iters, nonlin_iters, factorisations",
        "counts"}};

@@ -13,8 +13,8 @@
 
 namespace knitsim {
 
-// The "linear algebra" line of drape's and knit's summaries: "125 factorisations of S (block
-// LDL^T, 2.12e+09 flops each, 265 GFlop in all)"; "" where the run factorised no S by
+// The "linear algebra" line of drape's and knit's summaries: "125 symmetric factorisations
+// (block LDL^T, 2.12e+09 flops each, 265 GFlop in all)"; "" where the run factorised nothing by
 // SymmetricFactor (the explicit methods, KLU, block-Jacobi GMRES). `static`'s count includes
 // the few KLU factorisations of K (the same pattern) of its Newton polish.
 std::string linear_algebra_summary(const RunStats& s);
