@@ -123,6 +123,69 @@ TEST_CASE("plain jersey at rest: clearance 1.212 r, crossings invariant under ri
   }
 }
 
+TEST_CASE("a crossing at a vertex counts once whatever the vertex's round-off") {
+  const KnitModel m = build_knit(parse_knit_chart(chart_file("plain_jersey.chart")), KnitParams{});
+  const double r = m.params.loop_radius;
+  // Three yarns (courses 0, 1, 2), 9 vertices each, 0.5 r apart along them, through one shared
+  // vertex P (their 5th): course 1 level, course 0 rising across it and across course 2, which
+  // comes down to P and back up (it touches course 1 from above there: 0 or 2 crossings, by
+  // the side the tie-break puts it on). Depths: course 1 at the back, 0, then 2 in front.
+  const Vec3 P{0.0257, 0.0032, 0.0};  // far from the origin, as the knit's vertices are
+  auto unit = [](Vec3 v) { return (1.0 / norm(v)) * v; };
+  auto yarn = [&](Vec3 left, Vec3 right, double z) {
+    std::vector<Vec3> v;
+    for (int k = -4; k <= 4; ++k) {
+      const Vec3 side = k < 0 ? left : right;
+      v.push_back(P + (0.5 * r * std::abs(k)) * side + Vec3{0, 0, z});
+    }
+    return v;
+  };
+  auto lines_with = [&](Vec3 shift0, Vec3 shift2) {
+    YarnPolylines lines;
+    lines.vertices = {yarn(unit(Vec3{-1, -0.3, 0}), unit(Vec3{1, 0.3, 0}), r),
+                      yarn(Vec3{-1, 0, 0}, Vec3{1, 0, 0}, -r),
+                      yarn(unit(Vec3{-1, 0.2, 0}), unit(Vec3{1, 0.2, 0}), 3 * r)};
+    lines.vertices[0][4] = lines.vertices[0][4] + shift0;
+    lines.vertices[2][4] = lines.vertices[2][4] + shift2;
+    for (auto& v : lines.vertices) {
+      lines.arc.emplace_back();
+      double s = 0.0;
+      for (std::size_t k = 0; k < v.size(); ++k) {
+        if (k > 0) s += norm(v[k] - v[k - 1]);
+        lines.arc.back().push_back(s);
+      }
+    }
+    return lines;
+  };
+  const YarnPolylines exact = lines_with({}, {});
+  const std::vector<YarnCrossing> designed = designed_crossings(m, exact);
+  auto between = [](const std::vector<YarnCrossing>& xs, int ca, int cb) {
+    return std::count_if(xs.begin(), xs.end(), [&](const YarnCrossing& x) {
+      return x.a.course == ca && x.b.course == cb;
+    });
+  };
+  CHECK(between(designed, 0, 1) == 1);  // strict signs: 0 (every orientation exactly 0)
+  const auto touches = between(designed, 1, 2);
+  CHECK((touches == 0 || touches == 2));
+  CHECK(between(designed, 0, 2) == 1);
+  for (const YarnCrossing& x : designed) CHECK(x.sign == (x.b.course == 1 ? 1 : -1));
+  // The shared vertex moved by round-off (a few ulps of its coordinates, either way): the same
+  // count, so two models placing the same vertices by different arithmetic agree.
+  const double ulp = 4e-18;  // m: ~ the spacing of doubles near 0.03 m
+  for (const Vec3 d : {Vec3{ulp, 0, 0}, Vec3{-ulp, 0, 0}, Vec3{0, ulp, 0}, Vec3{0, -ulp, 0},
+                       Vec3{ulp, -ulp, 0}, Vec3{-ulp, ulp, 0}}) {
+    const std::vector<YarnCrossing> moved = designed_crossings(m, lines_with(d, -1.0 * d));
+    CHECK(between(moved, 0, 1) == 1);
+    CHECK(between(moved, 0, 2) == 1);
+    CHECK(between(moved, 1, 2) == touches);
+  }
+  // And the check at the end sees them: course 0 pushed behind course 1 changes that crossing
+  // (it was behind course 2 already).
+  YarnPolylines behind = exact;
+  for (Vec3& p : behind.vertices[0]) p.z = -3 * r;
+  CHECK(check_crossings(designed, behind).changed == 1);
+}
+
 TEST_CASE("rest clearance of the committed charts, and the clearance over a run") {
   // The tuck and held-loop rest geometry (models/knit_loops.hpp): a single tuck's yarns keep
   // plain jersey's clearance (1.212 r); the loops held over two courses by several_misses'

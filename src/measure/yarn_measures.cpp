@@ -99,20 +99,38 @@ FlatSegment segment_of(const YarnPolylines& lines, int course, int segment) {
   return {course, segment, v[segment], v[segment + 1]};
 }
 
-// Front-view (x, y) proper intersection of two segments: true, with the depth of each segment
-// at the crossing point (linear along the segment), or false.
-bool cross_in_front_view(const FlatSegment& a, const FlatSegment& b, double* za = nullptr,
-                         double* zb = nullptr) {
-  auto orient = [](Vec3 p, Vec3 q, Vec3 r) {
-    return (q.x - p.x) * (r.y - p.y) - (q.y - p.y) * (r.x - p.x);
+// Front-view (x, y) crossing of two segments: true, with the depth of each segment at the
+// crossing point (linear along the segment), or false. Ties are broken by a fixed perturbation:
+// a point within 1e-10 of a segment's length of that segment's line (on it, to round-off) is
+// on the side it would be on if the segment of the higher (course, segment) were moved by an
+// infinitesimal (e, e^2) in the plane. Two yarns crossing at a vertex, of one or of both (the
+// knit's rest centrelines share points), then cross at exactly one pair of their segments,
+// whatever the vertices' round-off; with strict signs such a crossing counted none, one or two
+// pairs, and which depended on the order of the arithmetic that placed the vertices.
+bool cross_in_front_view(const FlatSegment& first, const FlatSegment& second,
+                         double* z_first = nullptr, double* z_second = nullptr) {
+  const bool swap = std::tie(second.course, second.segment) < std::tie(first.course, first.segment);
+  const FlatSegment& a = swap ? second : first;
+  const FlatSegment& b = swap ? first : second;  // the one moved
+  // Which side of the line p -> q the point r is on (true: left), with its orientation o (0 on
+  // a tie); `move` +1 if r is on the moved segment, -1 if the line is: o(r + move (e, e^2)) =
+  // o + move (-dy e + dx e^2).
+  auto left = [](Vec3 p, Vec3 q, Vec3 r, double move, double& o) {
+    const double dx = q.x - p.x, dy = q.y - p.y;
+    o = dx * (r.y - p.y) - dy * (r.x - p.x);
+    if (std::abs(o) > 1e-10 * (dx * dx + dy * dy)) return o > 0.0;
+    o = 0.0;
+    return dy != 0.0 ? -move * dy > 0.0 : move * dx > 0.0;
   };
-  const double o1 = orient(a.p0, a.p1, b.p0), o2 = orient(a.p0, a.p1, b.p1);
-  const double o3 = orient(b.p0, b.p1, a.p0), o4 = orient(b.p0, b.p1, a.p1);
-  if (!(((o1 > 0.0 && o2 < 0.0) || (o1 < 0.0 && o2 > 0.0)) &&
-        ((o3 > 0.0 && o4 < 0.0) || (o3 < 0.0 && o4 > 0.0))))
-    return false;
-  if (za != nullptr) *za = a.p0.z + (o3 / (o3 - o4)) * (a.p1.z - a.p0.z);
-  if (zb != nullptr) *zb = b.p0.z + (o1 / (o1 - o2)) * (b.p1.z - b.p0.z);
+  double o1, o2, o3, o4;
+  const bool l1 = left(a.p0, a.p1, b.p0, 1.0, o1), l2 = left(a.p0, a.p1, b.p1, 1.0, o2);
+  const bool l3 = left(b.p0, b.p1, a.p0, -1.0, o3), l4 = left(b.p0, b.p1, a.p1, -1.0, o4);
+  if (l1 == l2 || l3 == l4) return false;
+  // Opposite sides: o1 - o2 and o3 - o4 are not 0 (at most one of each pair is a tie).
+  const double za = a.p0.z + (o3 / (o3 - o4)) * (a.p1.z - a.p0.z);
+  const double zb = b.p0.z + (o1 / (o1 - o2)) * (b.p1.z - b.p0.z);
+  if (z_first != nullptr) *z_first = swap ? zb : za;
+  if (z_second != nullptr) *z_second = swap ? za : zb;
   return true;
 }
 
