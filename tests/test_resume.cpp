@@ -518,6 +518,23 @@ TEST_CASE("knitsim drape --continue: a run continued where it stopped is the uni
         slurp(tmp.path / "whole" / "nodes.csv"));
 }
 
+TEST_CASE("a state that is not finite leaves no state.json, not even an earlier run's") {
+  namespace fs = std::filesystem;
+  knitsim::test::TempDir tmp("state");
+  SavedRun saved{"drape", {1.0, {0.0, 1.0}, {0.0, 0.0}}, "euler", 1e-3, nlohmann::json::object()};
+  write_run_state(tmp.path, saved);
+  REQUIRE(fs::exists(tmp.path / "state.json"));
+  CHECK(read_run_state(tmp.path, "drape").state.x == saved.state.x);
+  for (double bad :
+       {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
+    SavedRun diverged = saved;
+    diverged.state.x[1] = bad;
+    write_run_state(tmp.path, saved);
+    write_run_state(tmp.path, diverged);
+    CHECK_FALSE(fs::exists(tmp.path / "state.json"));
+  }
+}
+
 TEST_CASE("a drape state's model keys are the keys --set takes") {
   const std::vector<std::string> known = knitsim::scene_keys();
   const nlohmann::json keys = knitsim::drape_model_keys(knitsim::DrapeParams{});

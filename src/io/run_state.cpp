@@ -25,8 +25,10 @@ bool all_finite(const std::vector<double>& a) {
 }  // namespace
 
 void write_run_state(const fs::path& dir, const SavedRun& saved) {
-  if (!all_finite(saved.state.x) || !all_finite(saved.state.v) || !std::isfinite(saved.state.t))
+  if (!all_finite(saved.state.x) || !all_finite(saved.state.v) || !std::isfinite(saved.state.t)) {
+    remove_stale_output(dir / "state.json");  // an earlier run's would be continued instead
     return;
+  }
   write_json_atomic(dir / "state.json", {{"format", kRunStateFormat},
                                          {"command", saved.command},
                                          {"integrator", saved.integrator},

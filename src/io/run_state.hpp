@@ -25,8 +25,9 @@ struct SavedRun {
 // A drape's SavedRun::model: to_json(params) with its keys as --set names them ("model.KEY",
 // "fabric.width", "pins.layout", ...).
 nlohmann::json drape_model_keys(const DrapeParams& params);
-// Writes DIR/state.json (format "knitsim run state 2", shortest round-trip decimals); does
-// nothing if x or v is not finite (there is nothing to continue from).
+// Writes DIR/state.json (format "knitsim run state 2", shortest round-trip decimals); if x, v
+// or t is not finite there is nothing to continue from, and an earlier run's state.json in DIR
+// is removed (--continue would start from it).
 void write_run_state(const std::filesystem::path& dir, const SavedRun& saved);
 // The text of a state.json written by `command`: throws std::invalid_argument (one line) naming
 // what is missing or malformed (x, v not finite or not integrated_dof long, t or dt negative),
