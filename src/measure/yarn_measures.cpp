@@ -123,9 +123,8 @@ bool cross_in_front_view(const FlatSegment& first, const FlatSegment& second,
     return dy != 0.0 ? -move * dy > 0.0 : move * dx > 0.0;
   };
   double o1, o2, o3, o4;
-  const bool l1 = left(a.p0, a.p1, b.p0, 1.0, o1), l2 = left(a.p0, a.p1, b.p1, 1.0, o2);
-  const bool l3 = left(b.p0, b.p1, a.p0, -1.0, o3), l4 = left(b.p0, b.p1, a.p1, -1.0, o4);
-  if (l1 == l2 || l3 == l4) return false;
+  if (left(a.p0, a.p1, b.p0, 1.0, o1) == left(a.p0, a.p1, b.p1, 1.0, o2)) return false;
+  if (left(b.p0, b.p1, a.p0, -1.0, o3) == left(b.p0, b.p1, a.p1, -1.0, o4)) return false;
   // Opposite sides: o1 - o2 and o3 - o4 are not 0 (at most one of each pair is a tie).
   const double za = a.p0.z + (o3 / (o3 - o4)) * (a.p1.z - a.p0.z);
   const double zb = b.p0.z + (o1 / (o1 - o2)) * (b.p1.z - b.p0.z);
