@@ -7,7 +7,6 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
-#include <unordered_set>
 #include <utility>
 
 namespace knitsim {
@@ -128,38 +127,55 @@ ContactNetwork::ContactNetwork(SpringNetwork network, YarnContactSpec contact)
   std::vector<double> x(dof()), v(dof());
   net_.initial_state(x.data(), v.data());
   positions(0.0, x.data());
-  std::vector<Box> boxes(pts_.size());
-  for (std::size_t k = 0; k < pts_.size(); ++k)
-    boxes[k] = around(pts_[k], 0.5 * spec_.pattern_radius);
   // Points share their particle sets in runs along a yarn: pairs are kept per two distinct sets
   // (a near pair of points adds the blocks between their sets' particles; every set also gets the
-  // blocks within it, for a point's own J^T H J and its map's curvature).
+  // blocks within it, for a point's own J^T H J and its map's curvature). The sets are paired by
+  // boxes round their points (a set's pairs then tested point by point, to the first near one):
+  // a few per cent of the box tests of pairing the points themselves, the same set pairs.
   using Set = std::array<int, kContactParticles>;
   std::vector<Set> sets;
   sets.reserve(spec_.points.size());
   for (const ContactPoint& p : spec_.points) sets.push_back(p.particles);
   std::sort(sets.begin(), sets.end());
   sets.erase(std::unique(sets.begin(), sets.end()), sets.end());
-  std::vector<std::uint32_t> set_of(spec_.points.size());
-  for (std::size_t k = 0; k < spec_.points.size(); ++k)
-    set_of[k] = static_cast<std::uint32_t>(
-        std::lower_bound(sets.begin(), sets.end(), spec_.points[k].particles) - sets.begin());
-  std::unordered_set<std::uint64_t> set_pairs;
-  for (std::uint64_t k = 0; k < sets.size(); ++k) set_pairs.insert(k << 32 | k);
-  overlapping_boxes(boxes, spec_.pattern_radius, [&](int a, int b) {
-    if (!may_pair(a, b) || norm(pts_[a] - pts_[b]) >= spec_.pattern_radius) return;
-    const std::uint64_t sa = std::min(set_of[a], set_of[b]), sb = std::max(set_of[a], set_of[b]);
-    set_pairs.insert(sa << 32 | sb);
+  std::vector<int> member_begin(sets.size() + 1, 0), members(spec_.points.size());
+  {
+    std::vector<std::uint32_t> set_of(spec_.points.size());
+    for (std::size_t k = 0; k < spec_.points.size(); ++k) {
+      set_of[k] = static_cast<std::uint32_t>(
+          std::lower_bound(sets.begin(), sets.end(), spec_.points[k].particles) - sets.begin());
+      ++member_begin[set_of[k] + 1];
+    }
+    for (std::size_t s = 0; s < sets.size(); ++s) member_begin[s + 1] += member_begin[s];
+    std::vector<int> next(member_begin.begin(), member_begin.end() - 1);
+    for (std::size_t k = 0; k < spec_.points.size(); ++k)
+      members[next[set_of[k]]++] = static_cast<int>(k);
+  }
+  const double R = spec_.pattern_radius;
+  std::vector<Box> boxes(sets.size());
+  for (std::size_t s = 0; s < sets.size(); ++s) {
+    Box& b = boxes[s];
+    b = around(pts_[members[member_begin[s]]], 0.5 * R);
+    for (int m = member_begin[s] + 1; m < member_begin[s + 1]; ++m) {
+      const Box p = around(pts_[members[m]], 0.5 * R);
+      b = {std::min(b.x0, p.x0), std::max(b.x1, p.x1), std::min(b.y0, p.y0), std::max(b.y1, p.y1)};
+    }
+  }
+  std::vector<std::vector<std::uint32_t>> near_sets(sets.size());
+  for (std::uint32_t s = 0; s < sets.size(); ++s) near_sets[s].push_back(s);
+  overlapping_boxes(boxes, R, [&](int sa, int sb) {
+    for (int i = member_begin[sa]; i < member_begin[sa + 1]; ++i)
+      for (int j = member_begin[sb]; j < member_begin[sb + 1]; ++j) {
+        const int a = members[i], b = members[j];
+        if (!may_pair(a, b) || norm(pts_[a] - pts_[b]) >= R) continue;
+        near_sets[sa].push_back(static_cast<std::uint32_t>(sb));
+        near_sets[sb].push_back(static_cast<std::uint32_t>(sa));
+        return;
+      }
   });
   // Each free particle's blocks: the particles of every set near a set it belongs to, each once
   // (a marker per particle; near sets share most of their particles, so listing every set pair's
   // 8 x 8 blocks would list each block many times over).
-  std::vector<std::vector<std::uint32_t>> near_sets(sets.size());
-  for (std::uint64_t key : set_pairs) {
-    const auto sa = static_cast<std::uint32_t>(key >> 32), sb = static_cast<std::uint32_t>(key);
-    near_sets[sa].push_back(sb);
-    if (sb != sa) near_sets[sb].push_back(sa);
-  }
   std::vector<std::vector<std::uint32_t>> sets_of(net_.particle_count());
   for (std::uint32_t k = 0; k < sets.size(); ++k)
     for (int i = 0; i < kContactParticles && sets[k][i] >= 0; ++i) sets_of[sets[k][i]].push_back(k);
