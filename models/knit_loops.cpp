@@ -20,6 +20,9 @@ constexpr double kTuckLegForward = 1.0;
 constexpr double kKnitLegForward = 2.0;
 
 const char* const kAcceptedLetters = "accepted letters: K knit, T tuck, M miss";
+const char* const kChartRules =
+    "chart rules: no tuck or miss in the bottom course or on an edge wale, no miss in the top "
+    "course";
 
 [[noreturn]] void bad(const std::string& field, double value, const std::string& range) {
   std::ostringstream os;
@@ -27,12 +30,16 @@ const char* const kAcceptedLetters = "accepted letters: K knit, T tuck, M miss";
   throw std::invalid_argument(os.str());
 }
 
-// "chart row R, column C: <what> (<accepted letters>)" with R counted from the top as drawn.
-[[noreturn]] void bad_stitch(const KnitChart& chart, int wale, int course,
-                             const std::string& what) {
+// "chart row R (line L), column C: <what> (<accepts>)" with R counted from the top as drawn,
+// L the row's line in the file (row_lines, top row first; without them no line).
+[[noreturn]] void bad_stitch(const KnitChart& chart, int wale, int course, const std::string& what,
+                             const char* accepts, const std::vector<int>* row_lines) {
+  const int row = chart.courses - course;
   std::ostringstream os;
-  os << "chart row " << chart.courses - course << ", column " << wale + 1 << ": " << what << " ("
-     << kAcceptedLetters << ")";
+  os << "chart row " << row;
+  if (row_lines != nullptr && row <= static_cast<int>(row_lines->size()))
+    os << " (line " << (*row_lines)[row - 1] << ")";
+  os << ", column " << wale + 1 << ": " << what << " (" << accepts << ")";
   throw std::invalid_argument(os.str());
 }
 
@@ -193,7 +200,7 @@ void check_positions(const KnitModel& m, const std::vector<Vec3>& x) {
 
 }  // namespace
 
-void KnitChart::validate() const {
+void KnitChart::validate(const std::vector<int>* row_lines) const {
   if (wales < 1 || courses < 1)
     throw std::invalid_argument(std::string("chart: no stitch rows (one line per course, top "
                                             "course first; ") +
@@ -208,15 +215,16 @@ void KnitChart::validate() const {
     for (int i = 0; i < wales; ++i) {
       const Stitch s = at(i, j);
       if (s != Stitch::Knit && s != Stitch::Tuck && s != Stitch::Miss)
-        bad_stitch(*this, i, j, "not a stitch");
+        bad_stitch(*this, i, j, "not a stitch", kAcceptedLetters, row_lines);
       if (s == Stitch::Knit) continue;
       const std::string name = s == Stitch::Tuck ? "a tuck" : "a miss";
-      if (j == 0) bad_stitch(*this, i, j, name + " in the bottom course has no loop below to hold");
-      if (i == 0 || i == wales - 1)
-        bad_stitch(*this, i, j, name + " on an edge wale leaves the yarn no loop to turn at");
+      auto broken = [&](const std::string& what) {
+        bad_stitch(*this, i, j, name + what, kChartRules, row_lines);
+      };
+      if (j == 0) broken(" in the bottom course has no loop below to hold");
+      if (i == 0 || i == wales - 1) broken(" on an edge wale leaves the yarn no loop to turn at");
       if (s == Stitch::Miss && j == courses - 1)
-        bad_stitch(*this, i, j,
-                   "a miss in the top course leaves the held loop without an upper point");
+        broken(" in the top course leaves the held loop without an upper point");
     }
 }
 
@@ -263,7 +271,9 @@ KnitChart parse_knit_chart(const std::string& text) {
       chart.stitches[static_cast<size_t>(course) * chart.wales + col] =
           static_cast<Stitch>(r.stitches[col]);
   }
-  chart.validate();
+  std::vector<int> row_lines;
+  for (const Row& r : rows) row_lines.push_back(r.line);
+  chart.validate(&row_lines);
   return chart;
 }
 

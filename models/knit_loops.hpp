@@ -175,8 +175,10 @@ struct KnitChart {
   int courses = 0;
   std::vector<Stitch> stitches;  // index course * wales + wale; course 0 = bottom (drawn last)
   Stitch at(int wale, int course) const { return stitches[course * wales + wale]; }
-  // Throws std::invalid_argument for a chart that breaks the model's rules (see above).
-  void validate() const;
+  // Throws std::invalid_argument for a chart that breaks the model's rules (see above), naming
+  // the row (from the top as drawn), its line in the file where row_lines gives them (top row
+  // first), the column and the rule.
+  void validate(const std::vector<int>* row_lines = nullptr) const;
 };
 
 // Parses the text of a chart file. Throws std::invalid_argument with one line naming the

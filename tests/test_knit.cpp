@@ -118,7 +118,8 @@ TEST_CASE("chart parser: rows top first, comments, blank lines, CRLF") {
   CHECK(plain.courses == 6);
 }
 
-TEST_CASE("chart errors name row (from the top as drawn), column and the accepted letters") {
+TEST_CASE(
+    "chart errors name row (from the top as drawn), line, column and the letters or the rule") {
   using Catch::Contains;
   const auto letters = Contains("K knit, T tuck, M miss");
   CHECK_THROWS_WITH(parse_knit_chart("KKK\nKXK\nKKK\n"),
@@ -130,20 +131,23 @@ TEST_CASE("chart errors name row (from the top as drawn), column and the accepte
                     Contains("row 2 (line 2): 4 stitches, row 1 has 3") && letters);
   CHECK_THROWS_WITH(parse_knit_chart(""), Contains("no stitch rows") && letters);
   CHECK_THROWS_WITH(parse_knit_chart("# only comments\n\n"), Contains("no stitch rows"));
+  // A broken rule: the row's line in the file too (comment lines counted), and the rules.
+  const auto rules = Contains("chart rules: no tuck or miss in the bottom course");
   CHECK_THROWS_WITH(parse_knit_chart("KKK\nKTK\n"),
-                    Contains("row 2, column 2: a tuck in the bottom course") && letters);
+                    Contains("row 2 (line 2), column 2: a tuck in the bottom course") && rules);
   CHECK_THROWS_WITH(parse_knit_chart("KKK\nKMK\n"),
-                    Contains("row 2, column 2: a miss in the bottom course"));
-  CHECK_THROWS_WITH(parse_knit_chart("KKK\nTKK\nKKK\n"),
-                    Contains("row 2, column 1: a tuck on an edge wale") && letters);
+                    Contains("row 2 (line 2), column 2: a miss in the bottom course"));
+  CHECK_THROWS_WITH(parse_knit_chart("# top\nKKK\n\nTKK\nKKK\n"),
+                    Contains("row 2 (line 4), column 1: a tuck on an edge wale") && rules);
   CHECK_THROWS_WITH(parse_knit_chart("KKK\nKKM\nKKK\n"),
-                    Contains("row 2, column 3: a miss on an edge wale"));
+                    Contains("row 2 (line 2), column 3: a miss on an edge wale"));
   CHECK_THROWS_WITH(parse_knit_chart("KMK\nKKK\n"),
-                    Contains("row 1, column 2: a miss in the top course") && letters);
-  // A programmatic chart goes through the same rules.
+                    Contains("row 1 (line 1), column 2: a miss in the top course") && rules);
+  // A programmatic chart goes through the same rules (it has no lines).
   KnitChart bad{3, 2, std::vector<Stitch>(6, Stitch::Knit)};
   bad.stitches[1] = Stitch::Tuck;  // course 0 (bottom), wale 1
-  CHECK_THROWS_WITH(build_knit(bad, {}), Contains("row 2, column 2: a tuck in the bottom"));
+  CHECK_THROWS_WITH(build_knit(bad, {}),
+                    Contains("row 2, column 2: a tuck in the bottom") && rules);
 }
 
 TEST_CASE("knit parameters are validated by name") {
