@@ -235,6 +235,12 @@ TEST_CASE("output writers: tables, VTK, atomic files and output folders") {
         "125 symmetric factorisations (block LDL^T, 2.12e+09 flops each, 265 GFlop in all)");
   st.factorization = "supernodal";
   CHECK(linear_algebra_summary(st).find("(supernodal LL^T, ") != std::string::npos);
+  st.lin_iters = 2401;  // CG between the factorisations (cg-ldl)
+  CHECK(linear_algebra_summary(st) ==
+        "125 symmetric factorisations (supernodal LL^T, 2.12e+09 flops each, 265 GFlop in all); "
+        "2401 Krylov iterations");
+  st.factor_flops = 0.0;  // block-Jacobi GMRES: iterations only
+  CHECK(linear_algebra_summary(st) == "2401 Krylov iterations");
 
   Table t;
   t.columns = {"a", "b"};

@@ -19,12 +19,16 @@ namespace knitsim {
 namespace fs = std::filesystem;
 
 std::string linear_algebra_summary(const RunStats& s) {
-  if (s.factorisations == 0 || !(s.factor_flops > 0.0)) return "";
-  return std::to_string(s.factorisations) + " symmetric factorisations (" + s.factorization +
-         (s.factorization == "supernodal" ? " LL^T, " : " LDL^T, ") +
-         format_number(s.factor_flops, 3) + " flops each, " +
-         format_number(s.factor_flops * static_cast<double>(s.factorisations) / 1e9, 3) +
-         " GFlop in all)";
+  std::string line;
+  if (s.factorisations > 0 && s.factor_flops > 0.0)
+    line = std::to_string(s.factorisations) + " symmetric factorisations (" + s.factorization +
+           (s.factorization == "supernodal" ? " LL^T, " : " LDL^T, ") +
+           format_number(s.factor_flops, 3) + " flops each, " +
+           format_number(s.factor_flops * static_cast<double>(s.factorisations) / 1e9, 3) +
+           " GFlop in all)";
+  if (s.lin_iters > 0)
+    line += (line.empty() ? "" : "; ") + std::to_string(s.lin_iters) + " Krylov iterations";
+  return line;
 }
 
 std::string certificate_summary(const RunStats& s) {

@@ -14,9 +14,10 @@
 namespace knitsim {
 
 // The "linear algebra" line of drape's and knit's summaries: "125 symmetric factorisations
-// (block LDL^T, 2.12e+09 flops each, 265 GFlop in all)"; "" where the run factorised nothing by
-// SymmetricFactor (the explicit methods, KLU, block-Jacobi GMRES). `static`'s count includes
-// the few KLU factorisations of K (the same pattern) of its Newton polish.
+// (block LDL^T, 2.12e+09 flops each, 265 GFlop in all)", followed by "; 2401 Krylov iterations"
+// where the run iterated (lin_iters: GMRES, or CG between factorisations); "" where it did
+// neither (the explicit methods; KLU, whose factorisations are not costed). `static`'s count
+// includes the few KLU factorisations of K (the same pattern) of its Newton polish.
 std::string linear_algebra_summary(const RunStats& s);
 
 // The "certificate" and "residual" lines of drape's and knit's summaries: the certificate, or
