@@ -241,6 +241,8 @@ TEST_CASE("output writers: tables, VTK, atomic files and output folders") {
         "2401 Krylov iterations");
   st.factor_flops = 0.0;  // block-Jacobi GMRES: iterations only
   CHECK(linear_algebra_summary(st) == "2401 Krylov iterations");
+  st.steps = 14, st.rhs_evals = 23, st.jac_evals = 22, st.lin_setups = 9;
+  CHECK(steps_summary(st) == "14 (RHS 23, Jac 22, LS setups 9)");
 
   Table t;
   t.columns = {"a", "b"};

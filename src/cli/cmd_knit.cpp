@@ -696,9 +696,7 @@ void run(const KnitArgs& args) {
               {"t_final",
                format_number(stats.t_final, 6) + " s" +
                    (stats.t_final > t0 || stats.steps == 0 ? "" : " (its steps do not advance t)")},
-              {"steps", std::to_string(stats.steps) + " (RHS " + std::to_string(stats.rhs_evals) +
-                            ", Jac " + std::to_string(stats.jac_evals) + ", LS setups " +
-                            std::to_string(stats.lin_setups) + ")"}};
+              {"steps", steps_summary(stats)}};
     if (const std::string la = linear_algebra_summary(stats); !la.empty())
       t.rows.push_back({"linear algebra", la});
     t.rows.insert(

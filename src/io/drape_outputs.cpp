@@ -35,6 +35,11 @@ std::string certificate_summary(const RunStats& s) {
   return s.certificate.empty() ? std::string("none") : s.certificate;
 }
 
+std::string steps_summary(const RunStats& s) {
+  return std::to_string(s.steps) + " (RHS " + std::to_string(s.rhs_evals) + ", Jac " +
+         std::to_string(s.jac_evals) + ", LS setups " + std::to_string(s.lin_setups) + ")";
+}
+
 std::string residual_summary(const RunStats& s, double position_tol) {
   const std::string r = format_number(s.residual, 3);
   if (s.certificate.empty()) return r + " (the stop did not pass: no Newton correction)";

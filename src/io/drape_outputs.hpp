@@ -20,6 +20,9 @@ namespace knitsim {
 // includes the few KLU factorisations of K (the same pattern) of its Newton polish.
 std::string linear_algebra_summary(const RunStats& s);
 
+// The "steps" line of drape's and knit's summaries: "14 (RHS 23, Jac 23, LS setups 14)".
+std::string steps_summary(const RunStats& s);
+
 // The "certificate" and "residual" lines of drape's and knit's summaries: the certificate, or
 // "none" where the stop did not pass; the static residual with the stop's own figure beside it
 // (the Newton correction and position_tol, m), or that the residual decided (a singular
