@@ -12,7 +12,8 @@ namespace knitsim::detail {
 
 namespace {
 
-// 3 x 3 blocks are row-major arrays of 9.
+// B x B blocks are row-major arrays of B * B: B = 3 (a particle's x, y, z), or B = 2 where the
+// third coordinates are split out (a planar network's x, y; see decoupled_third below).
 
 struct BlockPattern {
   std::vector<int> start;              // group J holds columns start[J] .. start[J + 1) - 1
@@ -20,25 +21,40 @@ struct BlockPattern {
   bool empty() const { return rows.empty(); }
 };
 
-// Y -= A B. Y overlaps neither A nor B (a work block, a factor block, a copy on the stack):
-// __restrict lets the compiler keep Y in registers instead of storing and reloading each entry
-// between the products (the same operations in the same order; results bit for bit the same).
+// Y -= A B for B x B blocks. Y overlaps neither A nor B (a work block, a factor block, a copy on
+// the stack): __restrict lets the compiler keep Y in registers instead of storing and reloading
+// each entry between the products (the same operations in the same order; results bit for bit
+// the same).
+template <int B>
 inline void sub_product(double* __restrict Y, const double* __restrict A,
-                        const double* __restrict B) {
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c)
-      Y[3 * r + c] -= A[3 * r] * B[c] + A[3 * r + 1] * B[3 + c] + A[3 * r + 2] * B[6 + c];
+                        const double* __restrict X) {
+  for (int r = 0; r < B; ++r)
+    for (int c = 0; c < B; ++c) {
+      double sum = A[B * r] * X[c];
+      for (int q = 1; q < B; ++q) sum += A[B * r + q] * X[B * q + c];
+      Y[B * r + c] -= sum;
+    }
 }
 
-// The solves' block updates, v -= L u and v -= L^T u for a 3 x 3 block L of the factor and
+// The solves' block updates, v -= L u and v -= L^T u for a B x B block L of the factor and
 // two distinct nodes' entries (restrict, as sub_product).
+template <int B>
 inline void sub_block_times(double* __restrict v, const double* __restrict l,
                             const double* __restrict u) {
-  for (int r = 0; r < 3; ++r) v[r] -= l[3 * r] * u[0] + l[3 * r + 1] * u[1] + l[3 * r + 2] * u[2];
+  for (int r = 0; r < B; ++r) {
+    double sum = l[B * r] * u[0];
+    for (int q = 1; q < B; ++q) sum += l[B * r + q] * u[q];
+    v[r] -= sum;
+  }
 }
+template <int B>
 inline void sub_block_transposed_times(double* __restrict v, const double* __restrict l,
                                        const double* __restrict u) {
-  for (int c = 0; c < 3; ++c) v[c] -= l[c] * u[0] + l[3 + c] * u[1] + l[6 + c] * u[2];
+  for (int c = 0; c < B; ++c) {
+    double sum = l[c] * u[0];
+    for (int q = 1; q < B; ++q) sum += l[B * q + c] * u[q];
+    v[c] -= sum;
+  }
 }
 
 // A pivot block D (symmetric, row-major; its lower triangle is read) as D = l d l^T, l unit
@@ -292,17 +308,40 @@ double BlockLdlt::scalar_flops() const {
 
 bool BlockLdlt::factorize(const Eigen::SparseMatrix<double>& S) {
   if (nb_ == 0) throw std::logic_error("BlockLdlt::factorize before analyze");
-  return sym_->uniform ? factorize_blocks<true>(S.valuePtr())
-                       : factorize_blocks<false>(S.valuePtr());
+  const double* s = S.valuePtr();
+  split_ = sym_->uniform && allow_split_ && decoupled_third(s);
+  if (split_) return factorize_blocks<2, true>(s);
+  return sym_->uniform ? factorize_blocks<3, true>(s) : factorize_blocks<3, false>(s);
+}
+
+// Every node's third coordinate couples to nothing: in the blocks the factorisation reads (the
+// upper block pattern of P S P^T), its rows and columns are 0 but for its own diagonal. The 3 x 3
+// arithmetic would then keep every third-coordinate entry of L at 0 and leave that pivot S_zz,
+// and the x-y entries would add only those zeros: the 2 x 2 kernel below does the rest of the
+// same operations in the same order, bit for bit the same factor at about a third of the flops.
+bool BlockLdlt::decoupled_third(const double* s) const {
+  const Symbolic& sym = *sym_;
+  for (int k = 0; k < nb_; ++k)
+    for (int p = sym.ap[k]; p < sym.ap[k + 1]; ++p) {
+      const bool own = sym.ai[p] == k;
+      for (int c = 0; c < 3; ++c)
+        for (int r = 0; r < 3; ++r)
+          if ((r == 2 || c == 2) && !(own && r == 2 && c == 2) && s[sym.at[p][c] + r] != 0.0)
+            return false;
+    }
+  return true;
 }
 
 // Padded groups (Uniform false) enter as identity rows and columns: their entries of L stay
 // exactly 0 and their pivots 1, so the real unknowns' arithmetic is that of the unpadded
 // matrix. Uniform (every group 3, the spring networks) is the same loop with the sizes known at
 // compile time, which the compiler unrolls (docs/numerics.md, "Linear algebra", has the
-// measurement); the results are the same bit for bit.
-template <bool Uniform>
+// measurement); the results are the same bit for bit. B = 2 (uniform only): the x-y blocks of a
+// matrix whose third coordinates are decoupled (decoupled_third), each third pivot its S_zz.
+template <int B, bool Uniform>
 bool BlockLdlt::factorize_blocks(const double* s) {
+  static_assert(B == 3 || (B == 2 && Uniform), "the 2 x 2 kernel is for uniform nodes");
+  constexpr int BB = B * B;
   const Symbolic& sym = *sym_;
   std::fill(lnz_.begin(), lnz_.end(), 0);
   std::fill(flag_.begin(), flag_.end(), -1);
@@ -312,12 +351,15 @@ bool BlockLdlt::factorize_blocks(const double* s) {
     // each entry's row up to k, in topological order at stack_[top..nb_).
     int top = nb_;
     flag_[k] = k;
+    double szz = 0.0;  // B = 2: the third coordinate's diagonal, its pivot
     for (int p = sym.ap[k]; p < sym.ap[k + 1]; ++p) {
-      double* y = &work_[9 * static_cast<std::size_t>(sym.ai[p])];
-      const int rows = Uniform ? 3 : sym.size[sym.ai[p]];
-      const int cols = Uniform ? 3 : sym.size[k];
+      double* y = &work_[BB * static_cast<std::size_t>(sym.ai[p])];
+      const int rows = Uniform ? B : sym.size[sym.ai[p]];
+      const int cols = Uniform ? B : sym.size[k];
       for (int c = 0; c < cols; ++c)
-        for (int r = 0; r < rows; ++r) y[3 * r + c] += s[sym.at[p][c] + r];
+        for (int r = 0; r < rows; ++r) y[B * r + c] += s[sym.at[p][c] + r];
+      if constexpr (B == 2)
+        if (sym.ai[p] == k) szz = s[sym.at[p][2] + 2];
       int len = 0;
       for (int i = sym.ai[p]; flag_[i] != k; i = sym.parent[i]) {
         stack_[len++] = i;
@@ -325,58 +367,76 @@ bool BlockLdlt::factorize_blocks(const double* s) {
       }
       while (len > 0) stack_[--top] = stack_[--len];
     }
-    double d[9];
-    double* yk = &work_[9 * static_cast<std::size_t>(k)];
-    std::copy(yk, yk + 9, d);
-    std::fill(yk, yk + 9, 0.0);
-    if (!Uniform)
+    double d[BB];
+    double* yk = &work_[BB * static_cast<std::size_t>(k)];
+    std::copy(yk, yk + BB, d);
+    std::fill(yk, yk + BB, 0.0);
+    if constexpr (!Uniform)
       for (int q = sym.size[k]; q < 3; ++q) d[4 * q] = 1.0;  // a padded coordinate's pivot
     // Row k of L: solve L(0:k, 0:k) y = column k along the pattern; L(k, i) = y_i^T D_i^-1,
     // D_k = S_kk - sum_i L(k, i) y_i.
     for (; top < nb_; ++top) {
       const int i = stack_[top];
-      double* wi = &work_[9 * static_cast<std::size_t>(i)];
-      double y[9];
-      std::copy(wi, wi + 9, y);
-      std::fill(wi, wi + 9, 0.0);
+      double* wi = &work_[BB * static_cast<std::size_t>(i)];
+      double y[BB];
+      std::copy(wi, wi + BB, y);
+      std::fill(wi, wi + BB, 0.0);
       const int end = sym.lp[i] + lnz_[i];
       for (int p = sym.lp[i]; p < end; ++p)
-        sub_product(&work_[9 * static_cast<std::size_t>(li_[p])],
-                    &lx_[9 * static_cast<std::size_t>(p)], y);
-      // L(k, i) = y^T D_i^-1: its row r is D_i^-1 times y's column r (D_i symmetric).
-      double* l = &lx_[9 * static_cast<std::size_t>(end)];
-      for (int r = 0; r < 3; ++r) {
-        double col[3] = {y[r], y[3 + r], y[6 + r]};
+        sub_product<B>(&work_[BB * static_cast<std::size_t>(li_[p])],
+                       &lx_[BB * static_cast<std::size_t>(p)], y);
+      // L(k, i) = y^T D_i^-1: its row r is D_i^-1 times y's column r (D_i symmetric; with
+      // B = 2 the column's third entry is the 0 the 3 x 3 arithmetic would carry).
+      double* l = &lx_[BB * static_cast<std::size_t>(end)];
+      for (int r = 0; r < B; ++r) {
+        double col[3] = {y[r], y[B + r], 0.0};
+        if constexpr (B == 3) col[2] = y[2 * B + r];
         apply_pivot_inverse(&pivot_[6 * static_cast<std::size_t>(i)], col);
-        std::copy(col, col + 3, l + 3 * r);
+        std::copy(col, col + B, l + B * r);
       }
-      sub_product(d, l, y);
+      sub_product<B>(d, l, y);
       li_[end] = k;
       ++lnz_[i];
     }
-    if (!factor_pivot(d, &pivot_[6 * static_cast<std::size_t>(k)])) return false;
+    double* f = &pivot_[6 * static_cast<std::size_t>(k)];
+    if constexpr (B == 2) {  // the pivot block as the 3 x 3 arithmetic holds it
+      const double full[9] = {d[0], d[1], 0.0, d[2], d[3], 0.0, 0.0, 0.0, szz};
+      if (!factor_pivot(full, f)) return false;
+    } else if (!factor_pivot(d, f)) {
+      return false;
+    }
   }
   return true;
 }
 
 void BlockLdlt::solve(const double* b, double* x) {
+  if (split_)
+    solve_blocks<2>(b, x);
+  else
+    solve_blocks<3>(b, x);
+}
+
+template <int B>
+void BlockLdlt::solve_blocks(const double* b, double* x) {
+  constexpr int BB = B * B;
   const Symbolic& sym = *sym_;
   double* w = work_.data();  // 3 per node, in elimination order
   for (int k = 0; k < nb_; ++k)
     for (int r = 0; r < 3; ++r) w[3 * k + r] = r < sym.size[k] ? b[sym.first[k] + r] : 0.0;
   // Node j's entries are copied out while its column updates other nodes' (rows li_ > j): the
-  // same operations, without a reload after every store.
+  // same operations, without a reload after every store. With B = 2 the third coordinates'
+  // entries of L are 0: L leaves them as they are.
   for (int j = 0; j < nb_; ++j) {  // L z = P b
     const double wj[3] = {w[3 * j], w[3 * j + 1], w[3 * j + 2]};
     for (int p = sym.lp[j]; p < sym.lp[j + 1]; ++p)
-      sub_block_times(&w[3 * li_[p]], &lx_[9 * static_cast<std::size_t>(p)], wj);
+      sub_block_times<B>(&w[3 * li_[p]], &lx_[BB * static_cast<std::size_t>(p)], wj);
   }
   for (int j = 0; j < nb_; ++j)  // D^-1
     apply_pivot_inverse(&pivot_[6 * static_cast<std::size_t>(j)], &w[3 * j]);
   for (int j = nb_ - 1; j >= 0; --j) {  // L^T
     double wj[3] = {w[3 * j], w[3 * j + 1], w[3 * j + 2]};
     for (int p = sym.lp[j]; p < sym.lp[j + 1]; ++p)
-      sub_block_transposed_times(wj, &lx_[9 * static_cast<std::size_t>(p)], &w[3 * li_[p]]);
+      sub_block_transposed_times<B>(wj, &lx_[BB * static_cast<std::size_t>(p)], &w[3 * li_[p]]);
     std::copy(wj, wj + 3, &w[3 * j]);
   }
   for (int k = 0; k < nb_; ++k)

@@ -3,7 +3,10 @@
 // where every particle's three coordinates couple to the same neighbours. On the mirror-reduced
 // drapes (models/mirror_reduced.hpp) a particle on a mirror plane keeps 1 or 2 coordinates: its
 // node is padded to 3 with identity rows and columns, which the arithmetic keeps exact (their
-// entries of L stay 0, their pivots 1), so those matrices are factorised in blocks too.
+// entries of L stay 0, their pivots 1), so those matrices are factorised in blocks too. A
+// planar network (the knit's default: z held by k_p I, models/spring_network.hpp) keeps its
+// z unknowns coupled to nothing: where S's values say so, the factorisation runs in 2 x 2 x-y
+// blocks, each z pivot its diagonal, the same factor bit for bit at ~30 % of the flops (factorize).
 //
 //   S = P^T L D L^T P,  L unit block lower triangular (3 x 3 blocks), D block diagonal.
 //
@@ -44,8 +47,16 @@ class BlockLdlt {
   bool try_analyze(const Eigen::SparseMatrix<double>& S);
   // Forgets the memoised analyses (tests: a fresh analysis against a remembered one).
   static void clear_symbolic_memo();
-  // Numeric factorisation; false if a pivot block is singular or not finite.
+  // Numeric factorisation; false if a pivot block is singular or not finite. Where every node
+  // has 3 unknowns and the third couples to nothing (S's entries in its row and column are 0
+  // but its diagonal: a planar spring network's z, whose stiffness is k_p I), the x-y blocks
+  // are factorised 2 x 2 and each z pivot is its diagonal: the same factor bit for bit at about
+  // a third of the flops (split()). Decided from S's values at each factorisation.
   bool factorize(const Eigen::SparseMatrix<double>& S);
+  // Whether the latest factorisation split the third coordinates out; allow_split(false) keeps
+  // every factorisation in 3 x 3 blocks (tests compare the two).
+  bool split() const { return split_; }
+  void allow_split(bool allow) { allow_split_ = allow; }
   // x = S^-1 b for the latest successful factorisation; b and x must not overlap.
   void solve(const double* b, double* x);
   // Negative pivots d of the latest successful factorisation: by Sylvester's law of inertia the
@@ -55,8 +66,9 @@ class BlockLdlt {
   // Stored entries of L (3 x 3 blocks, counted as scalars).
   long nonzeros_l() const;
   // Entries of L below the diagonal and flops of one factorisation, counted on the scalar
-  // columns (SymmetricFactor::factor_flops): padded coordinates count, their zeros are computed
-  // too.
+  // columns (SymmetricFactor::factor_flops): the pattern's count, so padded coordinates count,
+  // their zeros are computed too, and a split factorisation's third coordinates count too
+  // (it does about 30 % of these flops).
   double scalar_nonzeros() const;
   double scalar_flops() const;
 
@@ -69,9 +81,14 @@ class BlockLdlt {
   std::vector<double> lx_;                    // L's blocks, 9 per entry (row-major)
   std::vector<double> pivot_;  // D_k = l d l^T, 6 per node: d0, d1, d2, l10, l20, l21
   std::vector<double> work_;   // 9 per node: the row of L being formed; 3 per node in solve
+  bool split_ = false;         // the latest factorisation's blocks are 2 x 2 (lx_: 4 per entry)
+  bool allow_split_ = true;
 
-  template <bool Uniform>
+  bool decoupled_third(const double* s) const;
+  template <int B, bool Uniform>
   bool factorize_blocks(const double* s);
+  template <int B>
+  void solve_blocks(const double* b, double* x);
 };
 
 }  // namespace knitsim::detail

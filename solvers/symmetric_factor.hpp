@@ -13,7 +13,8 @@
 //   block       the same up-looking LDL^T in 3 x 3 particle blocks (solvers/block_ldlt.hpp):
 //               same fill, one index per block instead of nine, unrolled 3 x 3 kernels. Used
 //               where S is made of such blocks: every spring network, the mirror-reduced drapes
-//               too (a particle on a mirror plane keeps 1 or 2 coordinates, padded to 3).
+//               too (a particle on a mirror plane keeps 1 or 2 coordinates, padded to 3);
+//               2 x 2 x-y blocks where a planar network's z unknowns couple to nothing.
 //   supernodal  CHOLMOD's supernodal LL^T (AMD or METIS ordering, dense BLAS kernels on the
 //               supernodes). Fastest on large grids with an optimised BLAS (Debian's
 //               libopenblas0-serial, which run.sh installs); LL^T needs S positive definite,
@@ -66,8 +67,10 @@ class SymmetricFactor {
   // Size and cost of one numeric factorisation of the analysed pattern by the chosen back end,
   // in CHOLMOD's convention: with c_j the entries of L below the diagonal in column j,
   // nonzeros = sum_j c_j and flops = sum_j (c_j + 1)^2 (a multiply and an add count 2). The
-  // block back end counts its padded coordinates; the supernodal one reports CHOLMOD's count
-  // for the exact pattern, before amalgamation adds explicit zeros to the supernodes. Both 0
+  // block back end counts its padded coordinates and, where it splits a planar network's z out,
+  // the z columns too (the pattern's count: the split does ~30 % of it); the supernodal one
+  // reports CHOLMOD's count for the exact pattern, before amalgamation adds explicit zeros to
+  // the supernodes. Both 0
   // before analyze(). On a 2-D grid nested dissection's theory has them grow like N log N and
   // N^1.5; on the four_corner drapes (AMD) the flops grew like N^1.75 (experiments/scaling).
   double factor_nonzeros() const;

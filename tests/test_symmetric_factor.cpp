@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "models/drape_grid.hpp"
+#include "models/knit_loops.hpp"
 #include "models/mirror_reduced.hpp"
 #include "solvers/block_ldlt.hpp"
 #include "solvers/integrator.hpp"
@@ -426,6 +427,92 @@ TEST_CASE("BlockLdlt: the mirror-reduced drapes are blocked and solve as the sca
   scalar.solve(b, xs);
   CHECK(relative_error(S, b, xb) < 1e-10);
   CHECK((xb - xs).cwiseAbs().maxCoeff() <= 1e-10 * xs.cwiseAbs().maxCoeff());
+}
+
+// Factorises S with the third coordinates' split allowed or not; the solution of S x = b and
+// the negative pivots, with whether it split.
+struct SplitRun {
+  bool ok = false, split = false;
+  int negative = -1;
+  Eigen::VectorXd x;
+};
+SplitRun factorise_split(const Eigen::SparseMatrix<double>& S, bool allow) {
+  detail::BlockLdlt f;
+  f.allow_split(allow);
+  f.analyze(S);
+  SplitRun run;
+  run.ok = f.factorize(S);
+  run.split = f.split();
+  if (!run.ok) return run;
+  run.negative = f.negative_pivots();
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(S.rows(), -2.0, 3.0);
+  run.x.resize(S.rows());
+  f.solve(b.data(), run.x.data());
+  return run;
+}
+
+TEST_CASE("BlockLdlt: decoupled third coordinates are split out, bit for bit the same factor") {
+  const unsigned seed = GENERATE(1u, 2u, 3u);
+  // An indefinite block matrix with every z coupled to nothing but its own diagonal (stored
+  // zeros: the pattern keeps whole 3 x 3 blocks), as a planar network's S is.
+  Eigen::SparseMatrix<double> planar = random_block_matrix(60, 3, seed);
+  for (int j = 0; j < planar.outerSize(); ++j)
+    for (int k = planar.outerIndexPtr()[j]; k < planar.outerIndexPtr()[j + 1]; ++k) {
+      const int i = planar.innerIndexPtr()[k];
+      if ((i % 3 == 2 || j % 3 == 2) && i != j) planar.valuePtr()[k] = 0.0;
+    }
+  const SplitRun two = factorise_split(planar, true), three = factorise_split(planar, false);
+  REQUIRE(two.ok);
+  REQUIRE(three.ok);
+  CHECK(two.split);
+  CHECK_FALSE(three.split);
+  CHECK(two.negative == three.negative);
+  CHECK(two.negative > 0);
+  CHECK(two.x == three.x);  // bit for bit
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(planar.rows(), -2.0, 3.0);
+  CHECK(relative_error(planar, b, two.x) < 1e-12);
+
+  // One coupling of a z left (an x-z entry off the diagonal, or a z-z between two nodes): the
+  // factorisation stays 3 x 3 and solves that matrix.
+  const bool between_nodes = GENERATE(false, true);
+  Eigen::SparseMatrix<double> coupled = planar;
+  bool set = false;
+  for (int j = 0; j < coupled.outerSize() && !set; ++j)
+    for (int k = coupled.outerIndexPtr()[j]; k < coupled.outerIndexPtr()[j + 1] && !set; ++k) {
+      const int i = coupled.innerIndexPtr()[k];
+      const bool pick =
+          between_nodes ? (i % 3 == 2 && j % 3 == 2 && i / 3 != j / 3) : (i % 3 == 2 && j == i - 2);
+      if (!pick) continue;
+      coupled.coeffRef(i, j) = 0.25;
+      coupled.coeffRef(j, i) = 0.25;
+      set = true;
+    }
+  REQUIRE(set);
+  const SplitRun kept = factorise_split(coupled, true);
+  REQUIRE(kept.ok);
+  CHECK_FALSE(kept.split);
+  CHECK(relative_error(coupled, b, kept.x) < 1e-12);
+}
+
+TEST_CASE("BlockLdlt: a planar knit network with yarn contact is factorised split") {
+  // The default knit model (planar, with contact), its S at a moved state: z is held by k_p I.
+  const KnitModel m = build_knit(parse_knit_chart("KKKKK\nKTKMK\nKKKKK\nKKKKK\n"), KnitParams{});
+  REQUIRE(m.contact);
+  REQUIRE(m.system().planar());
+  const Eigen::SparseMatrix<double> S = schur_at(m.system(), 1e-3, 1e-5);
+  const SplitRun two = factorise_split(S, true), three = factorise_split(S, false);
+  REQUIRE(two.ok);
+  REQUIRE(three.ok);
+  CHECK(two.split);
+  CHECK(two.x == three.x);
+  // With the bending stencils the points leave the plane: z couples, nothing is split.
+  KnitParams bending;
+  bending.bending_ratio = 1.0;
+  bending.contact_ratio = 0.0;
+  const KnitModel b = build_knit(parse_knit_chart("KKKKK\nKTKMK\nKKKKK\nKKKKK\n"), bending);
+  const SplitRun out_of_plane = factorise_split(schur_at(b.system(), 1e-3, 1e-5), true);
+  REQUIRE(out_of_plane.ok);
+  CHECK_FALSE(out_of_plane.split);
 }
 
 TEST_CASE("BlockLdlt: a remembered analysis factorises bit for bit as a fresh one, per pattern") {
