@@ -67,8 +67,9 @@
 // d0 + filter_keep (D_start - d0), found exactly for the straight move of each point from its start
 // to its end (a quadratic in the fraction). A co-rotated point's path bends: the step is swept as
 // chords between exact states, each turning no point more than kChordTurn, and the admitted end
-// is checked exactly (halved while a pair is inside a core). Pairs by their swept boxes on the
-// grid. The equilibrium
+// is checked exactly (halved while a pair is inside a core). Pairs from the near-pair list where
+// no point ends further than skin / 2 from where it was listed (then every pair that can come
+// within d is listed), else by their swept boxes on the grid. The equilibrium
 // solver and implicit-euler shorten their steps by it, so no step jumps through the barrier.
 // The SUNDIALS methods have no such hook: a state inside the core gives a non-finite
 // acceleration, which they treat as a recoverable failure (a smaller step).
@@ -188,6 +189,8 @@ class ContactNetwork final : public MechanicalSystem {
   // Pairs in contact whose Jacobian blocks were not all in the pattern, over all evaluations.
   long pattern_misses() const { return pattern_misses_; }
   long list_rebuilds() const { return rebuilds_; }
+  // Step-filter and renewal sweeps that found their pairs in the near-pair list (sweep_fraction).
+  long list_sweeps() const { return list_sweeps_; }
   long refreshes() const { return refreshes_; }  // yarns renewed, over all refreshes
   long cut_renewals() const { return cut_renewals_; }  // renewals the step filter cut short
 
@@ -218,7 +221,8 @@ class ContactNetwork final : public MechanicalSystem {
   void barrier(double D, double& e, double& de, double& d2e) const;
   // The largest fraction in [0, 1] of the points' straight moves from start along which no pair
   // comes closer than d0 + keep (min(D_start, d) - d0): exact (a quadratic per pair), pairs by
-  // their swept boxes. The step filter keeps filter_keep, a renewal renew_keep.
+  // their swept boxes, or the near-pair list where it holds every pair the moves can bring
+  // within d. The step filter keeps filter_keep, a renewal renew_keep.
   double sweep_fraction(const std::vector<Vec3>& start, const std::vector<Vec3>& move,
                         double keep) const;
   double turn_angle(int k) const;  // point k's phi at pts_'s state (0 for a plain point), rad
@@ -242,7 +246,8 @@ class ContactNetwork final : public MechanicalSystem {
   mutable std::vector<Vec3> grad_;  // per point, dE/dp summed over its pairs (stiffness_values)
   mutable std::vector<Pair> pairs_;
   mutable std::vector<double> net_values_, force_;
-  mutable long pattern_misses_ = 0, rebuilds_ = 0, refreshes_ = 0, cut_renewals_ = 0;
+  mutable long pattern_misses_ = 0, rebuilds_ = 0, refreshes_ = 0, cut_renewals_ = 0,
+               list_sweeps_ = 0;
 };
 
 }  // namespace knitsim

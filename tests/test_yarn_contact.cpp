@@ -465,6 +465,34 @@ TEST_CASE("yarn contact: the step filter keeps every pair outside the core", "[c
   CHECK(cut > 0);  // random steps of 3 r do hit the barrier
 }
 
+TEST_CASE("yarn contact: small steps are swept on the near-pair list, to the same fraction",
+          "[contact]") {
+  // Steps whose points stay within half the skin of where the list was made are swept on the
+  // list; a network whose skin is too thin for that sweeps the same steps by their boxes.
+  const KnitModel m = chart_model("single_tuck.chart", with_contact());
+  const std::vector<double> x = tuck_in_contact(m);
+  YarnContactSpec thin = m.contact->contact();
+  thin.skin = 1e-9 * thin.touching;
+  const ContactNetwork boxes(m.network, thin);
+  const ContactNetwork& listed = *m.contact;
+  const double r = m.params.loop_radius;
+  const int n = listed.dof();
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int cut = 0;
+  for (int trial = 0; trial < 20; ++trial) {
+    std::vector<double> dx(n);
+    for (double& d : dx) d = 0.01 * r * u(rng);
+    const long before = listed.list_sweeps();
+    const double f = listed.admissible_step(0.0, x.data(), dx.data());
+    CHECK(listed.list_sweeps() > before);
+    CHECK(boxes.admissible_step(0.0, x.data(), dx.data()) == f);  // bit for bit
+    cut += f < 1.0;
+  }
+  CHECK(boxes.list_sweeps() == 0);
+  CHECK(cut > 0);  // pairs near their floor: some of these steps are cut
+}
+
 TEST_CASE("yarn contact: the equilibrium solver and implicit-euler stay outside the core",
           "[contact]") {
   const KnitModel m = chart_model("single_tuck.chart", with_contact(10.0));

@@ -408,7 +408,8 @@ nlohmann::json contact_json(const KnitModel& m, double t, const std::vector<doub
           {"renewed_yarns", c.refreshes()},
           {"renewals_cut", c.cut_renewals()},
           {"pattern_misses", c.pattern_misses()},
-          {"list_rebuilds", c.list_rebuilds()}};
+          {"list_rebuilds", c.list_rebuilds()},
+          {"list_sweeps", c.list_sweeps()}};
 }
 
 void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m,
@@ -553,7 +554,8 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
                        "closest two contact points at the end / loop radius (null: no "
                        "pair within reach); pairs_in_contact: pairs closer than the touching "
                        "distance r; renewed_yarns, renewals_cut, pattern_misses, "
-                       "list_rebuilds: counts over the run (docs/knit.md, Yarn contact)"},
+                       "list_rebuilds, list_sweeps: counts over the run (docs/knit.md, Yarn "
+                       "contact)"},
                       {"params",
                        "loop_radius m; wale_stiffness, "
                        "course_stiffness N/m; damping N s/m; "
