@@ -674,10 +674,30 @@ std::vector<ContactPoint> knit_contact_points(const KnitModel& m,
   for (int L = j; L <= std::min(top, C); ++L)
     for (int i = 0; i < W; ++i)
       if (m.point(i, L) >= 0) ids.push_back(m.point(i, L));
-  // d vertex / d particle (x, y) by central differences: per vertex, per particle, a 3 x 2.
-  std::vector<std::array<double, 6>> J(v.size() * ids.size(), std::array<double, 6>{});
+  // Given particles_of (a renewal), each vertex's particles as indices into ids, in its order.
+  std::vector<std::array<int, kContactParticles>> given(particles_of ? v.size() : 0, filled(-1));
+  std::vector<char> used(ids.size(), particles_of == nullptr);
+  for (std::size_t k = 0; k < given.size(); ++k)
+    for (int i = 0; i < kContactParticles && particles_of[k].particles[i] >= 0; ++i) {
+      const auto at = std::find(ids.begin(), ids.end(), particles_of[k].particles[i]);
+      if (at == ids.end())
+        throw std::invalid_argument("knit_contact_points: a given particle is not the course's");
+      given[k][i] = static_cast<int>(at - ids.begin());
+      used[given[k][i]] = 1;
+    }
+  // d vertex / d particle (x, y) by central differences, a 3 x 2 per vertex and particle: for
+  // every particle of the course at set-up (the largest are kept), else only for each vertex's
+  // given particles, in their slots.
+  const std::size_t columns = particles_of ? kContactParticles : ids.size();
+  std::vector<std::array<double, 6>> J(v.size() * columns, std::array<double, 6>{});
+  auto entry = [&](int k, std::size_t q) -> std::array<double, 6>* {
+    if (!particles_of) return &J[k * columns + q];
+    for (int i = 0; i < kContactParticles; ++i)
+      if (given[k][i] == static_cast<int>(q)) return &J[k * columns + i];
+    return nullptr;
+  };
   for (std::size_t q = 0; q < ids.size(); ++q)
-    for (int c = 0; c < 2; ++c) {
+    for (int c = 0; c < 2 && used[q]; ++c) {
       double& coord = c == 0 ? pos[ids[q]].x : pos[ids[q]].y;
       const double keep = coord;
       coord = keep + h;
@@ -698,33 +718,29 @@ std::vector<ContactPoint> knit_contact_points(const KnitModel& m,
       polyline_vertices({plus.begin() + lo, plus.begin() + hi + 1}, S, first - lo, last - lo, vp);
       polyline_vertices({minus.begin() + lo, minus.begin() + hi + 1}, S, first - lo, last - lo, vm);
       for (int k = first * S; k <= last * S; ++k) {
-        const int t = k - first * S;                                 // the vertex's index in vp, vm
-        J[k * ids.size() + q][c] = (vp[t].x - vm[t].x) / (2.0 * h);  // d vx / d c
-        J[k * ids.size() + q][2 + c] = (vp[t].y - vm[t].y) / (2.0 * h);  // d vy / d c
-        J[k * ids.size() + q][4 + c] = (vp[t].z - vm[t].z) / (2.0 * h);  // d vz / d c
+        std::array<double, 6>* e = entry(k, q);
+        if (e == nullptr) continue;
+        const int t = k - first * S;                    // the vertex's index in vp, vm
+        (*e)[c] = (vp[t].x - vm[t].x) / (2.0 * h);      // d vx / d c
+        (*e)[2 + c] = (vp[t].y - vm[t].y) / (2.0 * h);  // d vy / d c
+        (*e)[4 + c] = (vp[t].z - vm[t].z) / (2.0 * h);  // d vz / d c
       }
     }
   // Per vertex the kContactParticles particles of largest |W|; the rest is added to the
   // largest, so the weights sum to [I; 0] (translations in the plane carried exactly).
-  std::vector<int> order(ids.size());
+  std::vector<int> order(columns);
   for (std::size_t k = 0; k < v.size(); ++k) {
-    const std::array<double, 6>* row = &J[k * ids.size()];
+    const std::array<double, 6>* row = &J[k * columns];
     auto size = [&](int q) {
       double s = 0.0;
       for (double w : row[q]) s += w * w;
       return s;
     };
-    for (std::size_t q = 0; q < ids.size(); ++q) order[q] = static_cast<int>(q);
+    for (std::size_t q = 0; q < columns; ++q) order[q] = static_cast<int>(q);
     std::size_t keep = std::min<std::size_t>(kContactParticles, ids.size());
-    if (particles_of != nullptr) {  // the given point's particles, in its order
-      const ContactPoint& given = particles_of[k];
+    if (particles_of != nullptr) {  // the given point's particles, in its order (its slots)
       keep = 0;
-      for (int i = 0; i < kContactParticles && given.particles[i] >= 0; ++i) {
-        const auto at = std::find(ids.begin(), ids.end(), given.particles[i]);
-        if (at == ids.end())
-          throw std::invalid_argument("knit_contact_points: a given particle is not the course's");
-        order[keep++] = static_cast<int>(at - ids.begin());
-      }
+      while (keep < kContactParticles && given[k][keep] >= 0) ++keep;
     } else {
       std::partial_sort(order.begin(), order.begin() + keep, order.end(),
                         [&](int a, int b) { return size(a) > size(b); });
@@ -734,7 +750,7 @@ std::vector<ContactPoint> knit_contact_points(const KnitModel& m,
     p.arc = arc[k];
     std::array<double, 6> rest_sum{};
     for (std::size_t q = 0; q < keep; ++q) {
-      p.particles[q] = ids[order[q]];
+      p.particles[q] = ids[particles_of ? given[k][q] : order[q]];
       p.weights[q] = row[order[q]];
       for (int e = 0; e < 6; ++e) rest_sum[e] += row[order[q]][e];
     }
