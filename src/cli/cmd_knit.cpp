@@ -622,6 +622,12 @@ void run(const KnitArgs& args) {
   bool created = false;
   const fs::path dir = make_output_dir(args.out, "knit-" + name, &created);
   warn_about_run("knit.damping", params.damping, integ->info(), args.options, opt.t_max);
+  if (model.contact && integ->info().explicit_method)  // docs/knit.md, "What is not met, and why"
+    warn("yarn contact with " + integrator +
+         ": the chart's first impacts (~10 us in) carry more energy than the barrier holds above "
+         "its core in double precision, so it fails there whatever its step (docs/knit.md, \"What "
+         "is not met, and why\"); equilibrium (the default) and implicit-euler keep every pair "
+         "off its core");
   if (params.mechanism())
     warn(std::string(params.network == KnitNetwork::Paper ? "knit.network = paper"
                                                           : "knit.stabiliser = 0") +
