@@ -169,11 +169,13 @@ void add_newton_solver_option(CLI::App* cmd, IntegratorOptions::NewtonSolver& wh
 void add_factorization_option(CLI::App* cmd, IntegratorOptions::Factorization& which) {
   using F = IntegratorOptions::Factorization;
   static const F all[] = {F::Automatic, F::Simplicial, F::Block, F::Supernodal};
-  add_named_option(cmd, "--factorization", which, all,
-                   "sparse factorisation of the 3n symmetric matrix (implicit-euler, ldl, cg-ldl, "
-                   "schur-ldl): simplicial (Eigen LDL^T), block (LDL^T in 3 x 3 particle blocks; "
-                   "simplicial where the matrix has none), supernodal (CHOLMOD LL^T, LDL^T where "
-                   "not positive definite) or auto (block, supernodal from 33000 unknowns)");
+  add_named_option(
+      cmd, "--factorization", which, all,
+      "sparse factorisation of the 3n symmetric matrix (implicit-euler, ldl, cg-ldl, "
+      "schur-ldl): simplicial (Eigen LDL^T), block (LDL^T in 3 x 3 particle blocks, 2 x 2 "
+      "where z couples to nothing; simplicial where the matrix has none), supernodal (CHOLMOD "
+      "LL^T, LDL^T where "
+      "not positive definite) or auto (block, supernodal from 33000 unknowns)");
 }
 
 void add_gmres_options(CLI::App* cmd, IntegratorOptions& o) {
