@@ -496,7 +496,8 @@ TEST_CASE("BlockLdlt: decoupled third coordinates are split out, bit for bit the
 
 TEST_CASE("BlockLdlt: a planar knit network with yarn contact is factorised split") {
   // The default knit model (planar, with contact), its S at a moved state: z is held by k_p I.
-  const KnitModel m = build_knit(parse_knit_chart("KKKKK\nKTKMK\nKKKKK\nKKKKK\n"), KnitParams{});
+  const KnitChart chart = parse_knit_chart("KKKKK\nKTKMK\nKKKKK\nKKKKK\n");
+  const KnitModel m = build_knit(chart, KnitParams{});
   REQUIRE(m.contact);
   REQUIRE(m.system().planar());
   const Eigen::SparseMatrix<double> S = schur_at(m.system(), 1e-3, 1e-5);
@@ -509,7 +510,7 @@ TEST_CASE("BlockLdlt: a planar knit network with yarn contact is factorised spli
   KnitParams bending;
   bending.bending_ratio = 1.0;
   bending.contact_ratio = 0.0;
-  const KnitModel b = build_knit(parse_knit_chart("KKKKK\nKTKMK\nKKKKK\nKKKKK\n"), bending);
+  const KnitModel b = build_knit(chart, bending);
   const SplitRun out_of_plane = factorise_split(schur_at(b.system(), 1e-3, 1e-5), true);
   REQUIRE(out_of_plane.ok);
   CHECK_FALSE(out_of_plane.split);

@@ -174,8 +174,8 @@ void add_factorization_option(CLI::App* cmd, IntegratorOptions::Factorization& w
       "sparse factorisation of the 3n symmetric matrix (implicit-euler, ldl, cg-ldl, "
       "schur-ldl): simplicial (Eigen LDL^T), block (LDL^T in 3 x 3 particle blocks, 2 x 2 "
       "where z couples to nothing; simplicial where the matrix has none), supernodal (CHOLMOD "
-      "LL^T, LDL^T where "
-      "not positive definite) or auto (block, supernodal from 33000 unknowns)");
+      "LL^T, LDL^T where not positive definite) or auto (block, supernodal from 33000 "
+      "unknowns)");
 }
 
 void add_gmres_options(CLI::App* cmd, IntegratorOptions& o) {
