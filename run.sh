@@ -58,7 +58,7 @@ if grep -qs '/knitsim_optimizers\.dir$' "$BUILD_DIR/CMakeFiles/TargetDirectories
   build knitsim_optimizers
 fi
 
-# The main job (SPEC 2.11): the quick reproduction of paper 1's Tables 4 and 6 (with the Taguchi
+# The main job: the quick reproduction of paper 1's Tables 4 and 6 (with the Taguchi
 # tuning, Fig. 13 and the fitted drapes), the integrator comparison on the built-in scenes, and
 # every study of experiments/ in its quick mode; one report links them.
 OUT_DIR=${OUT_DIR:-out/run-$(date +%Y%m%d-%H%M%S)}

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Synthetic targets of paper 1's reproduction (SPEC 2.8, src/fit/synthetic_targets.hpp).
+# Synthetic targets of paper 1's reproduction (paper_repro/data/README.md, src/fit/synthetic_targets.hpp).
 #
 #   paper_repro/make_targets.sh           regenerates the 18 committed files
 #                                         paper_repro/data/targets/{twin,cross}_sample{1..9}.csv

@@ -1,4 +1,4 @@
-// The knitsim binary against its command-line contract (SPEC 2.10), and the output writers.
+// The knitsim binary against its command-line contract (docs/commands.md), and the output writers.
 //   bad input: exit 2, one stderr line naming the field, nothing written;
 //   a settled run: exit 0 and outputs that agree with each other;
 //   an unsettled run: exit 3 with the outputs still written.

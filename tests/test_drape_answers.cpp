@@ -1,5 +1,5 @@
 // Answer-file regression (SUNDIALS-examples style, digits as published): the four_corner
-// equilibrium of sample 1 (SPEC 2.12 fabric) against an independent implementation's values:
+// equilibrium of sample 1 (the benchmark fabric, experiments/benchmark) against an independent implementation's values:
 // centre 1.288 cm below the corners for topology a, ~1.45 cm for b, ~6.9 cm for c (ours:
 // docs/scenes.md). Two integrators of different kinds must agree with each other and with it.
 #include <catch2/catch.hpp>

@@ -283,7 +283,7 @@ TEST_CASE("paper 1's tables (paper_repro/data) parse and agree with the code's d
   for (const char* name : {"/table4_four_corner.csv", "/table6_two_corner.csv"}) {
     const auto t = read_csv(dir + name);
     REQUIRE(t.size() == 9);
-    for (const auto& row : t) {  // natural length printed in mm (SPEC 2.2)
+    for (const auto& row : t) {  // natural length printed in mm (paper_repro/data/README.md)
       const double mm = std::stod(row.at("natural_length_printed"));
       CHECK(std::stod(row.at("natural_length_m")) == Approx(mm / 1000).epsilon(1e-15));
       CHECK(std::stod(row.at("natural_length_m")) >= box.lower[kGeneNaturalLength]);
@@ -299,7 +299,7 @@ TEST_CASE("paper 1's tables (paper_repro/data) parse and agree with the code's d
   CHECK(std::stod(t6[8].at("error_percent")) == 2.6);
 }
 
-TEST_CASE("knitsim fit: bad input writes nothing; a run writes the SPEC 2.10 summary") {
+TEST_CASE("knitsim fit: bad input writes nothing; a run writes the summary docs/summary_json.md names") {
   namespace fs = std::filesystem;
   const fs::path tmp =
       fs::temp_directory_path() / ("knitsim_test_fit_cli_" + std::to_string(::getpid()));

@@ -1,4 +1,4 @@
-// Integrators and the equilibrium driver (SPEC 2.3, 2.4; STYLE practice 7): closed-form
+// Integrators and the equilibrium driver (docs/equilibrium.md, docs/numerics.md): closed-form
 // equilibria for every integrator in the catalog, observed orders of the fixed-step methods,
 // Verlet's energy behaviour, cross-integrator agreement on the drape equilibrium, the
 // elongation limit on both paths, and the driver's statuses.

@@ -1,4 +1,4 @@
-// Knit model (paper 2, SPEC 2.9): chart parsing and its errors, hand-counted topology, the
+// Knit model (paper 2, docs/knit.md): chart parsing and its errors, hand-counted topology, the
 // rest geometry of the type-value points, intermeshing, Jacobian, relaxation and integrators,
 // and the number text of `knitsim knit`'s CSV/VTK files.
 #include <Eigen/Dense>
@@ -283,7 +283,7 @@ TEST_CASE("masses share the chart's areal mass equally; residual scale, gravity 
         3 * (static_cast<int>(g.points.size()) - 8));
 }
 
-TEST_CASE("type-value points reproduce the SPEC 2.9 rest geometry exactly") {
+TEST_CASE("type-value points reproduce paper 2's rest geometry exactly") {
   const KnitParams p;
   const double r = p.loop_radius;
   const KnitModel m = model_of(chart_file("plain_jersey.chart"));

@@ -1,4 +1,4 @@
-// `knitsim knit` against the command-line contract (SPEC 2.10): a settled small chart writes
+// `knitsim knit` against the command-line contract (docs/commands.md): a settled small chart writes
 // outputs that agree with the model; a bad chart exits 2 with one line naming row and column
 // and writes nothing.
 #include <catch2/catch.hpp>

@@ -1,4 +1,4 @@
-// Drape measurement (SPEC 2.5): normalisation rules on hand-computed points, the QR polynomial
+// Drape measurement (docs/fitting.md, "1. Measure"): normalisation rules on hand-computed points, the QR polynomial
 // fit (exact recovery, least-squares optimality, an ill-conditioned case against an SVD solve),
 // the Eq. 5 objective, edges of analytic sheets, and the target CSV (lab data, round trip,
 // every malformed-file error).

@@ -1,4 +1,4 @@
-// Linear stability of the explicit fixed-step methods (SPEC 2.4): the limit measured by
+// Linear stability of the explicit fixed-step methods (docs/numerics.md, "Integrators"): the limit measured by
 // bisection on a single damped spring-mass matches predict_stable_dt (to 1 %) and the closed
 // forms.
 //

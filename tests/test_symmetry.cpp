@@ -119,7 +119,7 @@ TEST_CASE("the reduced equations are the full equations restricted to symmetric 
           CHECK(reduced.damping_rate()[j] == Approx(full.damping_rate()[k]).epsilon(1e-14));
         }
         CHECK(worst <= 1e-12 * scale);
-        // E_R = E / |G| and the same static residual (the equilibrium criterion of SPEC 2.3).
+        // E_R = E / |G| and the same static residual (the equilibrium criterion, docs/equilibrium.md).
         CHECK(reduced.potential_energy(t, q.data()) ==
               Approx(full.potential_energy(t, x.data()) / order).epsilon(1e-12));
         CHECK(reduced.static_residual(t, q.data()) ==

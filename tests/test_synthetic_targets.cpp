@@ -1,5 +1,5 @@
 // Paper 1's sample data in code (src/paper/paper_data.hpp) against the committed tables, and the
-// synthetic targets of SPEC 2.8 (src/fit/synthetic_targets.hpp): exact edges without noise, the
+// synthetic targets (paper_repro/data/README.md, src/fit/synthetic_targets.hpp): exact edges without noise, the
 // noise's statistics, determinism, and a regression pin: `knitsim targets` still writes the
 // committed twin_sample1.csv byte for byte (a file this program wrote: it pins determinism and
 // guards against unintended changes, it does not show the targets are right -- the tests of

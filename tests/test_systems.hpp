@@ -89,7 +89,7 @@ double total_energy(const MechanicalSystem& sys, double t, const double* x, cons
 
 // How far (m, max norm, to first order) a state of `net` whose static residual is at most
 // `residual` can lie from the exact equilibrium at x: the net force on each of the p free
-// particles is at most residual x F_ref (SPEC 2.3), so |F|_2 <= sqrt(p) residual F_ref, and
+// particles is at most residual x F_ref (docs/equilibrium.md), so |F|_2 <= sqrt(p) residual F_ref, and
 // the state is dx = K^-1 F away, K = -dF/dx the springs' tangent stiffness at x (symmetric
 // positive definite at a stable equilibrium):
 //   |dx|_inf <= |dx|_2 <= sqrt(p) residual F_ref / lambda_min(K).

@@ -1,5 +1,6 @@
 // Taguchi L27 (src/fit/taguchi.hpp): the array against the published table and its orthogonality,
-// the additive self-check of SPEC 2.7, the ANOVA decomposition and pooling, the CSV reader.
+// the additive self-check (exact main effects of additive data), the ANOVA decomposition and
+// pooling, the CSV reader.
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <sstream>

@@ -1,7 +1,7 @@
-// Validation at the boundary (SPEC 2.10: "non-zero with one clear line naming the bad input;
-// never a crash or a hang on bad input"): oversized and endless input files, NaN/inf and unknown
-// keys where knit --set and the target reader missed them, and an unwritable --out for every
-// command that writes. Each case states the message it expects; each failed before its fix
+// Validation at the boundary (docs/reliability.md: non-zero with one clear line naming the bad
+// input; never a crash or a hang on bad input): oversized and endless input files, NaN/inf and
+// unknown keys where knit --set and the target reader missed them, and an unwritable --out for
+// every command that writes. Each case states the message it expects; each failed before its fix
 // (noted per case) or pins down behaviour the fuzzers and the CLI rely on.
 #include <fcntl.h>
 #include <sys/file.h>

@@ -2,7 +2,7 @@
 # Drape benchmark (experiments/benchmark/README.md): cvode-bdf on four_corner and two_corner as
 # medians of REPEATS runs, on the whole sheet and on the part each scene requires (the eighth
 # of four_corner, the half of two_corner: model.symmetry), and the paper's explicit Euler reference on four_corner to the
-# same residual (SPEC 2.12 fabric: k 852 N/m, c 12 N s/m, L0 4.9 cm, 41.65 g/m^2, topology a,
+# same residual (the benchmark fabric: k 852 N/m, c 12 N s/m, L0 4.9 cm, 41.65 g/m^2, topology a,
 # i.e. the built-in scenes' defaults).
 #
 #   experiments/benchmark/run.sh [--quick] [--repeats N] [--out DIR]

@@ -26,10 +26,10 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 from expkit import (md_table, num, provenance, read_json, read_rows, span,  # noqa: E402
                     summary_main)
 
-# SPEC 2.12's targets for one drape (the requirement, not a result).
+# The design targets for one drape (docs/performance.md; the requirement, not a result).
 TARGETS = (("four_corner ≤ 10 ms", "four_corner", 0.010),
            ("two_corner ≤ 0.5 s", "two_corner", 0.5))
-EULER_FACTOR = 1e4  # SPEC 2.12: >= 1e4 x faster than the paper's explicit Euler
+EULER_FACTOR = 1e4  # target: >= 1e4 x faster than the paper's explicit Euler
 
 
 def first(folder, names, column=None):
@@ -104,8 +104,8 @@ def drape_section(folder):
                        "cvode-bdf", "Euler / cvode-bdf = %s" % num(ratio, 2),
                        "met" if ratio >= EULER_FACTOR else "not met"])
     if checks:
-        text += ("\n\nSPEC 2.12 targets (CPU of one drape; a run that did not settle is no "
-                 "evidence):\n\n" + md_table(["target", "scene", "integrator", "CPU (s)",
+        text += ("\n\nDesign targets (docs/performance.md; CPU of one drape; a run that did not "
+                 "settle is no evidence):\n\n" + md_table(["target", "scene", "integrator", "CPU (s)",
                                               "verdict"], checks))
     text += manifest_text(folder, ["drape_manifest.json"] if name == "drape_summary.csv"
                           else ["manifest.json"])

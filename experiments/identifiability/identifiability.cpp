@@ -1,4 +1,4 @@
-// Which drape parameters can the edge data determine? (SPEC 2.8 twin targets)
+// Which drape parameters can the edge data determine? (twin targets: paper_repro/data/README.md)
 //
 // For each paper sample s (Tables 2 and 4), each target set (twin, and with --sets also cross)
 // and each data set D in {four_corner, two_corner, both}:

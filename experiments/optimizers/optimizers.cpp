@@ -6,7 +6,7 @@
 // Problem: DrapeFitProblem (src/fit/drape_fit.hpp) of the base scene `--scene` (default
 // four_corner) with the Table 2 areal density of `--sample` (as `knitsim fit --scene four_corner
 // --set fabric.areal_density=<Table 2>` builds it), rtol 1e-8, the Table 3 box, fitted to
-// `--target` (default: the twin target of sample 1, SPEC 2.8). Cost = Eq. 5 error, percent.
+// `--target` (default: the twin target of sample 1, paper_repro/data/README.md). Cost = Eq. 5 error, percent.
 // Encoding, the same for every optimizer: the 5 genes k, c, eps, L0 and the topology gene u in
 // [0, 3), topology = 'a' + floor(u) (src/fit/ica.hpp category_of; pagmo may propose u = 3 exactly,
 // which maps to c). LM searches the topologies x grid sizes itself (src/fit/lm_fit.hpp).

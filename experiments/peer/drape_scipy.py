@@ -1,7 +1,7 @@
 #!/usr/bin/python3
-"""Independent implementation of the paper-1 drape (SPEC 2.1-2.3) integrated by scipy BDF.
+"""Independent implementation of the paper-1 drape (docs/scenes.md, docs/equilibrium.md) integrated by scipy BDF.
 
-Written from SPEC 2.2 only (no knitsim code): a square fabric of side W = 0.50 m and areal
+Written from paper 1's model only (no knitsim code): a square fabric of side W = 0.50 m and areal
 density rho_A (g/m^2) becomes an (n+1) x (n+1) grid, n = max(2, floor(W/L0 + 0.5)), spacing
 exactly L0, particle (i, j) at (j L0, i L0, 0), index i (n+1) + j. Masses rho_A (n L0)^2
 lumped by area (interior 1, edge 1/2, corner 1/4). Springs with one stiffness k: structural
@@ -11,7 +11,7 @@ lumped by area (interior 1, edge 1/2, corner 1/4). Springs with one stiffness k:
     dx/dt = v,   dv/dt = M^-1 (F_spring(x) + m g - c v),
 F_spring from springs (a, b): F_a = k (L - L0) u_ab, F_b = -F_a, u_ab = (x_b - x_a)/L.
 Jacobian J = [[0, I], [M^-1 K, -c M^-1]], K per spring k [(1 - L0/L)(I - u u^T) + u u^T].
-Equilibrium (SPEC 2.3): static residual r = max_i |F_i + m_i g| / (mean free mass g)
+Equilibrium (docs/equilibrium.md): static residual r = max_i |F_i + m_i g| / (mean free mass g)
 <= equilibrium_tol, checked at every BDF step (a terminal event on log r - log tol).
 The elongation limit (Provot) is not modelled: with these parameters strains stay << 5 %
 (the script prints the largest strain).

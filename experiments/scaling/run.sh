@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Scaling study (SPEC 2.12 "report how cost grows with the number of
-# particles"): four_corner drapes of one 50 x 50 cm sheet refined from 11 x 11 to 101 x 101
+# Scaling study (how cost grows with the number of
+# particles): four_corner drapes of one 50 x 50 cm sheet refined from 11 x 11 to 101 x 101
 # particles (and 141 x 141 in full mode) with cvode-bdf (Schur LDL^T and KLU), cvode-bdf-gmres,
 # implicit-euler and the equilibrium solver on the full grid, the equilibrium solver as the
 # default runs it (model.symmetry = auto: the eighth here; label equilibrium-auto), and `static`
@@ -10,7 +10,7 @@
 #   experiments/scaling/run.sh [--quick | --target [--repeats R]] [--grids "N ..."]
 #                              [--solver "LABEL ..."] [--out DIR] [--max-wall S]
 #
-# --target: the SPEC 2.12 target "a 101 x 101 four_corner equilibrium in <= 5 s" only: n = 100
+# --target: the target "a 101 x 101 four_corner equilibrium in <= 5 s" only: n = 100
 # with static on the eighth and on the quarter, cvode-bdf on the eighth and the equilibrium
 # solver on the whole sheet and as the default runs it, R rounds (default 3) of the five in turn
 # (runs interleaved, so load drifts hit all alike); default DIR out/scaling-target.
@@ -27,7 +27,7 @@
 # same at every n), stiffness k = 852 N/m per spring (one spring stands for a strip of
 # fabric whose tensile stiffness does not depend on its length-to-width ratio when refined in
 # both directions), damping scaled with the particle mass, c = 12 N s/m x (L0 / 0.049 m)^2,
-# i.e. the paper's damping rate c/m at every n (SPEC 2.12: the paper's damping is absolute per
+# i.e. the paper's damping rate c/m at every n (docs/numerics.md: the paper's damping is absolute per
 # particle, so an unscaled c would add total damping under refinement and slow the settling
 # without changing the equilibrium). Each run is capped at --max-wall seconds of wall time
 # (status wall_limit then; default 1800 s, 60 s with --quick: enough for n = 40 on a quiet

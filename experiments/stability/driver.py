@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Stability study: measured stability limits of the explicit integrators on
-the four_corner drape vs the linear analysis of SPEC 2.4, a dt x stiffness stability map,
+the four_corner drape vs the linear analysis of solvers/integrator.hpp, a dt x stiffness stability map,
 cvode-bdf at the parameter extremes, and what every integrator does without damping.
 
 Every number comes from `knitsim drape` runs (no knitsim code is linked); the exact linear

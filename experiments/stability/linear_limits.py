@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Exact linear stability limits of euler, verlet and arkode-erk on a drape (SPEC 2.4).
+"""Exact linear stability limits of euler, verlet and arkode-erk on a drape (solvers/integrator.hpp, predict_stable_dt).
 
 The drape ODE linearised at the flat start (experiments/peer/drape_scipy.py builds the model
 independently of knitsim), y' = J y + const, J = [[0, I], [-A, -Gamma]] with A = -M^-1 K and

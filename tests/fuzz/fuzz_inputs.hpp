@@ -3,14 +3,14 @@
 // tests/fuzz/regressions/ through the same functions).
 //
 // Each check feeds one input to a parser the command line reaches with user files:
-//   scene   load_scene_text (TOML scene, SPEC 2.10), then, if accepted and small, the grid;
-//   chart   parse_knit_chart (SPEC 2.9), then, if accepted and small, the model and its
+//   scene   load_scene_text (TOML scene, docs/scenes.md), then, if accepted and small, the grid;
+//   chart   parse_knit_chart (docs/knit.md), then, if accepted and small, the model and its
 //           type-value points and centrelines at rest;
 //   target  parse_target_csv (src/fit/targets.hpp), then every scene's edge fits;
 //   state   parse_run_state (src/io/output.hpp: the state.json of drape|knit --continue), then
 //           what it holds (finite, x and v of one size).
 // Oracle: the parser either accepts the input or throws std::invalid_argument with one
-// non-empty line (SPEC 2.10: "one clear line naming the bad input"). Once it has accepted, the
+// non-empty line (docs/reliability.md: one clear line naming the bad input). Once it has accepted, the
 // later stages must succeed (validation promised they would) and give finite numbers. Anything
 // else -- another exception, a multi-line message, a non-finite result -- throws
 // FuzzFinding; crashes, UB, leaks and hangs are caught by the sanitizers and libFuzzer.
