@@ -212,32 +212,32 @@ SpringNetworkSpec reduced_network_spec(const SpringNetworkSpec& spec,
   return q;
 }
 
-// The structure of a network that passed check_particles. Throws (asymmetric) where its
-// integers break the mirrors: two springs on one pair, a spring without an image, a particle on
-// the x plane and the diagonal that is not the centre.
-std::shared_ptr<const MirrorReduced::Structure> build_structure(const SpringNetwork& full,
-                                                                const MirrorPlanes& planes) {
-  using Structure = MirrorReduced::Structure;
-  auto made = std::make_shared<Structure>();
-  Structure& s = *made;
-  const SpringNetworkSpec& spec = full.spec();
-  const int np = full.particle_count();
+// The structure's key: the image maps, the pinned particles, the springs' ends and each
+// particle's sides of the mirrors; and the order of the mirrors' group.
+void record_key(MirrorReduced::Structure& s, const SpringNetworkSpec& spec,
+                const MirrorPlanes& planes) {
   s.image_x = planes.image_x;
   s.image_y = planes.image_y;
   s.image_d = planes.image_d;
   s.pinned = spec.pinned;
   for (const Spring& sp : spec.springs) s.ends.insert(s.ends.end(), {sp.a, sp.b});
   for (const Vec3& p : spec.positions) s.sides.push_back(side_bits(p, planes));
+  s.group_order = !s.image_d.empty() ? 8 : !s.image_y.empty() ? 4 : 2;
+}
+
+// The fold into the domain: every particle's domain image d(p) and the element g taking d(p)
+// to p (p = g(d)).
+struct Fold {
+  std::vector<int> domain_of, element;
+};
+
+Fold fold_into_domain(const MirrorReduced::Structure& s) {
   const std::vector<int>& ix = s.image_x;
   const std::vector<int>& iy = s.image_y;
   const std::vector<int>& id = s.image_d;
   const bool has_y = !iy.empty(), diagonal = !id.empty();
-  const int order = s.group_order = diagonal ? 8 : has_y ? 4 : 2;
-  std::vector<int> pin_slot(np, -1);
-  for (size_t k = 0; k < spec.pinned.size(); ++k) pin_slot[spec.pinned[k]] = static_cast<int>(k);
-
-  // Fold: every particle's domain image d(p) and the element taking d(p) to p (p = g(d)).
-  std::vector<int> domain_of(np), element(np);
+  const int np = static_cast<int>(s.sides.size());
+  Fold fold{std::vector<int>(np), std::vector<int>(np)};
   for (int p = 0; p < np; ++p) {
     int g = 0;
     if (ix[p] != p && (s.sides[p] & 1)) g |= 1;
@@ -247,16 +247,28 @@ std::shared_ptr<const MirrorReduced::Structure> build_structure(const SpringNetw
       d = id[d];
       g |= 4;
     }
-    domain_of[p] = d;
-    element[p] = g;
+    fold.domain_of[p] = d;
+    fold.element[p] = g;
   }
+  return fold;
+}
 
-  // The unknowns q: free coordinates of the free domain particles, in particle order. Each
-  // domain coordinate (d, c) is x_d[c] = q[q_of] + base (q_of -1: the constant base).
+// The unknowns q: free coordinates of the free domain particles, in particle order, with their
+// particles, weights and multiplicities. Returns q_of: domain coordinate (d, c) is
+// x_d[c] = q[q_of] + base (q_of -1: the constant base, s.source_base). Throws (asymmetric) for a
+// particle on the x plane and the diagonal that is not the centre.
+std::vector<int> choose_unknowns(MirrorReduced::Structure& s, const SpringNetwork& full,
+                                 const Fold& fold) {
+  using Structure = MirrorReduced::Structure;
+  const std::vector<int>& ix = s.image_x;
+  const std::vector<int>& iy = s.image_y;
+  const std::vector<int>& id = s.image_d;
+  const bool has_y = !iy.empty(), diagonal = !id.empty();
+  const int np = full.particle_count(), order = s.group_order;
   std::vector<int> q_of(3 * np, -1);
   s.source_base.assign(3 * np, Structure::kZero);
   for (int p = 0; p < np; ++p) {
-    if (domain_of[p] != p || full.free_index(p) < 0) continue;
+    if (fold.domain_of[p] != p || full.free_index(p) < 0) continue;
     int orbit = 0;
     for (int g = 0; g < order; ++g) {
       bool seen = false;
@@ -287,17 +299,21 @@ std::shared_ptr<const MirrorReduced::Structure> build_structure(const SpringNetw
     }
   }
   s.particle_begin.push_back(static_cast<int>(s.q_particle.size()));
+  return q_of;
+}
 
-  // The tie of every full free dof to q: coordinate c of p = g(d) is the mirrored coordinate
-  // src of d (D swaps x and y, X and Y flip them).
+// The tie of every full free dof to q: coordinate c of p = g(d) is the mirrored coordinate src
+// of d (D swaps x and y, X and Y flip them).
+void tie_full_dofs(MirrorReduced::Structure& s, const SpringNetwork& full, const Fold& fold,
+                   const std::vector<int>& q_of) {
   const int full_dofs = full.dof();
   s.tie_dof.assign(full_dofs, -1);
   s.tie_sign.assign(full_dofs, 1.0);
   s.tie_source.assign(full_dofs, 0);
   s.tie_element.assign(full_dofs, 0);
-  for (int p = 0; p < np; ++p) {
+  for (int p = 0; p < full.particle_count(); ++p) {
     if (full.free_index(p) < 0) continue;
-    const int d = domain_of[p], g = element[p];
+    const int d = fold.domain_of[p], g = fold.element[p];
     for (int c = 0; c < 3; ++c) {
       const int k = 3 * full.free_index(p) + c;
       const int src = (g & 4) && c < 2 ? 1 - c : c;
@@ -309,27 +325,46 @@ std::shared_ptr<const MirrorReduced::Structure> build_structure(const SpringNetw
       s.tie_element[k] = static_cast<unsigned char>(g);
     }
   }
+}
 
-  // Springs: every mirror image present; one weighted representative per orbit, chosen with as
-  // many ends in the domain as possible (the rest become ghosts).
-  auto key = [np](int a, int b) {
-    return static_cast<long long>(std::min(a, b)) * np + std::max(a, b);
-  };
-  // (key, spring) sorted by key: a lookup table without a node per spring.
-  std::vector<std::pair<long long, int>> by_key(spec.springs.size());
-  for (size_t k = 0; k < spec.springs.size(); ++k)
-    by_key[k] = {key(spec.springs[k].a, spec.springs[k].b), static_cast<int>(k)};
-  std::sort(by_key.begin(), by_key.end());
-  for (size_t k = 1; k < by_key.size(); ++k)
-    if (by_key[k].first == by_key[k - 1].first) {
-      const Spring& dup = spec.springs[by_key[k].second];
-      asymmetric("two springs join particles " + std::to_string(dup.a) + " and " +
-                 std::to_string(dup.b) + " (not supported)");
-    }
-  auto spring_of = [&](long long k) {  // the spring with this key, or -1
-    const auto it = std::lower_bound(by_key.begin(), by_key.end(), std::make_pair(k, -1));
-    return it != by_key.end() && it->first == k ? it->second : -1;
-  };
+// The springs of a network by their unordered pair of ends: (key, spring) sorted by key, a
+// lookup table without a node per spring. Throws (asymmetric) when two springs join one pair.
+class SpringsByEnds {
+ public:
+  SpringsByEnds(const SpringNetworkSpec& spec, int np) : np_(np), by_key_(spec.springs.size()) {
+    for (size_t k = 0; k < spec.springs.size(); ++k)
+      by_key_[k] = {key(spec.springs[k].a, spec.springs[k].b), static_cast<int>(k)};
+    std::sort(by_key_.begin(), by_key_.end());
+    for (size_t k = 1; k < by_key_.size(); ++k)
+      if (by_key_[k].first == by_key_[k - 1].first) {
+        const Spring& dup = spec.springs[by_key_[k].second];
+        asymmetric("two springs join particles " + std::to_string(dup.a) + " and " +
+                   std::to_string(dup.b) + " (not supported)");
+      }
+  }
+  // The spring joining a and b, or -1.
+  int find(int a, int b) const {
+    const long long k = key(a, b);
+    const auto it = std::lower_bound(by_key_.begin(), by_key_.end(), std::make_pair(k, -1));
+    return it != by_key_.end() && it->first == k ? it->second : -1;
+  }
+
+ private:
+  long long key(int a, int b) const {
+    return static_cast<long long>(std::min(a, b)) * np_ + std::max(a, b);
+  }
+  int np_;
+  std::vector<std::pair<long long, int>> by_key_;
+};
+
+// The reduced network's particles (the domain's, then ghosts) and springs: every spring's mirror
+// images present (else asymmetric); one weighted representative per orbit, chosen with as many
+// ends in the domain as possible (the rest become ghosts); the orbits for check_springs.
+void reduce_springs(MirrorReduced::Structure& s, const SpringNetworkSpec& spec, const Fold& fold) {
+  const int np = static_cast<int>(spec.positions.size()), order = s.group_order;
+  std::vector<int> pin_slot(np, -1);
+  for (size_t k = 0; k < spec.pinned.size(); ++k) pin_slot[spec.pinned[k]] = static_cast<int>(k);
+  const SpringsByEnds springs(spec, np);
   std::vector<int> net_of(np, -1);
   auto add_particle = [&](int p) {
     net_of[p] = static_cast<int>(s.net_full.size());
@@ -340,7 +375,7 @@ std::shared_ptr<const MirrorReduced::Structure> build_structure(const SpringNetw
     }
   };
   for (int p = 0; p < np; ++p)
-    if (domain_of[p] == p) add_particle(p);
+    if (fold.domain_of[p] == p) add_particle(p);
   std::vector<char> done(spec.springs.size(), 0);
   for (size_t k = 0; k < spec.springs.size(); ++k) {
     if (done[k]) continue;
@@ -349,11 +384,11 @@ std::shared_ptr<const MirrorReduced::Structure> build_structure(const SpringNetw
     s.orbit_first.push_back(static_cast<int>(k));
     for (int g = 0; g < order; ++g) {
       const int a = s.image(g, sp.a), b = s.image(g, sp.b);
-      const int match = spring_of(key(a, b));
+      const int match = springs.find(a, b);
       if (match < 0) no_spring_image(sp, a, b);
       s.orbit_images.push_back(match);
       if (std::find(members, members + count, match) == members + count) members[count++] = match;
-      const int inside = (domain_of[a] == a) + (domain_of[b] == b);
+      const int inside = (fold.domain_of[a] == a) + (fold.domain_of[b] == b);
       if (inside > best_inside) best_inside = inside, best = g;
     }
     for (int i = 0; i < count; ++i) done[members[i]] = 1;
@@ -364,10 +399,12 @@ std::shared_ptr<const MirrorReduced::Structure> build_structure(const SpringNetw
     s.net_source.push_back(static_cast<int>(k));
     s.net_weight.push_back(count / static_cast<double>(order));
   }
+}
 
-  // Reduced network dof -> full dof, and the Jacobian P^T K P into the q pattern (the network's
-  // free particles and pattern follow from its integers; this drape's values stand in).
-  const SpringNetwork net(reduced_network_spec(spec, s));
+// Reduced network dof -> full dof, and the Jacobian P^T K P into the q pattern (the network's
+// free particles and pattern follow from its integers; this drape's values stand in).
+void map_jacobian(MirrorReduced::Structure& s, const SpringNetwork& full) {
+  const SpringNetwork net(reduced_network_spec(full.spec(), s));
   s.net_full_dof.assign(net.dof(), -1);
   for (int k = 0; k < net.particle_count(); ++k) {
     const int f = net.free_index(k);
@@ -392,6 +429,21 @@ std::shared_ptr<const MirrorReduced::Structure> build_structure(const SpringNetw
       const int r = s.tie_dof[s.net_full_dof[kp.rowind[e]]], c = s.tie_dof[s.net_full_dof[col]];
       if (r >= 0 && c >= 0) s.jac_target[e] = entry_position[next_entry++];
     }
+}
+
+// The structure of a network that passed check_particles. Throws (asymmetric) where its
+// integers break the mirrors: two springs on one pair, a spring without an image, a particle on
+// the x plane and the diagonal that is not the centre.
+std::shared_ptr<const MirrorReduced::Structure> build_structure(const SpringNetwork& full,
+                                                                const MirrorPlanes& planes) {
+  auto made = std::make_shared<MirrorReduced::Structure>();
+  MirrorReduced::Structure& s = *made;
+  record_key(s, full.spec(), planes);
+  const Fold fold = fold_into_domain(s);
+  const std::vector<int> q_of = choose_unknowns(s, full, fold);
+  tie_full_dofs(s, full, fold, q_of);
+  reduce_springs(s, full.spec(), fold);
+  map_jacobian(s, full);
   return made;
 }
 
