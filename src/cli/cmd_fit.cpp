@@ -380,6 +380,148 @@ void run_lm_fit(const FitArgs& args, const Scene& base, const DrapeFitProblem& p
   if (!fit.ok || !drape_ok) throw CLI::RuntimeError(3);
 }
 
+// The ICA fit's first lines: what is fitted to what, with which budget, and where a resumed fit
+// goes on from.
+void print_ica_start(const FitArgs& args, const Scene& base, const DrapeFitProblem& problem,
+                     const std::shared_ptr<const IcaState>& resumed_from,
+                     const std::filesystem::path& dir) {
+  std::cout << "fitting " << base.name << " to " << args.target << " (scene "
+            << problem.target_scene() << ", " << problem.measured().size()
+            << " edges) with the ICA: " << args.ica.countries << " countries, "
+            << args.ica.imperialists << " imperialists, " << args.ica.decades << " decades, seed "
+            << args.ica.seed << ", jobs " << args.ica.jobs << ", " << problem.integrator() << "\n";
+  if (args.resume)
+    std::cout << (resumed_from ? "resuming from decade " + std::to_string(resumed_from->decade) +
+                                     " of " + std::to_string(args.ica.decades)
+                               : std::string("no checkpoint: starting afresh"))
+              << " (" << (dir / kCheckpointFile).string() << ")\n";
+  std::cout << std::flush;
+}
+
+// The ICA's convergence history, one row per decade (history.csv and the console).
+Table history_table(const DrapeFitResult& fit) {
+  Table history;
+  history.columns = {"decade", "best", "mean", "empires", "evaluations"};
+  for (const IcaDecade& d : fit.history)
+    history.rows.push_back({std::to_string(d.decade), format_number(d.best_cost, 17),
+                            format_number(d.mean_cost, 17), std::to_string(d.empires),
+                            std::to_string(d.evaluations)});
+  return history;
+}
+
+// The same history as summary.json's "history".
+nlohmann::json history_json(const DrapeFitResult& fit) {
+  nlohmann::json history = nlohmann::json::array();
+  for (const IcaDecade& d : fit.history)
+    history.push_back({{"decade", d.decade},
+                       {"best", d.best_cost},
+                       {"mean", d.mean_cost},
+                       {"empires", d.empires},
+                       {"evaluations", d.evaluations}});
+  return history;
+}
+
+// The fitted drape's re-run: its status, "not_run" for a fit cut short.
+struct FittedDrape {
+  std::string status = "not_run";
+  bool equilibrium = false;
+};
+
+// The fitted drape, re-run (deterministic: the same run the ICA scored) into dir/drape; not for
+// a fit cut short, whose best country is provisional.
+FittedDrape rerun_fitted_drape(const FitArgs& args, const DrapeFitProblem& problem,
+                               const DrapeFitResult& fit, const std::filesystem::path& dir) {
+  FittedDrape result;
+  if (fit.status == IcaStatus::Interrupted) return result;
+  const Scene fitted = problem.scene_of(fit.best_x);
+  const DrapeResult drape = run_drape(fitted, problem.integrator());
+  const std::filesystem::path drape_dir = dir / "drape";
+  std::filesystem::create_directories(drape_dir);
+  write_drape_outputs(drape_dir, fitted, drape, &problem.measured(), !args.no_pictures);
+  result.status = to_string(drape.stats.status);
+  result.equilibrium = drape.stats.status == RunStatus::Equilibrium;
+  return result;
+}
+
+// The ICA fit's summary.json and manifest.json in dir (fields: the file's header comment).
+void write_ica_summary(const FitArgs& args, const Scene& base, const DrapeFitProblem& problem,
+                       const DrapeFitResult& fit, const std::string& drape_status,
+                       const std::shared_ptr<const IcaState>& resumed_from,
+                       const std::filesystem::path& dir) {
+  const nlohmann::json bounds = bounds_json(problem.options().bounds);
+  const nlohmann::json settings = {{"scene", base.name},
+                                   {"scene_source", base.source},
+                                   {"sets", args.sets},
+                                   {"target", args.target},
+                                   {"target_scene", problem.target_scene()},
+                                   {"optimizer", args.optimizer},
+                                   {"integrator", problem.integrator()},
+                                   {"ica", ica_json(args.ica)},
+                                   {"bounds", bounds},
+                                   {"base_params", to_json(base.params)},
+                                   {"run_options", to_json(base.options)}};
+  nlohmann::json summary = settings;
+  summary["params"] = params_json(fit.params);
+  summary["objective"] = fit.objective;
+  summary["evaluations"] = fit.evaluations;
+  summary["failed_evaluations"] = fit.failed_evaluations;
+  summary["status"] = to_string(fit.status);
+  summary["message"] = fit.message;
+  summary["wall_seconds"] = fit.wall_seconds;
+  summary["best_country"] = fit.best_x;
+  summary["history"] = history_json(fit);
+  summary["fitted_drape_status"] = drape_status;
+  if (resumed_from) summary["resumed_from_decade"] = resumed_from->decade;
+  summary["units"] = fit_units(false);
+  write_json_atomic(dir / "summary.json", summary);
+  write_json_atomic(dir / "manifest.json", manifest(settings));
+}
+
+// The ICA fit's console report: the history, the status and the fitted parameters.
+void print_ica_result(const FitArgs& args, const Scene& base, const DrapeFitProblem& problem,
+                      const DrapeFitResult& fit, const Table& history,
+                      const std::filesystem::path& dir) {
+  std::cout << history.text() << "\nstatus: " << fit.message << "\n";
+  Table t;
+  t.columns = {"parameter", "fitted"};
+  t.rows = {{"stiffness", format_number(fit.params.stiffness, 6) + " N/m"},
+            {"damping", format_number(fit.params.damping, 6) + " N s/m"},
+            {"elongation_limit", format_number(fit.params.elongation_limit, 6) + " %"},
+            {"natural_length", format_number(fit.params.natural_length, 6) + " m"},
+            {"topology", std::string(1, fit.params.topology)},
+            {"objective", format_number(fit.objective, 6) + " %"},
+            {"evaluations", std::to_string(fit.evaluations) + " (" +
+                                std::to_string(fit.failed_evaluations) + " failed)"},
+            {"wall", format_number(fit.wall_seconds, 4) + " s"},
+            {"outputs", dir.string() + "/"}};
+  std::cout << t.text() << mesh_note(base, fit.params) << std::flush;
+  warn_if_upside_down(problem, args.target);
+}
+
+// The ICA fit, its outputs in dir and its exit: 128 + signal when interrupted (the handlers,
+// installed here, are `interrupt`, which the problem's stop_requested reads), 3 when every
+// evaluation failed or the fitted drape does not settle.
+void run_ica_fit(const FitArgs& args, const Scene& base, const DrapeFitProblem& problem,
+                 const std::shared_ptr<const IcaState>& resumed_from,
+                 const std::filesystem::path& dir, std::unique_ptr<InterruptScope>& interrupt) {
+  if (!args.quiet) print_ica_start(args, base, problem, resumed_from, dir);
+  interrupt = std::make_unique<InterruptScope>();
+  const DrapeFitResult fit = fit_drape(problem);
+  const Table history = history_table(fit);
+  write_file_atomic(dir / "history.csv", history.csv());
+  const FittedDrape drape = rerun_fitted_drape(args, problem, fit, dir);
+  write_ica_summary(args, base, problem, fit, drape.status, resumed_from, dir);
+  if (!args.quiet) print_ica_result(args, base, problem, fit, history, dir);
+  if (fit.status == IcaStatus::Interrupted) {
+    std::cerr << "knitsim fit: interrupted by " << interrupt->signal_name() << " after decade "
+              << fit.history.back().decade << " of " << args.ica.decades
+              << "; the best so far is written to " << dir.string()
+              << "/; the same command with --resume goes on from there" << std::endl;
+    throw CLI::RuntimeError(interrupt->exit_code());
+  }
+  if (fit.status == IcaStatus::AllFailed || !drape.equilibrium) throw CLI::RuntimeError(3);
+}
+
 void run(const FitArgs& args) {
   if (args.optimizer != "ica" && args.optimizer != "lm")
     throw std::invalid_argument("--optimizer = " + args.optimizer + ": accepted: ica, lm");
@@ -428,108 +570,7 @@ void run(const FitArgs& args) {
   warn_if_upside_down(*problem, args.target);
   if (args.optimizer == "lm") return run_lm_fit(args, base, *problem, dir);
 
-  if (!args.quiet) {
-    std::cout << "fitting " << base.name << " to " << args.target << " (scene "
-              << problem->target_scene() << ", " << problem->measured().size()
-              << " edges) with the ICA: " << args.ica.countries << " countries, "
-              << args.ica.imperialists << " imperialists, " << args.ica.decades << " decades, seed "
-              << args.ica.seed << ", jobs " << args.ica.jobs << ", " << problem->integrator()
-              << "\n";
-    if (args.resume) {
-      const std::shared_ptr<const IcaState>& from = options.ica.resume_from;
-      std::cout << (from ? "resuming from decade " + std::to_string(from->decade) + " of " +
-                               std::to_string(args.ica.decades)
-                         : std::string("no checkpoint: starting afresh"))
-                << " (" << (dir / kCheckpointFile).string() << ")\n";
-    }
-    std::cout << std::flush;
-  }
-  interrupt = std::make_unique<InterruptScope>();
-  const DrapeFitResult fit = fit_drape(*problem);
-  const bool interrupted = fit.status == IcaStatus::Interrupted;
-
-  Table history;
-  history.columns = {"decade", "best", "mean", "empires", "evaluations"};
-  nlohmann::json history_json = nlohmann::json::array();
-  for (const IcaDecade& d : fit.history) {
-    history.rows.push_back({std::to_string(d.decade), format_number(d.best_cost, 17),
-                            format_number(d.mean_cost, 17), std::to_string(d.empires),
-                            std::to_string(d.evaluations)});
-    history_json.push_back({{"decade", d.decade},
-                            {"best", d.best_cost},
-                            {"mean", d.mean_cost},
-                            {"empires", d.empires},
-                            {"evaluations", d.evaluations}});
-  }
-  write_file_atomic(dir / "history.csv", history.csv());
-
-  // The fitted drape, re-run (deterministic: the same run the ICA scored); not for a fit cut
-  // short, whose best country is provisional.
-  std::string drape_status = "not_run";
-  bool drape_ok = false;
-  if (!interrupted) {
-    const Scene fitted = problem->scene_of(fit.best_x);
-    const DrapeResult drape = run_drape(fitted, problem->integrator());
-    const std::filesystem::path drape_dir = dir / "drape";
-    std::filesystem::create_directories(drape_dir);
-    write_drape_outputs(drape_dir, fitted, drape, &problem->measured(), !args.no_pictures);
-    drape_status = to_string(drape.stats.status);
-    drape_ok = drape.stats.status == RunStatus::Equilibrium;
-  }
-
-  const nlohmann::json bounds = bounds_json(problem->options().bounds);
-  const nlohmann::json settings = {{"scene", base.name},
-                                   {"scene_source", base.source},
-                                   {"sets", args.sets},
-                                   {"target", args.target},
-                                   {"target_scene", problem->target_scene()},
-                                   {"optimizer", args.optimizer},
-                                   {"integrator", problem->integrator()},
-                                   {"ica", ica_json(args.ica)},
-                                   {"bounds", bounds},
-                                   {"base_params", to_json(base.params)},
-                                   {"run_options", to_json(base.options)}};
-  nlohmann::json summary = settings;
-  summary["params"] = params_json(fit.params);
-  summary["objective"] = fit.objective;
-  summary["evaluations"] = fit.evaluations;
-  summary["failed_evaluations"] = fit.failed_evaluations;
-  summary["status"] = to_string(fit.status);
-  summary["message"] = fit.message;
-  summary["wall_seconds"] = fit.wall_seconds;
-  summary["best_country"] = fit.best_x;
-  summary["history"] = history_json;
-  summary["fitted_drape_status"] = drape_status;
-  if (options.ica.resume_from) summary["resumed_from_decade"] = options.ica.resume_from->decade;
-  summary["units"] = fit_units(false);
-  write_json_atomic(dir / "summary.json", summary);
-  write_json_atomic(dir / "manifest.json", manifest(settings));
-
-  if (!args.quiet) {
-    std::cout << history.text() << "\nstatus: " << fit.message << "\n";
-    Table t;
-    t.columns = {"parameter", "fitted"};
-    t.rows = {{"stiffness", format_number(fit.params.stiffness, 6) + " N/m"},
-              {"damping", format_number(fit.params.damping, 6) + " N s/m"},
-              {"elongation_limit", format_number(fit.params.elongation_limit, 6) + " %"},
-              {"natural_length", format_number(fit.params.natural_length, 6) + " m"},
-              {"topology", std::string(1, fit.params.topology)},
-              {"objective", format_number(fit.objective, 6) + " %"},
-              {"evaluations", std::to_string(fit.evaluations) + " (" +
-                                  std::to_string(fit.failed_evaluations) + " failed)"},
-              {"wall", format_number(fit.wall_seconds, 4) + " s"},
-              {"outputs", dir.string() + "/"}};
-    std::cout << t.text() << mesh_note(base, fit.params) << std::flush;
-    warn_if_upside_down(*problem, args.target);
-  }
-  if (interrupted) {
-    std::cerr << "knitsim fit: interrupted by " << interrupt->signal_name() << " after decade "
-              << fit.history.back().decade << " of " << args.ica.decades
-              << "; the best so far is written to " << dir.string()
-              << "/; the same command with --resume goes on from there" << std::endl;
-    throw CLI::RuntimeError(interrupt->exit_code());
-  }
-  if (fit.status == IcaStatus::AllFailed || !drape_ok) throw CLI::RuntimeError(3);
+  run_ica_fit(args, base, *problem, options.ica.resume_from, dir, interrupt);
 }
 
 }  // namespace
