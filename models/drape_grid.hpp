@@ -1,4 +1,4 @@
-// DrapeGrid: the mass-spring grid of Mozafary & Payvandy (2017), SPEC 2.2.
+// DrapeGrid: the mass-spring grid of Mozafary & Payvandy (2017) (user's view: docs/scenes.md).
 //
 // A square fabric of side W (m) and areal density rho_A (g/m^2) becomes an (n+1) x (n+1) grid,
 //   n = max(2, floor(W / L0 + 0.5)) cells per side, spacing exactly L0 (the model fabric is

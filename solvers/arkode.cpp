@@ -5,7 +5,7 @@
 //                 (Zonneveld 5-3-4; IntegratorOptions::max_order picks the default table of
 //                 another order, 2..8; 7 selects the order-8 table). Explicit: its step is bounded
 //                 by stability, ~2.8/max|lambda| with max|lambda| ~ c/m ~ 1e5 /s on the drape --
-//                 the stiffness penalty the SPEC asks to show.
+//                 the stiffness penalty the comparison is to show.
 //   arkode-dirk   ARKStep, fully implicit y' = f_I = f with an ESDIRK table (default
 //                 ESDIRK4(3)6L[2]SA, order 4, L-stable, stiffly accurate; max_order 3 / 4 / 5
 //                 select ESDIRK3(2)4L[2]SA / ESDIRK4(3)6L[2]SA / ESDIRK5(4)7L[2]SA). Newton

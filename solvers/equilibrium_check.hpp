@@ -1,5 +1,5 @@
-// What makes an end state an equilibrium, for every integrator (SPEC 2.3): a stop in positions
-// and a certificate that the state is a stable minimum the damped dynamics can reach.
+// What makes an end state an equilibrium, for every integrator (docs/equilibrium.md): a stop in
+// positions and a certificate that the state is a stable minimum the damped dynamics can reach.
 //
 //   K = -M Ax        the symmetric stiffness (N/m): the Hessian of the potential energy, from the
 //                    model's stiffness values (Ax = da_c/dx, row i over m_i)

@@ -1,6 +1,6 @@
 // A SUNDIALS linear solver for the Newton systems of implicit integrators on a
 // FirstOrderSystem: it eliminates the velocity block and factors a symmetric 3n x 3n matrix
-// instead of the unsymmetric 6n x 6n one (SPEC 2.12, "levers").
+// instead of the unsymmetric 6n x 6n one (docs/numerics.md, "Linear algebra").
 //
 // CVODE and ARKODE (identity mass) build A = I - gamma J in the FirstOrderSystem's CSC pattern
 // (src/core/first_order.hpp), so

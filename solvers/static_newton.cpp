@@ -1,5 +1,5 @@
-// static: an accelerator that reaches the equilibrium the damped dynamics reach (SPEC 2.2,
-// 2.4) faster than integrating until the residual is tiny.
+// static: an accelerator that reaches the equilibrium the damped dynamics reach
+// (docs/equilibrium.md) faster than integrating until the residual is tiny.
 //
 // Why not plain Newton: F(x) = 0 has many solutions (saddles, buckled shapes, other fold
 // branches), and Newton from the flat state often lands on one of those (docs/numerics.md,
@@ -7,7 +7,7 @@
 // initial state, so `static` follows the dynamics until close to that end, then polishes:
 //
 //   1. Relaxation: cvode-bdf (the same integrator, options and stop rule) from the initial
-//      state, one CVODE step per step(), until the static residual r(x) (SPEC 2.3) falls
+//      state, one CVODE step per step(), until the static residual r(x) (docs/equilibrium.md) falls
 //      below the polish threshold (initially kPolishThreshold = 1e-3) -- and only once
 //      t >= equilibrium_start_time() (pins no longer moving).
 //   2. Polish: KINSOL Newton with line search (KIN_LINESEARCH, a fresh Jacobian every

@@ -8,7 +8,7 @@
 // solvers, matrices, vectors and the context last. Classes that hold them declare them in
 // creation order so the compiler-generated destructor gets that right.
 //
-// Errors (SPEC 2.1, STYLE practice 5). `check` is the one place a SUNDIALS return flag is
+// Errors (docs/reliability.md). `check` is the one place a SUNDIALS return flag is
 // checked: a negative flag during set-up throws SundialsError carrying the call and the
 // flag's name. During stepping a negative flag becomes a failed Integrator::Step whose
 // message names the call, the flag and the time (`step_failure`) -- never an exception.

@@ -5,7 +5,7 @@
 //    manifest.json).
 // 2. Every registered integrator on four_corner, each capped at kComparisonWallCap seconds of
 //    wall time (the explicit and non-stiff methods need minutes to hours here and end with
-//    status wall_limit: that is the measurement, SPEC 1), compared by cost and by the largest
+//    status wall_limit: that is the measurement), compared by cost and by the largest
 //    particle distance from the reference run (cvode-bdf, or the first integrator registered).
 // 3. report.md (tables and picture links), comparison.csv (full precision), manifest.json.
 // Exit status 3 if a scene run of step 1 did not reach equilibrium (everything is still written).

@@ -1,4 +1,4 @@
-// knitsim drape (SPEC 2.10): one scene run to equilibrium, with its outputs.
+// knitsim drape (docs/commands.md): one scene run to equilibrium, with its outputs.
 //
 // Order of work: parse, load the scene and apply --set, check the run options and the
 // integrator name, create and probe --out; only then run and write. Bad input therefore writes

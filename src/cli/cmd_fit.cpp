@@ -1,4 +1,4 @@
-// knitsim fit (SPEC 2.10): the drape model's parameters fitted to a target with the ICA
+// knitsim fit (docs/fitting.md): the drape model's parameters fitted to a target with the ICA
 // (src/fit/drape_fit.hpp), or with `--optimizer lm` by multi-start Levenberg-Marquardt on analytic
 // equilibrium sensitivities (src/fit/lm_fit.hpp; outputs: see run_lm_fit), and the fitted drape.
 //

@@ -1,5 +1,5 @@
-// knitsim list integrators|scenes|keys (SPEC 2.10): what the registry, the built-in scenes and
-// the scene files offer. --format markdown is what docs/generate_reference.sh commits.
+// knitsim list integrators|scenes|keys (docs/commands.md): what the registry, the built-in scenes
+// and the scene files offer. --format markdown is what docs/generate_reference.sh commits.
 #include <CLI/CLI.hpp>
 #include <iostream>
 #include <memory>

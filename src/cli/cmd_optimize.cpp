@@ -1,4 +1,4 @@
-// knitsim optimize (SPEC 2.10): the ICA (src/fit/ica.hpp) on a standard test function
+// knitsim optimize (docs/commands.md): the ICA (src/fit/ica.hpp) on a standard test function
 // (src/fit/test_functions.hpp), to check and tune the optimiser without any drape.
 //
 // Prints the run's settings, one line per decade (decade 0 = the initial empires: best and

@@ -1,4 +1,4 @@
-// knitsim repro (SPEC 2.10): paper 1's Tables 4 and 6, the Taguchi tuning, Fig. 13 and the
+// knitsim repro (docs/commands.md): paper 1's Tables 4 and 6, the Taguchi tuning, Fig. 13 and the
 // fitted drapes' pictures, on the synthetic targets (src/repro/repro.hpp has what is computed and
 // written).
 //

@@ -1,4 +1,4 @@
-// knitsim taguchi (SPEC 2.10, 2.7): S/N, main effects, optimal levels and ANOVA of an L27
+// knitsim taguchi (docs/commands.md): S/N, main effects, optimal levels and ANOVA of an L27
 // experiment (src/fit/taguchi.hpp).
 //
 //   knitsim taguchi --responses FILE.csv [--columns 1,2,5,9,10,12,13] [--out DIR]

@@ -1,7 +1,7 @@
-// knitsim targets (SPEC 2.8): the synthetic "measured" edges of paper 1's 9 samples
-// (src/fit/synthetic_targets.hpp), one CSV per (set, sample): DIR/<set>_sample<s>.csv in the
-// src/fit/targets.hpp format, opened by '#' lines giving the command that regenerates that file,
-// the seed and noise, the sample's parameters, and per scene the grid and the equivalent
+// knitsim targets (paper_repro/data/README.md): the synthetic "measured" edges of paper 1's 9
+// samples (src/fit/synthetic_targets.hpp), one CSV per (set, sample): DIR/<set>_sample<s>.csv in
+// the src/fit/targets.hpp format, opened by '#' lines giving the command that regenerates that
+// file, the seed and noise, the sample's parameters, and per scene the grid and the equivalent
 // `knitsim drape` run (its noise-free edges are the target's before the noise).
 //
 // Order of work: parse and check every flag (bad input: one line naming the flag, exit 2,

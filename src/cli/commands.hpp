@@ -1,5 +1,5 @@
-// The knitsim subcommands (SPEC 2.10). Each lives in its own src/cli/cmd_<name>.cpp and registers
-// itself on the CLI11 application; main.cpp only calls these.
+// The knitsim subcommands (docs/commands.md). Each lives in its own src/cli/cmd_<name>.cpp and
+// registers itself on the CLI11 application; main.cpp only calls these.
 //
 // Contract for every command: exit status 0 on success; on bad input one line on stderr
 // naming the field and its accepted range, exit status 2; on a numerical failure of the run

@@ -1,5 +1,5 @@
 // Fitting the drape model to measured edges with the ICA (paper 1, "Optimization of model
-// parameters using ICA", Table 3; SPEC 2.2, 2.5, 2.6).
+// parameters using ICA", Table 3; user's view: docs/fitting.md).
 //
 // A country of the ICA (src/fit/ica.hpp) is the 5-vector, in this order (DrapeGene),
 //   x = [ stiffness k (N/m), damping c (N s/m), elongation limit eps (percent),

@@ -1,5 +1,5 @@
 // The Imperialist Competitive Algorithm (Atashpaz-Gargari & Lucas 2007), as used by paper 1
-// (Mozafary & Payvandy 2017, Fig. 8 and Table 1) to fit the drape model. SPEC 2.6.
+// (Mozafary & Payvandy 2017, Fig. 8 and Table 1) to fit the drape model (docs/fitting.md).
 //
 // The ICA minimises a cost over a box [lower, upper] in R^D; it knows nothing about drapes.
 //
@@ -59,7 +59,7 @@
 // drape topology u in [0, 3) mapped to a/b/c by floor) are moved like any other gene; the
 // problem maps them (see category_of). The ICA only keeps them inside the half-open [lower,
 // upper), so floor never yields the category `upper`.
-// Not implemented (not in SPEC 2.6 or paper 1): the original code's revolution-rate damping,
+// Not implemented (not in paper 1): the original code's revolution-rate damping,
 // uniting of close empires, and its 11 % gate on the competition step.
 //
 // Failed evaluations: a cost that is NaN or +-inf is a failed evaluation, scored as
@@ -130,7 +130,7 @@ struct IcaOptions {
   // the problem's dimension.
   static constexpr int max_countries = 10000;
   // Defaults: paper 1's Taguchi-best combination A3 B3 C1 D2 E1 F2 G2 of Table 1, with B and C
-  // read swapped (B = number of countries, C = number of imperialists; SPEC 2.6).
+  // read swapped (B = number of countries, C = number of imperialists; paper_repro/data/README.md).
   int decades = 40;              // MaxIt, Table 1 factor A (levels 10 / 20 / 40)
   int countries = 25;            // N_country, factor B (15 / 20 / 25); > imperialists, <= max
   int imperialists = 2;          // N_imp, factor C (2 / 5 / 10); >= 1
@@ -143,7 +143,7 @@ struct IcaOptions {
   double failure_cost = 1e10;    // cost given to failed (non-finite) evaluations; finite, > 0
   // Step 9's literal rule (paper 1: "When only one empire exists, the algorithm is
   // terminated"). Off by default: with the Taguchi-best settings it ends a run after ~2
-  // decades, contradicting the ~950 evaluations per run of SPEC 2.12 (see step 9 above).
+  // decades, contradicting the ~950 evaluations per run of the paper's protocol (see step 9 above).
   bool stop_when_one_empire = false;
 
   // Checkpointing (knitsim fit --resume; not part of validate()). `on_decade`, when set, is
@@ -163,7 +163,7 @@ struct IcaOptions {
   void validate() const;
 };
 
-// Paper 1 Table 1 (SPEC 2.6): the options of one level combination, levels 1..3 for the
+// Paper 1 Table 1: the options of one level combination, levels 1..3 for the
 // factors A..G in order (B = countries, C = imperialists, read swapped). Other fields default.
 IcaOptions ica_table1_options(const std::array<int, 7>& levels);
 // The three values of each Table 1 factor A..G (B = countries, C = imperialists).

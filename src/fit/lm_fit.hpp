@@ -1,8 +1,8 @@
 // Levenberg-Marquardt fit of the drape model with analytic equilibrium sensitivities, and the
 // Gauss-Newton identifiability analysis at its optimum.
 //
-// Residuals (paper 1 Eq. 5, SPEC 2.5): r = P_measured - P_simulated over the measured edges (in
-// the target's edge order) x the 5 coefficients p0..p4, so the error is E = 100 rms(r) (the
+// Residuals (paper 1 Eq. 5, docs/fitting.md): r = P_measured - P_simulated over the measured edges
+// (in the target's edge order) x the 5 coefficients p0..p4, so the error is E = 100 rms(r) (the
 // value objective() returns). Jacobian J = -dP_simulated/dp from src/fit/sensitivity.hpp (one
 // LDL^T of K per evaluation, negligible next to the drape run).
 //

@@ -65,7 +65,8 @@ class StiffnessFactor {
 
 struct PolishOptions {
   // Newton steps continue until one makes no progress (the arithmetic floor, 1e-10 .. 1e-12 on
-  // the drapes) or max_iterations; Converged if the static residual (SPEC 2.3) is then <= tol.
+  // the drapes) or max_iterations; Converged if the static residual (docs/equilibrium.md) is then
+  // <= tol.
   double tol = 1e-9;             // > 0
   int max_iterations = 8;        // Newton steps; >= 1
   double max_correction = 1e-3;  // m; a larger total |x* - x| means Newton left the branch the

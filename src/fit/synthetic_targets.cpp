@@ -1,4 +1,4 @@
-// Synthetic targets of SPEC 2.8 (see src/fit/synthetic_targets.hpp for the definitions).
+// Synthetic targets (see src/fit/synthetic_targets.hpp for the definitions).
 #include "src/fit/synthetic_targets.hpp"
 
 #include <cmath>
@@ -49,7 +49,7 @@ class NormalStream {
   bool has_spare_ = false;
 };
 
-// The length every normalised coordinate of `edge` is divided by (SPEC 2.5), m.
+// The length every normalised coordinate of `edge` is divided by (src/measure/measurement.hpp), m.
 double normalisation_span(const DrapeGrid& grid, const GridEdge& edge,
                           const std::vector<Vec3>& positions) {
   if (grid.params.layout == PinLayout::FourCorner)

@@ -1,6 +1,6 @@
-// Synthetic "measured" edges for the reproduction of paper 1 (SPEC 2.8): the paper's own edge
-// data are photographs (its Tables 5 and 7), so the targets are made by this code, with
-// provenance and fixed seeds.
+// Synthetic "measured" edges for the reproduction of paper 1 (paper_repro/data/README.md): the
+// paper's own edge data are photographs (its Tables 5 and 7), so the targets are made by this code,
+// with provenance and fixed seeds.
 //   twin  : the drape model at the sample's Table 4 parameters and Table 2 areal density: the
 //           built-in scene (four_corner | two_corner, fabric.width 0.50 m) with fabric.
 //           areal_density, model.stiffness, model.damping, model.elongation_limit,
@@ -30,8 +30,8 @@
 //   Gaussian error of sigma = noise_mm (default 0.5 mm); a point is the mean of `photos`
 //   (default 5, the paper's 5 repeats) photos, so its error has sigma / sqrt(photos).
 //   In normalised units the camera coordinates are divided by the span of the normalisation
-//   (SPEC 2.5): for a four_corner edge |B - A| (its two corners, 3D), for two_corner the pin
-//   distance S in the x-z plane -- both m, at equilibrium -- so s and d each get
+//   (src/measure/measurement.hpp): for a four_corner edge |B - A| (its two corners, 3D), for
+//   two_corner the pin distance S in the x-z plane -- both m, at equilibrium -- so s and d each get
 //     (noise_mm * 1e-3 / span_m) * (mean of `photos` standard normal draws).
 //   (Pins are level in both scenes, so s and d are exactly camera coordinates over the span;
 //   the pins themselves are taken as exact: they are known fixed positions.)

@@ -1,9 +1,9 @@
-// Drape targets: the "measured" edges the simulation is compared with (SPEC 2.5, 2.8; paper 1
+// Drape targets: the "measured" edges the simulation is compared with (docs/fitting.md; paper 1
 // Eq. 5). Per scene (four_corner | two_corner | two_corner_slack) and edge (top | bottom |
 // left | right), a target gives ONE of
 //   * normalised points (s, d)        -> fitted with the 4th-order polynomial,
 //   * the 5 coefficients p0..p4        -> used as given,
-//   * lab points in mm in the camera plane, with the pins -> normalised by the SPEC 2.5 rules
+//   * lab points in mm in the camera plane, with the pins -> normalised by the rules
 //     of src/measure/measurement.hpp (the same functions as the simulation), then fitted.
 //
 // CSV format (one format for reading and writing; UTF-8/ASCII, comma-separated, no quoting):
@@ -11,7 +11,7 @@
 //   The first other line is the header, exactly:  scene,edge,kind,a,b
 //   Each row has exactly 5 fields (surrounding spaces and a trailing CR are ignored):
 //     kind       meaning of a, b                                 edge field
-//     point      a = s, b = d (dimensionless, SPEC 2.5)         top|bottom|left|right
+//     point      a = s, b = d (dimensionless)                   top|bottom|left|right
 //     coeff      a = power i (integer 0..4), b = p_i            top|bottom|left|right
 //     lab_point  a = x_mm, b = z_mm (camera plane)              top|bottom|left|right
 //     pin        a = x_mm, b = z_mm (camera plane)              four_corner: the edge;

@@ -1,4 +1,4 @@
-// Standard test functions for optimisers (SPEC 2.10 `knitsim optimize`), with their usual
+// Standard test functions for optimisers (`knitsim optimize`), with their usual
 // boxes; every one has its global minimum f = 0.
 //
 //   sphere      f = sum x_i^2                                          box [-5.12, 5.12]^D

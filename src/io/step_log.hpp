@@ -1,8 +1,8 @@
 // StepLog: the step history of a run (`knitsim drape|knit --step-history` -> steps.csv), the
 // diagnostic behind "why does this integrator take N steps here": for every step, the time
 // reached t (s), the step size h (s; 0 for a step that did not advance time, e.g. a static
-// polish attempt), the method order used and the static residual (SPEC 2.3) where the driver
-// checked it (every step for adaptive methods; every check_every steps for fixed-step ones).
+// polish attempt), the method order used and the static residual (docs/equilibrium.md) where the
+// driver checked it (every step for adaptive methods; every check_every steps for fixed-step ones).
 //
 // Memory is bounded: every step is kept until there are 2 max_rows rows; then every other row
 // is dropped and from then on only steps whose number is a multiple of the doubled stride are

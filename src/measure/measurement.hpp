@@ -1,6 +1,7 @@
 // Drape measurement (paper 1, "Strategy of determining model error", Eq. 5, Figs 11-12;
-// SPEC 2.5): the fabric's boundary edges at equilibrium, seen in a camera view, are turned into
-// dimensionless points (s, d), each edge is fitted with a 4th-order polynomial
+// user's view: docs/fitting.md, "1. Measure"): the fabric's boundary edges at equilibrium, seen in
+// a camera view, are turned into dimensionless points (s, d), each edge is fitted with a 4th-order
+// polynomial
 //   d(s) = p0 + p1 s + p2 s^2 + p3 s^3 + p4 s^4
 // by least squares, and the model error is the RMS difference of the coefficients:
 //   E = 100 sqrt( mean over all measured edges and the 5 coefficients of (P_meas - P_sim)^2 )

@@ -1,4 +1,4 @@
-// Yarn measures of a knit state (SPEC 2.9; user's view: docs/knit.md, "Yarn measures"): the
+// Yarn measures of a knit state (user's view: docs/knit.md, "Yarn measures"): the
 // clearance between yarn centrelines and the over/under order of the designed crossings. They
 // are read off a state; nothing here enters the dynamics. knitsim knit reports them
 // (src/cli/cmd_knit.cpp); tests/test_yarn_measures.cpp checks the committed charts at rest.

@@ -1,6 +1,6 @@
 // Independent units of work (repro: target set x sample x ICA run; Taguchi experiment x
 // replicate), each run exactly once, checkpointed as it completes, resumable after an
-// interruption, and distributed over MPI ranks (SPEC 2.11 "beyond one machine").
+// interruption, and distributed over MPI ranks (docs/commands.md).
 //
 // Determinism: a unit's result must depend only on the unit itself (its key, its own seed),
 // never on which rank ran it, how many threads it used, or what ran before. Results are JSON;

@@ -1,4 +1,4 @@
-// The reproduction of paper 1 (Mozafary & Payvandy 2017; SPEC 2.6-2.8, 2.10): Tables 4 and 6,
+// The reproduction of paper 1 (Mozafary & Payvandy 2017; docs/fitting.md): Tables 4 and 6,
 // the Taguchi tuning of the ICA (Table 1, Fig. 10), the convergence plot (Fig. 13) and the
 // pictures of the fitted drapes (Tables 5 and 7), on the synthetic targets of
 // src/fit/synthetic_targets.hpp, side by side with the paper's numbers (src/paper/paper_data.hpp).
