@@ -278,7 +278,7 @@ TEST_CASE("interpolation with few points lowers the degree; degenerate data thro
   CHECK_THROWS_AS(bad.validate(), std::invalid_argument);
 }
 
-TEST_CASE("samples uniform in u and in arc length") {
+TEST_CASE("sample_curve spaces samples evenly in u, or in arc length to 1e-9") {
   const NurbsCurve c = interpolate_cubic(wiggly_points(12, 5));
   const CurveSamples u = sample_curve(c, 11, Spacing::Parameter);
   CHECK(u.u.front() == c.u_min());

@@ -171,7 +171,8 @@ TEST_CASE("ica_evaluation_estimate equals the ICA's count when no empire can col
   CHECK(ica_evaluation_estimate(o) == 20 + 5 * 10);
 }
 
-TEST_CASE("presets and validation", "[repro]") {
+TEST_CASE("the paper preset is the paper's protocol; a bad option is refused by its name",
+          "[repro]") {
   const ReproOptions paper = repro_preset("paper");
   CHECK(paper.runs == 10);
   CHECK(paper.ica.countries == 25);

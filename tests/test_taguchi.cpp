@@ -74,7 +74,8 @@ TEST_CASE("L27 is orthogonal: every column pair holds each level pair exactly 3 
   }
 }
 
-TEST_CASE("S/N smaller-the-better", "[taguchi]") {
+TEST_CASE("S/N smaller-the-better is -10 log10 mean(y^2); zero, NaN and no response are refused",
+          "[taguchi]") {
   CHECK(sn_smaller_the_better({1.0}) == 0.0);
   CHECK(sn_smaller_the_better({0.1, -0.1}) == Approx(20.0));
   CHECK(sn_smaller_the_better({1.0, 3.0}) == Approx(-10.0 * std::log10(5.0)));
