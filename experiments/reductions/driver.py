@@ -2,8 +2,9 @@
 """Reductions study: what each "model only what the scene requires" reduction
 saves against the full model, measured where the code allows it (README.md).
 
-  state.csv     pinned particles are scene data, not state (SPEC 2.1): dof of each scene vs the
-                3 x all-particles count a pinned-in-the-state model would integrate.
+  state.csv     pinned particles are scene data, not state (models/spring_network.hpp): dof
+                of each scene vs the 3 x all-particles count a pinned-in-the-state model would
+                integrate.
   topology.csv  springs of the chosen topology only: springs, CPU per explicit-Euler step
                 (fixed step count, the cost of one RHS) and a cvode-bdf drape, for a, b, c.
   stop.csv      stopping at equilibrium (docs/equilibrium.md) vs running to a fixed end time with the

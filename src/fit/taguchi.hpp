@@ -1,5 +1,5 @@
-// Taguchi analysis of an L27 experiment (SPEC 2.7; paper 1, "ICA parameter tuning", Table 1,
-// Fig. 10): which level of each factor gives the smallest responses, robustly.
+// Taguchi analysis of an L27 experiment (docs/commands.md, `taguchi`; paper 1, "ICA parameter
+// tuning", Table 1, Fig. 10): which level of each factor gives the smallest responses, robustly.
 //
 // Design: the standard L27(3^13) orthogonal array. Run r = 9a + 3b + c (r = 0..26, digits
 // a, b, c in 0..2 are the basic columns 1, 2, 5); column j holds (alpha_j a + beta_j b +
