@@ -299,7 +299,8 @@ TEST_CASE("paper 1's tables (paper_repro/data) parse and agree with the code's d
   CHECK(std::stod(t6[8].at("error_percent")) == 2.6);
 }
 
-TEST_CASE("knitsim fit: bad input writes nothing; a run writes the summary docs/summary_json.md names") {
+TEST_CASE(
+    "knitsim fit: bad input writes nothing; a run writes the summary docs/summary_json.md names") {
   namespace fs = std::filesystem;
   const fs::path tmp =
       fs::temp_directory_path() / ("knitsim_test_fit_cli_" + std::to_string(::getpid()));
