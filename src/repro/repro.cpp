@@ -262,7 +262,8 @@ const std::vector<SampleFits>& shown_fits(
 void report_header(ReproReport& r, const json& provenance) {
   const ReproOptions& o = r.o;
   r.text << "# knitsim repro " << to_string(o.task) << " --preset " << o.preset << "\n\n"
-         << "Paper 1 (Mozafary & Payvandy 2017) reproduced on synthetic targets (SPEC 2.8): "
+         << "Paper 1 (Mozafary & Payvandy 2017) reproduced on synthetic targets "
+            "(paper_repro/data/README.md): "
             "**twin** = the model itself at the paper's Table 4 parameters plus 0.5 mm noise "
             "(can the ICA recover known parameters?), **cross** = the same fabric on a 3x finer "
             "grid plus noise (a real model error, as the paper's photographs have). The paper's "
