@@ -189,7 +189,11 @@ TEST_CASE("courses and wales per cm count only loops two or more from every edge
   // what makes the closed form exact.
   const TextileMeasures t = textile_measures(rest, rest);
   CHECK(std::abs(cell(t, m, 0, 4).yarn_length_rest / cell(t, m, 4, 4).yarn_length_rest - 1.0) >
-        1e-4);
+        1e-3);
+  WARN("plain 10 x 9 at rest: edge stitch / interior stitch - 1 = "
+       << cell(t, m, 0, 4).yarn_length_rest / cell(t, m, 4, 4).yarn_length_rest - 1.0
+       << ", wale 2 / wale 5 - 1 = "
+       << cell(t, m, 2, 4).yarn_length_rest / cell(t, m, 5, 4).yarn_length_rest - 1.0);
   CHECK(cell(t, m, 2, 4).yarn_length_rest ==
         Approx(cell(t, m, 5, 4).yarn_length_rest).epsilon(1e-9));
   // Move every vertex of one cell's yarn (a whole wale, or a whole course) and see which moves

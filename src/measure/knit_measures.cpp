@@ -260,7 +260,7 @@ TextileMeasures textile_measures(const KnitYarns& now, const KnitYarns& rest) {
   FabricMeasure& f = out.fabric;
   const PooledSpacing wales = pooled_spacing(c, out.stitches, true);
   const PooledSpacing courses = pooled_spacing(c, out.stitches, false);
-  f.wale_pairs = wales.steps, f.course_pairs = courses.steps;
+  f.wale_steps = wales.steps, f.course_steps = courses.steps;
   auto per_cm = [](double distance, int steps) {
     return steps > 0 ? 0.01 * steps / distance : kNaN;
   };

@@ -122,8 +122,8 @@ struct FabricMeasure {
   double width_change = kNoMark, length_change = kNoMark;        // relative, end against rest
   double stitch_length = kNoMark, stitch_length_rest = kNoMark;  // m
   int interior_cells = 0;  // cells at least two from every edge
-  int wale_pairs = 0;      // sum over interior courses of the wales between first and last
-  int course_pairs = 0;    // likewise over interior wales
+  int wale_steps = 0;      // sum over interior courses of the wales between first and last
+  int course_steps = 0;    // likewise over interior wales
 };
 
 struct TextileMeasures {
