@@ -1,16 +1,22 @@
 // Textile measures (src/measure/knit_measures.hpp; docs/knit.md, "Textile measures"): plain
 // jersey at rest against the closed forms of its geometry and against the centreline's length
 // computed independently (Gauss-Legendre on the NURBS), the edge exclusion rule, the rows of a
-// tuck and a miss chart, the network's marks landing on its type-value points, and measures
-// that follow the centrelines, not the interlacing points.
+// tuck and a miss chart, the network's marks landing on its type-value points, measures that
+// follow the centrelines, not the interlacing points, and `knitsim knit`'s stitches.csv and
+// summary.json `fabric` block.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
 #include <stdexcept>
 
 #include "models/knit_loops.hpp"
 #include "solvers/integrator.hpp"
 #include "src/geometry/nurbs.hpp"
 #include "src/measure/knit_measures.hpp"
+#include "tests/cli_runner.hpp"
 #include "tests/test_files.hpp"
 
 using namespace knitsim;
@@ -397,4 +403,100 @@ TEST_CASE("inconsistent input is refused, naming the cell", "[knit_measures]") {
   const KnitModel plain = chart_model("plain_jersey.chart");
   const KnitYarns other = knit_yarns(plain, plain.rest_positions());
   CHECK_THROWS_WITH(textile_measures(other, y), Catch::Contains("different charts"));
+}
+
+namespace {
+
+// The cells of stitches.csv, by their header's names (an empty field is NaN).
+std::vector<std::map<std::string, std::string>> read_csv(const std::string& text) {
+  std::vector<std::map<std::string, std::string>> rows;
+  std::vector<std::string> names;
+  for (const std::string& line : knitsim::test::lines(text)) {
+    std::vector<std::string> fields;
+    std::stringstream in(line);
+    for (std::string f; std::getline(in, f, ',');) fields.push_back(f);
+    if (!line.empty() && line.back() == ',') fields.emplace_back();
+    if (names.empty()) {
+      names = fields;
+      continue;
+    }
+    REQUIRE(fields.size() == names.size());
+    std::map<std::string, std::string> row;
+    for (size_t k = 0; k < names.size(); ++k) row[names[k]] = fields[k];
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+double number(const std::string& field) { return field.empty() ? std::nan("") : std::stod(field); }
+
+bool same_number(double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); }
+
+}  // namespace
+
+TEST_CASE("knitsim knit writes stitches.csv and summary.json's fabric block", "[knit_measures]") {
+  using knitsim::test::run_knitsim;
+  using knitsim::test::slurp;
+  using knitsim::test::TempDir;
+  TempDir tmp("knit-measures");
+  const std::string chart = std::string(KNITSIM_CHARTS) + "/single_tuck.chart";
+  const knitsim::test::Run r = run_knitsim(
+      "knit --chart '" + chart + "' --set knit.contact=0 --no-pictures --quiet --out '" +
+          (tmp.path / "out").string() + "'",
+      tmp);
+  INFO(r.err);
+  REQUIRE(r.status == 0);
+  // The run's end positions from points.csv (shortest exact text), measured here: the files
+  // hold the same numbers.
+  KnitParams p;
+  p.contact_ratio = 0.0;
+  const KnitModel m = chart_model("single_tuck.chart", p);
+  std::vector<Vec3> end(m.points.size());
+  for (const auto& row : read_csv(slurp(tmp.path / "out" / "points.csv")))
+    end[std::stoi(row.at("id"))] = {number(row.at("x")), number(row.at("y")), number(row.at("z"))};
+  const TextileMeasures t = textile_measures(m, end);
+  const auto rows = read_csv(slurp(tmp.path / "out" / "stitches.csv"));
+  REQUIRE(rows.size() == t.stitches.size());
+  for (size_t k = 0; k < rows.size(); ++k) {
+    const StitchMeasure& s = t.stitches[k];
+    const auto& row = rows[k];
+    CAPTURE(k);
+    CHECK(std::stoi(row.at("wale")) == s.wale);
+    CHECK(std::stoi(row.at("course")) == s.course);
+    CHECK(row.at("stitch") == std::string(1, static_cast<char>(s.stitch)));
+    CHECK(std::stoi(row.at("held_over")) == s.held_over);
+    CHECK(same_number(number(row.at("y_m")), s.centre.y));
+    CHECK(same_number(number(row.at("x0_m")), s.centre_rest.x));
+    CHECK(same_number(number(row.at("loop_height_m")), s.loop_height));
+    CHECK(same_number(number(row.at("loop_width0_m")), s.loop_width_rest));
+    CHECK(same_number(number(row.at("yarn_length_m")), s.yarn_length));
+    CHECK(same_number(number(row.at("float_depth_m")), s.float_depth));
+  }
+  CHECK(rows[2 * 8 + 3].at("stitch") == "T");
+  CHECK(rows[2 * 8 + 3].at("float_length_m").empty());
+  const auto summary = nlohmann::json::parse(slurp(tmp.path / "out" / "summary.json"));
+  const auto& f = summary.at("fabric");
+  CHECK(f.at("courses_per_cm").get<double>() == t.fabric.courses_per_cm);
+  CHECK(f.at("wales_per_cm").get<double>() == t.fabric.wales_per_cm);
+  CHECK(f.at("courses_per_cm_rest").get<double>() == t.fabric.courses_per_cm_rest);
+  CHECK(f.at("wales_per_cm_rest").get<double>() == t.fabric.wales_per_cm_rest);
+  CHECK(f.at("width_change").get<double>() == t.fabric.width_change);
+  CHECK(f.at("length_change").get<double>() == t.fabric.length_change);
+  CHECK(f.at("stitch_length_m").get<double>() == t.fabric.stitch_length);
+  CHECK(f.at("interior_cells") == 8);
+  CHECK(summary.at("units").at("fabric").get<std::string>().find("1/cm") != std::string::npos);
+
+  // A chart too small for the interior: null counts, one row per cell all the same.
+  std::ofstream(tmp.path / "small.chart") << "KKKK\nKKKK\nKKKK\nKKKK\n";
+  const knitsim::test::Run s =
+      run_knitsim("knit --chart '" + (tmp.path / "small.chart").string() +
+                      "' --no-pictures --quiet --out '" + (tmp.path / "small").string() + "'",
+                  tmp);
+  REQUIRE(s.status == 0);
+  const auto small = nlohmann::json::parse(slurp(tmp.path / "small" / "summary.json"));
+  for (const char* key : {"courses_per_cm", "wales_per_cm", "courses_per_cm_rest",
+                          "wales_per_cm_rest", "width_change", "length_change", "stitch_length_m"})
+    CHECK(small.at("fabric").at(key).is_null());
+  CHECK(small.at("fabric").at("interior_cells") == 0);
+  CHECK(read_csv(slurp(tmp.path / "small" / "stitches.csv")).size() == 16);
 }

@@ -17,6 +17,11 @@
 //                    samples per interval between yarn points
 //   centerlines.vtk  the same as legacy VTK POLYDATA LINES, one line per course (cell data
 //                    `course`)
+//   stitches.csv     one row per chart cell: its loop's centre, height, width, yarn length, a
+//                    float's length and depth, at the end and at rest; summary.json's `fabric`
+//                    block: courses and wales per cm, width and length change, stitch length
+//                    (src/measure/knit_measures.hpp, src/io/textile_outputs.hpp; omitted, and
+//                    `fabric` null, for a state that is not finite)
 //   frames/centerlines_NNN.vtk, frames/frame_NNN.png   the captured frames (below)
 //   before.png, after.png   front views at rest and at the end (yarns as z-buffered tubes,
 //                    render_strokes_png; interlacing points as dots); --no-pictures skips every PNG
@@ -76,6 +81,7 @@
 #include "src/io/progress.hpp"
 #include "src/io/run_state.hpp"
 #include "src/io/step_log.hpp"
+#include "src/io/textile_outputs.hpp"
 #include "src/measure/yarn_measures.hpp"
 #include "src/render/render.hpp"
 #include "src/scene/scene.hpp"
@@ -460,6 +466,15 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
     }
   write_file_atomic(dir / "centerlines.csv", csv);
 
+  nlohmann::json fabric = nullptr;
+  if (std::all_of(pos.begin(), pos.end(), is_finite)) {
+    const TextileMeasures textile = textile_measures(m, pos);
+    write_file_atomic(dir / "stitches.csv", stitches_csv(textile));
+    fabric = fabric_json(textile.fabric);
+  } else {
+    remove_stale_output(dir / "stitches.csv");
+  }
+
   // The equilibrium solver's flow leaves t where it started: its steps say how far it went.
   const std::string when = stats.t_final > t_start
                                ? " at t = " + format_number(stats.t_final, 4) + " s"
@@ -525,6 +540,7 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
       {"dof", m.network.dof()},
       {"max_displacement_over_r", max_displacement_over_r(m, pos)},
       {"yarn", measures_json(measures)},
+      {"fabric", fabric},
       {"contact", contact_json(m, stats.t_final, x)},
       {"frames", frame_list},
       {"params", params_json(m.params)},
@@ -549,6 +565,7 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
                        "stats.cpu_seconds; crossings: designed "
                        "front-view crossings at rest and how many changed over/under "
                        "order at the end"},
+                      {"fabric", kFabricUnits},
                       {"contact",
                        "null without yarn contact; min_point_distance_over_r 1: the "
                        "closest two contact points at the end / loop radius (null: no "

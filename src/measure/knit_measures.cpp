@@ -282,4 +282,8 @@ TextileMeasures textile_measures(const KnitYarns& now, const KnitYarns& rest) {
   return out;
 }
 
+TextileMeasures textile_measures(const KnitModel& m, const std::vector<Vec3>& positions) {
+  return textile_measures(knit_yarns(m, positions), knit_yarns(m, m.rest_positions()));
+}
+
 }  // namespace knitsim

@@ -133,5 +133,7 @@ struct TextileMeasures {
 
 // Both states must have the same chart. Throws std::invalid_argument on inconsistent input.
 TextileMeasures textile_measures(const KnitYarns& now, const KnitYarns& rest);
+// The network's state at positions (all points) against its rest (the chart's start).
+TextileMeasures textile_measures(const KnitModel& m, const std::vector<Vec3>& positions);
 
 }  // namespace knitsim
