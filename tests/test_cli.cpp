@@ -254,7 +254,7 @@ TEST_CASE("output writers: tables, VTK, atomic files and output folders") {
   VtkPolyData d;
   d.title = "t";
   d.points = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {2, 0, 0}};
-  d.polygons = {{0, 1, 2, 3}, {1, 4, 2}};
+  d.cells = {{0, 1, 2, 3}, {1, 4, 2}};
   d.point_ints = {{"pinned", {1, 0, 0, 0, 1}}};
   const std::string vtk = to_vtk(d);
   CHECK(vtk.find("POLYGONS 2 9\n4 0 1 2 3\n3 1 4 2\n") != std::string::npos);

@@ -13,7 +13,7 @@
 #include "solvers/integrator.hpp"
 #include "src/core/jacobian_check.hpp"
 #include "src/measure/yarn_measures.hpp"
-#include "src/scene/scene.hpp"
+#include "src/scene/knit_run.hpp"
 #include "tests/test_files.hpp"
 
 using namespace knitsim;

@@ -27,12 +27,12 @@ def runs_table(rows):
 
 
 def single_tuck_table(rows):
-    return md_table(["variant", "held loop height, start -> end " + R, "its base rises " + R,
-                     "tuck head rises " + R,
+    return md_table(["variant", "held loop height, start -> end " + R,
+                     "its centre rises " + R, "tuck loop's centre rises " + R,
                      "lateral shift toward the tuck, k = 1, 2, 3, 4 " + R],
                     [[r["variant"], "%s -> %s" % (r["held_loop_height_start_r"],
                                                   r["held_loop_height_end_r"]),
-                      r["held_loop_base_rise_r"], r["tuck_head_rise_r"],
+                      r["held_loop_centre_rise_r"], r["tuck_loop_centre_rise_r"],
                       ", ".join(r["lateral_dx_toward_tuck_r_d%d" % k] for k in range(1, 5))]
                      for r in rows])
 
@@ -67,15 +67,21 @@ def stitch_overview(rows):
                      "float depth behind the face, rest -> end " + R], out)
 
 
+def rest_end(r, key):
+    """'rest -> end' of key_rest_r, key_end_r, or '' when the cell has no such measure."""
+    end = r[key + "_end_r"]
+    return "%s -> %s" % (r[key + "_rest_r"], end) if end else ""
+
+
 def stitch_table(rows):
-    return md_table(["chart", "variant", "stitch", "wale", "course", "held loop rest -> end",
-                     "tuck loop rest -> end", "float depth rest -> end"],
-                    [[r["chart"], r["variant"], r["stitch"], r["wale"], r["course"],
-                      "%s -> %s" % (r["held_loop_height_rest_r"], r["held_loop_height_end_r"]),
-                      ("%s -> %s" % (r["tuck_loop_height_rest_r"], r["tuck_loop_height_end_r"])
-                       if r["tuck_loop_height_end_r"] else ""),
-                      ("%s -> %s" % (r["float_depth_rest_r"], r["float_depth_end_r"])
-                       if r["float_depth_end_r"] else "")] for r in rows])
+    return md_table(["chart", "variant", "stitch", "wale", "course", "held loop height",
+                     "held loop length", "tuck loop height", "tuck loop length", "float depth",
+                     "float length"],
+                    [[r["chart"], r["variant"], r["stitch"], r["wale"], r["course"]] +
+                     [rest_end(r, key) for key in ("held_loop_height", "held_loop_length",
+                                                   "tuck_loop_height", "tuck_loop_length",
+                                                   "float_depth", "float_length")]
+                     for r in rows])
 
 
 def build(folder):
@@ -88,7 +94,7 @@ def build(folder):
          single_tuck_table(features) if features else ""),
         ("Tuck and miss stitches, per chart (stitch_features.csv)",
          stitch_overview(stitches) if stitches else ""),
-        ("Every tuck and miss stitch (stitch_features.csv), / r",
+        ("Every tuck and miss stitch (stitch_features.csv), rest -> end, / r",
          stitch_table(stitches) if stitches else ""),
         ("Provenance", provenance(read_json(folder, "manifest.json"))),
     ]

@@ -199,7 +199,7 @@ void write_drape_outputs(const fs::path& dir, const Scene& scene, const DrapeRes
   vtk.title = "knitsim drape " + scene.name + " (" + r.stats.integrator + ", " +
               to_string(r.stats.status) + ", t = " + format_number(r.stats.t_final, 6) + " s)";
   vtk.points = r.positions;
-  for (const auto& q : quads) vtk.polygons.emplace_back(q.begin(), q.end());
+  for (const auto& q : quads) vtk.cells.emplace_back(q.begin(), q.end());
   vtk.point_ints.push_back({"pinned", pinned});
   std::vector<Vec3> displacement(r.positions.size());
   for (size_t k = 0; k < displacement.size(); ++k) displacement[k] = r.positions[k] - r.rest[k];

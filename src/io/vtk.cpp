@@ -5,44 +5,54 @@
 namespace knitsim {
 
 std::string to_vtk(const VtkPolyData& d) {
-  // The numbers as a stream at precision 10 wrote them (%.10g), through std::to_chars.
+  // %.<digits>g as a stream at that precision wrote them, through std::to_chars.
   std::string os;
-  os.reserve(64 * d.points.size() * (1 + d.point_vectors.size()) + 32 * d.polygons.size() + 256);
+  os.reserve(64 * d.points.size() * (1 + d.point_vectors.size()) + 32 * d.cells.size() + 256);
   const auto line = [&os](const std::string& head, long long a, const char* tail) {
     os += head;
     append_integer(os, a);
     os += tail;
   };
-  const auto xyz = [&os](const Vec3& p) {
-    append_general(os, p.x, 10);
+  const auto number = [&os, &d](double v) {
+    if (d.digits > 0)
+      append_general(os, v, d.digits);
+    else
+      append_number(os, v);
+  };
+  const auto xyz = [&os, &number](const Vec3& p) {
+    number(p.x);
     os += ' ';
-    append_general(os, p.y, 10);
+    number(p.y);
     os += ' ';
-    append_general(os, p.z, 10);
+    number(p.z);
     os += '\n';
   };
   os += "# vtk DataFile Version 3.0\n" + d.title + "\nASCII\nDATASET POLYDATA\n";
   line("POINTS ", static_cast<long long>(d.points.size()), " double\n");
   for (const Vec3& p : d.points) xyz(p);
   size_t size = 0;
-  for (const auto& poly : d.polygons) size += poly.size() + 1;
-  line("POLYGONS ", static_cast<long long>(d.polygons.size()), " ");
+  for (const auto& cell : d.cells) size += cell.size() + 1;
+  line(d.kind == VtkPolyData::Cells::Lines ? "LINES " : "POLYGONS ",
+       static_cast<long long>(d.cells.size()), " ");
   line("", static_cast<long long>(size), "\n");
-  for (const auto& poly : d.polygons) {
-    append_integer(os, static_cast<long long>(poly.size()));
-    for (int i : poly) line(" ", i, "");
+  for (const auto& cell : d.cells) {
+    append_integer(os, static_cast<long long>(cell.size()));
+    for (int i : cell) line(" ", i, "");
     os += '\n';
   }
-  if (!d.point_ints.empty() || !d.point_vectors.empty())
-    line("POINT_DATA ", static_cast<long long>(d.points.size()), "\n");
-  for (const auto& [name, values] : d.point_ints) {
+  const auto ints = [&os, &line](const std::string& name, const std::vector<int>& values) {
     os += "SCALARS " + name + " int 1\nLOOKUP_TABLE default\n";
     for (int v : values) line("", v, "\n");
-  }
+  };
+  if (!d.point_ints.empty() || !d.point_vectors.empty())
+    line("POINT_DATA ", static_cast<long long>(d.points.size()), "\n");
+  for (const auto& [name, values] : d.point_ints) ints(name, values);
   for (const auto& [name, values] : d.point_vectors) {
     os += "VECTORS " + name + " double\n";
     for (const Vec3& v : values) xyz(v);
   }
+  if (!d.cell_ints.empty()) line("CELL_DATA ", static_cast<long long>(d.cells.size()), "\n");
+  for (const auto& [name, values] : d.cell_ints) ints(name, values);
   return os;
 }
 

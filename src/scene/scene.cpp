@@ -373,10 +373,6 @@ std::string scene_description(const std::string& toml_text) {
 
 std::string default_integrator() { return "equilibrium"; }
 
-std::string default_knit_integrator(bool yarn_contact) {
-  return yarn_contact ? "equilibrium" : "cvode-bdf";
-}
-
 namespace {
 
 // The largest mirror group of the grid and its start: eighth, quarter, half, or none (a

@@ -92,13 +92,6 @@ std::string scene_description(const std::string& toml_text);
 // The integrator of drape, fit, repro and demo's first row: `equilibrium`, the solver for the
 // state the damped dynamics reach (solvers/equilibrium_solver.cpp).
 std::string default_integrator();
-// The knit model's: cvode-bdf, which keeps a flat chart in its plane; on paper 2's network (a
-// mechanism, its stiffness singular) the overdamped flow of `equilibrium` crawls along the zero
-// modes (docs/knit.md, "Out-of-plane bending"). With yarn contact: equilibrium, whose flow steps
-// the contact's filter cuts (cvode-bdf crawls on the barrier's stiff, lightly damped modes and
-// restarts at each renewal of the contact points; implicit-euler lets an unpinned chart slide:
-// docs/knit.md, "Yarn contact").
-std::string default_knit_integrator(bool yarn_contact = false);
 
 // One drape run and the quantities every report of it shows.
 struct DrapeResult {

@@ -1,0 +1,118 @@
+#include "src/scene/knit_run.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+#include <utility>
+
+#include "src/base/text.hpp"
+
+namespace knitsim {
+
+namespace {
+
+// The clearance over the run is measured when an interlacing point has moved by 0.05 r since
+// the last measured state (src/measure/yarn_measures.hpp, ClearanceOverRun: a dip shallower than
+// 2 A 0.05 r can be missed, A the measured amplification, reported; figures per chart in
+// docs/knit.md, "Yarn measures").
+constexpr double kClearanceResample = 0.05;
+
+// The clearance and crossings at the end of the run; `rest_lines` are the rest state's.
+void measure_end(const KnitModel& model, const std::vector<Vec3>& end,
+                 const std::vector<YarnCrossing>& crossings, KnitMeasures& measures) {
+  if (std::all_of(end.begin(), end.end(), is_finite)) {
+    const YarnPolylines end_lines = yarn_polylines(model, end);
+    measures.end_clearance = yarn_clearance(model, end_lines).over_r;
+    measures.crossings = check_crossings(crossings, end_lines);
+  } else {
+    measures.end_clearance = std::nan("");
+    measures.crossings.designed = static_cast<int>(crossings.size());
+    measures.crossings.changed = -1;  // unknown: the end state is not finite
+  }
+}
+
+}  // namespace
+
+std::string default_knit_integrator(bool yarn_contact) {
+  return yarn_contact ? "equilibrium" : "cvode-bdf";
+}
+
+void set_default_knit_velocity_atol(IntegratorOptions& options, const KnitParams& params,
+                                    const IntegratorInfo& integrator) {
+  if (!params.mechanism() && integrator.adaptive) options.velocity_atol = kStabilisedVelocityAtol;
+}
+
+KnitStart start_knit(const KnitScene& scene) {
+  KnitStart s{build_knit(scene.chart, scene.params), 0.0, {}, {}};  // validates the parameters
+  s.x.resize(s.model.network.dof());
+  s.v.resize(s.model.network.dof());
+  s.model.network.initial_state(s.x.data(), s.v.data());
+  return s;
+}
+
+void continue_knit(KnitStart& start, const RunState& from) {
+  if (from.x.size() != start.x.size())  // same chart and parameters: only a corrupt file gets here
+    throw std::invalid_argument("the state has " + std::to_string(from.x.size()) +
+                                " unknowns; this chart has " + std::to_string(start.x.size()));
+  start.t = from.t, start.x = from.x, start.v = from.v;
+  // The contact points were made at rest: linearised afresh about the saved state, they stand
+  // for the yarn there (the run goes on from the same state, not with the same points).
+  if (start.model.contact && !start.model.contact->renew(start.t, start.x.data()))
+    throw std::invalid_argument(
+        "the saved state's yarns lie inside the contact's core (closer than " +
+        format_number(kContactCore, 3) + " r); it cannot go on");
+}
+
+KnitResult run_knit(KnitStart start, const KnitScene& scene, const std::string& integrator,
+                    RunObserver* observer) {
+  std::unique_ptr<Integrator> integ = make_integrator(integrator);
+  KnitResult r{std::move(start.model), {}, start.t, std::move(start.x), std::move(start.v),
+               {}, {}, {}};
+  const KnitModel& model = r.model;
+  const int dof = model.network.dof();
+  const YarnPolylines rest_lines = yarn_polylines(model, model.rest_positions());
+  const std::vector<YarnCrossing> crossings = designed_crossings(model, rest_lines);
+  KnitMeasures& measures = r.measures;
+  measures.rest_clearance = yarn_clearance(model, rest_lines).over_r;
+
+  FrameRecorder recorder(scene.frames, dof, observer);
+  recorder.record(r.t_start, r.x.data(), model.system().static_residual(r.t_start, r.x.data()));
+  ClearanceOverRun clearance(model, &recorder, kClearanceResample);
+  clearance.observe(r.t_start, r.x.data(), true);
+  const double measure_cpu_before = clearance.cpu_seconds();
+  r.stats = run_to_equilibrium(model.system(), *integ, scene.options, r.x, r.v, &clearance,
+                               r.t_start);
+  measures.measure_cpu_seconds = clearance.cpu_seconds() - measure_cpu_before;
+  clearance.observe(r.stats.t_final, r.x.data(), true);
+  measures.min_clearance = clearance.minimum();
+  measures.t_min_clearance = clearance.t_of_minimum();
+  measures.check_min_clearance = clearance.check_of_minimum();
+  measures.measured_states = clearance.measured_states();
+  measures.min_resolution = clearance.resolution_over_r();
+  r.positions = knit_positions(model, r.stats.t_final, r.x);
+  measure_end(model, r.positions, crossings, measures);
+  r.frames = recorder.frames();
+  return r;
+}
+
+KnitResult run_knit(const KnitScene& scene, const std::string& integrator, RunObserver* observer,
+                    const RunState* from) {
+  KnitStart start = start_knit(scene);
+  if (from) continue_knit(start, *from);
+  return run_knit(std::move(start), scene, integrator, observer);
+}
+
+std::vector<Vec3> knit_positions(const KnitModel& m, double t, const std::vector<double>& x) {
+  std::vector<Vec3> pos;
+  m.network.all_positions(t, x.data(), pos);
+  return pos;
+}
+
+double max_displacement_over_r(const KnitModel& m, const std::vector<Vec3>& pos) {
+  double d = 0.0;
+  for (size_t k = 0; k < pos.size(); ++k) d = std::max(d, norm(pos[k] - m.points[k].rest));
+  return d / m.params.loop_radius;
+}
+
+}  // namespace knitsim
