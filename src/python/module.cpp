@@ -94,10 +94,16 @@ std::string value_text(const py::handle& v) {
 
 // scene and target: a str or an os.PathLike.
 std::string path_text(const py::handle& v, const char* what) {
-  if (py::isinstance<py::str>(v)) return v.cast<std::string>();
+  auto checked = [what](std::string text) {
+    if (text.find('\0') != std::string::npos)  // the C library would read a shorter path
+      throw std::invalid_argument(std::string(what) + " " + printable(text) +
+                                  ": a name or path holds no NUL byte");
+    return text;
+  };
+  if (py::isinstance<py::str>(v)) return checked(v.cast<std::string>());
   if (py::hasattr(v, "__fspath__")) {
     py::object p = py::module_::import("os").attr("fspath")(v);
-    if (py::isinstance<py::str>(p)) return p.cast<std::string>();
+    if (py::isinstance<py::str>(p)) return checked(p.cast<std::string>());
   }
   throw std::invalid_argument(std::string(what) + ": expected a str or os.PathLike, got " +
                               py::str(py::type::of(v).attr("__name__")).cast<std::string>());
