@@ -24,6 +24,7 @@
 #include "src/base/text.hpp"
 #include "src/io/manifest.hpp"
 #include "src/python/drape_call.hpp"
+#include "src/python/fit_call.hpp"
 
 namespace py = pybind11;
 
@@ -49,17 +50,7 @@ class SignalPoll final : public RunObserver {
   void on_step(double, double, int) override { poll(); }
   void on_check(double, const double*, const double*, double) override { poll(); }
 
-  // With the GIL: the exception a handler raised during the run, or a signal that came after
-  // the last poll (then the result is complete). Returns true and leaves the exception set.
-  bool raised() {
-    if (error_) {
-      PyErr_Restore(type_.release().ptr(), value_.release().ptr(), trace_.release().ptr());
-      return true;
-    }
-    return active_ && PyErr_CheckSignals() != 0;
-  }
-
- private:
+  // From the solving thread, without the GIL (a run observer's call, the ICA's stop question).
   void poll() {
     if (!active_ || error_) return;
     const auto now = std::chrono::steady_clock::now();
@@ -77,6 +68,17 @@ class SignalPoll final : public RunObserver {
     cancel_->store(true, std::memory_order_relaxed);
   }
 
+  // With the GIL: the exception a handler raised during the run, or a signal that came after
+  // the last poll (then the result is complete). Returns true and leaves the exception set.
+  bool raised() {
+    if (error_) {
+      PyErr_Restore(type_.release().ptr(), value_.release().ptr(), trace_.release().ptr());
+      return true;
+    }
+    return active_ && PyErr_CheckSignals() != 0;
+  }
+
+ private:
   std::atomic<bool>* cancel_;
   bool active_;
   bool error_ = false;
@@ -193,6 +195,78 @@ py::object drape(const py::object& scene, const py::object& overrides, const py:
   return result;
 }
 
+
+// knitsim.fit: the ICA fit of `knitsim fit` (fit_call.hpp).
+py::object fit(const py::object& target, const py::object& scene, const py::object& overrides,
+               const py::object& integrator, const py::object& bounds, const py::kwargs& options) {
+  FitRequest request;
+  request.target = path_text(target, "--target");
+  request.scene = path_text(scene, "--scene");
+  request.overrides = override_list(overrides);
+  if (!integrator.is_none()) {
+    if (!py::isinstance<py::str>(integrator))
+      throw std::invalid_argument("--integrator: expected a name (knitsim.integrators())");
+    request.integrator = integrator.cast<std::string>();
+  }
+  if (!bounds.is_none()) {
+    if (!py::isinstance<py::dict>(bounds))
+      throw std::invalid_argument("bounds: expected a dict {gene: (lower, upper)}");
+    for (const auto& [gene, box] : py::reinterpret_borrow<py::dict>(bounds)) {
+      const std::string name = py::str(gene).cast<std::string>();
+      double lower = 0.0, upper = 0.0;
+      try {
+        auto pair = box.cast<std::pair<double, double>>();
+        lower = pair.first, upper = pair.second;
+      } catch (const py::cast_error&) {
+        throw std::invalid_argument("bounds." + name + ": expected (lower, upper), got " +
+                                    py::repr(box).cast<std::string>());
+      }
+      request.bounds.emplace_back(name, lower, upper);
+    }
+  }
+  for (const auto& [name, value] : options)
+    request.options.emplace_back(name.cast<std::string>(), value_text(value));
+
+  std::atomic<bool> cancel{false};
+  SignalPoll signals(&cancel);
+  std::shared_ptr<FitCall> call;
+  {
+    py::gil_scoped_release release;
+    call = std::make_shared<FitCall>(fit_call(request, [&signals, &cancel] {
+      signals.poll();
+      return cancel.load(std::memory_order_relaxed);
+    }));
+  }
+  py::object result = py::cast(call);
+  if (signals.raised()) {
+    py::error_already_set e;
+    if (PyExceptionInstance_Check(e.value().ptr())) e.value().attr("result") = result;
+    throw e;
+  }
+  return result;
+}
+
+std::string fit_doc() {
+  std::string doc =
+      "fit(target, scene='four_corner', overrides=None, integrator=None, bounds=None, **options)\n"
+      "\n"
+      "Fit the drape model's parameters to target edges with the ICA, as `knitsim fit` does "
+      "(the same fit, bit for bit), and return a FitResult (params, objective, evaluations, "
+      "history, best_country, status, and the fitted drape as a DrapeResult).\n"
+      "\n"
+      "target: the target edges CSV (docs/fitting.md).\n"
+      "scene, overrides, integrator: the base scene, as for drape() (fabric, pins, run options).\n"
+      "bounds: {gene: (lower, upper)} of the search box (genes: stiffness N/m, damping N s/m, "
+      "elongation_limit %, natural_length m, topology 0..3), default paper 1's Table 3.\n"
+      "options: the flags of `knitsim fit` by name:";
+  for (const auto& [name, flag] : fit_option_flags()) doc += " " + name;
+  doc +=
+      " (rtol defaults to 1e-8, as for the command).\n\n"
+      "Ctrl-C ends the fit at the end of its current decade (status interrupted) and raises "
+      "KeyboardInterrupt with the result so far as .result.\n";
+  return doc;
+}
+
 // help(knitsim.drape): the signature's meaning, then the scene keys from the key table (as
 // `knitsim list keys` prints them) and the run options.
 std::string drape_doc() {
@@ -236,7 +310,7 @@ PYBIND11_MODULE(knitsim, m) {
                       .cast<unsigned long>();
   m.doc() =
       "knitsim from Python: mass-spring models of knitted fabric (docs/python.md). drape(), "
-      "list_keys(), integrators(); results hold numpy arrays and summary.json as a dict.";
+      "fit(), list_keys(), integrators(), scenes(); results hold numpy arrays and summary.json as a dict.";
   m.attr("__version__") = KNITSIM_VERSION;
   m.attr("build") = py::dict(py::arg("version") = version_string(),
                              py::arg("python") = KNITSIM_PYTHON_EXECUTABLE,
@@ -341,6 +415,69 @@ PYBIND11_MODULE(knitsim, m) {
   static const std::string doc = drape_doc();
   m.def("drape", &drape, py::arg("scene") = "four_corner", py::arg("overrides") = py::none(),
         py::arg("integrator") = py::none(), py::arg("target") = py::none(), doc.c_str());
+
+
+  py::class_<FitCall, std::shared_ptr<FitCall>>(
+      m, "FitResult", "One ICA fit: the best parameters, their objective, the history.")
+      .def_property_readonly(
+          "status", [](const FitCall& c) { return to_string(c.fit.status); },
+          "decade_limit, one_empire, all_failed or interrupted")
+      .def_property_readonly(
+          "message", [](const FitCall& c) { return c.fit.message; }, "the ICA's")
+      .def_property_readonly(
+          "params",
+          [](const FitCall& c) {
+            const DrapeParams& p = c.fit.params;
+            return py::dict(py::arg("stiffness") = p.stiffness, py::arg("damping") = p.damping,
+                            py::arg("elongation_limit") = p.elongation_limit,
+                            py::arg("natural_length") = p.natural_length,
+                            py::arg("topology") = std::string(1, p.topology));
+          },
+          "the fitted parameters: stiffness N/m, damping N s/m, elongation_limit %, "
+          "natural_length m, topology")
+      .def_property_readonly(
+          "objective", [](const FitCall& c) { return c.fit.objective; },
+          "%: the Eq. 5 error of the best country")
+      .def_property_readonly(
+          "evaluations", [](const FitCall& c) { return c.fit.evaluations; }, "drapes run")
+      .def_property_readonly(
+          "failed_evaluations", [](const FitCall& c) { return c.fit.failed_evaluations; },
+          "drapes that did not reach equilibrium or could not be measured")
+      .def_property_readonly(
+          "best_country",
+          [](const FitCall& c) { return vector_array(c.fit.best_x.data(), c.fit.best_x.size()); },
+          "the best country: stiffness, damping, elongation_limit, natural_length, topology gene")
+      .def_property_readonly(
+          "history",
+          [](const FitCall& c) {
+            py::list l;
+            for (const IcaDecade& d : c.fit.history)
+              l.append(py::dict(py::arg("decade") = d.decade, py::arg("best") = d.best_cost,
+                                py::arg("mean") = d.mean_cost, py::arg("empires") = d.empires,
+                                py::arg("evaluations") = d.evaluations));
+            return l;
+          },
+          "history.csv's rows: [{decade, best, mean, empires, evaluations}]")
+      .def_property_readonly(
+          "wall_seconds", [](const FitCall& c) { return c.fit.wall_seconds; }, "s")
+      .def_property_readonly(
+          "integrator", [](const FitCall& c) { return c.integrator; }, "of every evaluation")
+      .def_property_readonly(
+          "target_scene", [](const FitCall& c) { return c.target_scene; },
+          "the target's scene the drapes were compared with")
+      .def_property_readonly(
+          "drape", [](const FitCall& c) { return c.drape; },
+          "the fitted drape re-run (a DrapeResult with the objective against the target in its "
+          "summary), None for a fit cut short")
+      .def("__repr__", [](const FitCall& c) {
+        return "<knitsim.FitResult " + std::string(to_string(c.fit.status)) + ": objective " +
+               format_number(c.fit.objective, 4) + " % after " +
+               std::to_string(c.fit.evaluations) + " drapes>";
+      });
+  static const std::string fit_docstring = fit_doc();
+  m.def("fit", &fit, py::arg("target"), py::arg("scene") = "four_corner",
+        py::arg("overrides") = py::none(), py::arg("integrator") = py::none(),
+        py::arg("bounds") = py::none(), fit_docstring.c_str());
 
   m.def(
       "list_keys",
