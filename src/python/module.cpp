@@ -86,11 +86,13 @@ class SignalPoll final : public RunObserver {
   py::object type_, value_, trace_;
 };
 
-// A Python value as the text --set or a run flag takes: str as is, float by repr (the shortest
-// text that reads back as the same double), anything else by str().
+// A Python value as the text --set or a run flag takes: str as is, a float (numpy's float64
+// included) by the plain float's repr (the shortest text that reads back as the same double),
+// anything else by str().
 std::string value_text(const py::handle& v) {
   if (py::isinstance<py::str>(v)) return v.cast<std::string>();
-  if (PyFloat_Check(v.ptr())) return py::repr(v).cast<std::string>();
+  if (PyFloat_Check(v.ptr()))  // numpy's float64 too, by the plain float's repr
+    return py::repr(py::float_(PyFloat_AsDouble(v.ptr()))).cast<std::string>();
   return py::str(v).cast<std::string>();
 }
 

@@ -112,3 +112,11 @@ def test_scene_file_and_path_like(tmp_path):
     b = knitsim.drape("four_corner", {"model.stiffness": 600.0})
     assert a.scene == "soft" and np.array_equal(a.positions, b.positions)
     assert a.summary["source"] == str(scene)
+
+
+def test_numpy_values_are_the_same_overrides():
+    k = np.linspace(500.0, 1200.0, 7)[3]  # numpy.float64
+    a = knitsim.drape("four_corner", {"model.stiffness": k, "model.seed": np.int64(2)})
+    b = knitsim.drape("four_corner", {"model.stiffness": float(k), "model.seed": 2})
+    assert np.array_equal(a.positions, b.positions)
+    assert a.summary["params"]["stiffness"] == float(k)
