@@ -167,8 +167,23 @@ py::list table_rows(const Table& t, const std::vector<std::string>& names) {
 
 using CallPtr = std::shared_ptr<DrapeCall>;
 
+// knitsim.Cancel: a flag another thread sets to end the runs given it (status interrupted).
+struct Cancel {
+  std::shared_ptr<std::atomic<bool>> flag = std::make_shared<std::atomic<bool>>(false);
+};
+
+// The call's own flag, or the one of `cancel` (a knitsim.Cancel) when given.
+std::shared_ptr<std::atomic<bool>> cancel_flag(const py::object& cancel) {
+  if (cancel.is_none()) return std::make_shared<std::atomic<bool>>(false);
+  if (!py::isinstance<Cancel>(cancel))
+    throw std::invalid_argument("cancel: expected a knitsim.Cancel, got " +
+                                py::str(py::type::of(cancel).attr("__name__")).cast<std::string>());
+  return cancel.cast<Cancel&>().flag;
+}
+
 py::object drape(const py::object& scene, const py::object& overrides, const py::object& integrator,
-                 const py::object& target, const py::kwargs& run_options) {
+                 const py::object& target, const py::object& cancel_token,
+                 const py::kwargs& run_options) {
   DrapeRequest request;
   request.scene = path_text(scene, "scene");
   request.overrides = override_list(overrides);
@@ -181,12 +196,12 @@ py::object drape(const py::object& scene, const py::object& overrides, const py:
   for (const auto& [name, value] : run_options)
     request.run_options.emplace_back(name.cast<std::string>(), value_text(value));
 
-  std::atomic<bool> cancel{false};
-  SignalPoll signals(&cancel);
+  const std::shared_ptr<std::atomic<bool>> cancel = cancel_flag(cancel_token);
+  SignalPoll signals(cancel.get());
   CallPtr call;
   {
     py::gil_scoped_release release;
-    call = std::make_shared<DrapeCall>(drape_call(request, &cancel, &signals));
+    call = std::make_shared<DrapeCall>(drape_call(request, cancel.get(), &signals));
   }
   py::object result = py::cast(call);
   if (signals.raised()) {  // KeyboardInterrupt (or a handler's own exception) with the result
@@ -273,7 +288,8 @@ std::string fit_doc() {
 // `knitsim list keys` prints them) and the run options.
 std::string drape_doc() {
   std::string doc =
-      "drape(scene='four_corner', overrides=None, integrator=None, target=None, **run_options)\n"
+      "drape(scene='four_corner', overrides=None, integrator=None, target=None, cancel=None, "
+      "**run_options)\n"
       "\n"
       "Hang a fabric and run it to equilibrium, as `knitsim drape` does (the same numbers, bit "
       "for bit), and return a DrapeResult (positions, rest_positions, edges, summary, status, "
@@ -284,6 +300,8 @@ std::string drape_doc() {
       "takes them, e.g. {\"model.stiffness\": 900}.\n"
       "integrator: a name of knitsim.integrators(); None = equilibrium.\n"
       "target: target edges CSV (docs/fitting.md): adds the Eq. 5 objective to the summary.\n"
+      "cancel: a knitsim.Cancel another thread may set() to end the run (status interrupted, "
+      "returned: no exception).\n"
       "run_options: the run flags of `knitsim drape` by name, e.g. rtol=1e-8, max_wall=5:";
   for (const auto& [name, flag] : run_option_flags()) doc += " " + name;
   doc +=
@@ -415,8 +433,15 @@ PYBIND11_MODULE(knitsim, m) {
       });
 
   static const std::string doc = drape_doc();
+  py::class_<Cancel>(m, "Cancel",
+                     "A cancel flag for drape(cancel=...): set() from any thread ends the runs "
+                     "given it at their next residual check, with status interrupted.")
+      .def(py::init<>())
+      .def("set", [](Cancel& c) { c.flag->store(true); }, "Ask the runs to stop.")
+      .def("is_set", [](const Cancel& c) { return c.flag->load(); });
   m.def("drape", &drape, py::arg("scene") = "four_corner", py::arg("overrides") = py::none(),
-        py::arg("integrator") = py::none(), py::arg("target") = py::none(), doc.c_str());
+        py::arg("integrator") = py::none(), py::arg("target") = py::none(),
+        py::arg("cancel") = py::none(), doc.c_str());
 
 
   py::class_<FitCall, std::shared_ptr<FitCall>>(

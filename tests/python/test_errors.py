@@ -64,6 +64,7 @@ def test_bad_toml(tmp_path, cli):
     (dict(overrides={"model.stiffness": None}), "model.stiffness = None: must be"),
     (dict(overrides={"scene.name": "a\nb"}), "scene.name = a\\x0ab: must be"),
     (dict(integrator=3), "--integrator: expected a name"),
+    (dict(cancel=True), "cancel: expected a knitsim.Cancel, got bool"),
     (dict(rtl=1e-8), "rtl: unknown key; did you mean rtol?"),
     (dict(max_steps=1.5), "--max-steps = 1.5: must be an integer"),
     (dict(max_steps=10**30), "--max-steps = 1000000000000000000000000000000: must be an integer"),

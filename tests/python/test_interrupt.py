@@ -83,3 +83,30 @@ except Stop as e:
     assert p.returncode == 0, p.stderr
     assert json.loads(p.stdout.strip().splitlines()[-1]) == {"raised": "Stop",
                                                              "status": "interrupted"}
+
+
+def test_a_cancel_flag_ends_a_run_on_another_thread():
+    # Ctrl-C reaches the main thread only; a run on a worker thread is ended by its Cancel.
+    import threading
+    import time
+
+    import knitsim
+    cancel = knitsim.Cancel()
+    out = {}
+
+    def work():
+        out["r"] = knitsim.drape("four_corner", {"model.natural_length": 0.02,
+                                                 "model.symmetry": "none"}, "verlet",
+                                 cancel=cancel, max_wall=60)
+
+    t = threading.Thread(target=work)
+    start = time.monotonic()
+    t.start()
+    time.sleep(0.3)
+    cancel.set()
+    t.join()
+    assert out["r"].status == "interrupted" and cancel.is_set()
+    assert time.monotonic() - start < 30
+    # A Cancel already set stops the next run at its first check; a fresh call has its own flag.
+    assert knitsim.drape(cancel=cancel, integrator="cvode-bdf").status == "interrupted"
+    assert knitsim.drape(integrator="cvode-bdf").status == "equilibrium"
