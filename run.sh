@@ -22,6 +22,7 @@ PACKAGES=(cmake g++ make pkg-config
   libsundials-dev libsuitesparse-dev libopenblas0-serial libeigen3-dev catch2
   libcairo2-dev libtomlplusplus-dev nlohmann-json3-dev libcli11-dev
   python3-scipy python3-matplotlib libopenmpi-dev openmpi-bin libpagmo-dev
+  python3-dev pybind11-dev python3-pybind11 python3-pytest
   ${KNITSIM_EXTRA_PACKAGES:-})  # test.sh --fuzz adds clang and libclang-rt-14-dev (libFuzzer)
 
 install_missing_packages() {

@@ -98,9 +98,78 @@ def note_build(manifest_path):
         FIRST_BUILD = {k: km.get(k) for k in BUILD_FIELDS}
 
 
+# `knitsim drape` runs go through the Python module of the same build (docs/python.md) when it
+# is there: <folder of the binary>/python, so that KNITSIM=<another build> runs that build's
+# module or none. The same numbers and files (ctest python_module), without a process per run.
+# KNITSIM_EXPKIT_PROCESSES=1 runs every drape as a process instead.
+_MODULE = []  # [the module, or None], looked up once
+
+
+def _module():
+    if not _MODULE:
+        module = None
+        folder = os.path.join(os.path.dirname(knitsim_path()), "python")
+        if os.environ.get("KNITSIM_EXPKIT_PROCESSES") != "1" and os.path.isdir(folder):
+            sys.path.insert(0, folder)
+            try:
+                import knitsim as module
+            except ImportError:
+                module = None
+            finally:
+                sys.path.remove(folder)
+        _MODULE.append(module)
+    return _MODULE[0]
+
+
+# drape's flags the module takes, and its run options by flag (docs/python.md).
+_DRAPE_RUN_FLAGS = {"--rtol", "--atol", "--velocity-atol", "--dt", "--max-order", "--max-steps",
+                    "--max-wall", "--max-restarts", "--newton-solver", "--factorization",
+                    "--gmres-preconditioner", "--krylov-dim", "--eps-lin"}
+
+
+def _drape_in_process(args, folder):
+    """`knitsim drape ARGS --out FOLDER` through the module: the Run, or None where the module is
+    absent or ARGS hold a flag it does not take (--continue, --step-history): then the binary
+    runs it."""
+    knitsim = _module()
+    if knitsim is None or not args or args[0] != "drape":
+        return None
+    call = dict(scene="four_corner", overrides=[], integrator=None, target=None)
+    options, pictures, i = {}, True, 1
+    while i < len(args):
+        flag = args[i]
+        if flag in ("--no-pictures", "--quiet"):
+            pictures = pictures and flag != "--no-pictures"
+            i += 1
+            continue
+        if i + 1 >= len(args):
+            return None
+        value = args[i + 1]
+        if flag == "--set":
+            call["overrides"].append(value)
+        elif flag in ("--scene", "--integrator", "--target"):
+            call[flag[2:]] = value
+        elif flag in _DRAPE_RUN_FLAGS:
+            options[flag[2:].replace("-", "_")] = value
+        else:
+            return None
+        i += 2
+    try:
+        result = knitsim.drape(**call, **options)
+    except ValueError as e:  # bad input, as the binary's exit 2
+        sys.exit("knitsim failed (bad input): drape %s\n%s" % (" ".join(args[1:]), e))
+    result.write(folder, pictures=pictures)
+    summary_path = os.path.join(folder, "summary.json")
+    note_build(os.path.join(folder, "manifest.json"))
+    return Run(folder, 0 if result.status == "equilibrium" else 3,
+               json.load(open(summary_path)), "")
+
+
 def run_knitsim(out, label, args, timeout=None):
     """knitsim ARGS --quiet --out OUT/runs/LABEL. Exit 0 (equilibrium) and 3 (another status,
-    outputs written) are results; anything else (bad input) stops the driver."""
+    outputs written) are results; anything else (bad input) stops the driver. A drape runs
+    through the module where it can (_drape_in_process), unless a timeout is asked for or the
+    run may be reused (--reuse)."""
     folder = os.path.join(out, "runs", label)
     args = [str(a) for a in args]
     # The studies measure whole sheets unless a row names a reduction: knitsim's default
@@ -117,6 +186,10 @@ def run_knitsim(out, label, args, timeout=None):
         note_build(manifest_path)
         return Run(folder, 0 if status == "equilibrium" else 3, summary, "")
     shutil.rmtree(folder, ignore_errors=True)
+    if timeout is None and not REUSE:
+        run = _drape_in_process(args, folder)
+        if run is not None:
+            return run
     try:
         p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
     except subprocess.TimeoutExpired:

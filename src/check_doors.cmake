@@ -13,7 +13,7 @@ set(levels
   "src/scene"
   "src/io src/fit"
   "src/repro"
-  "src/cli")
+  "src/cli src/python")
 
 if(NOT ROOT)
   message(FATAL_ERROR "check_doors: -DROOT=<source dir> is required")

@@ -127,29 +127,22 @@ void write_drape_picture(const fs::path& path, const Scene& scene, const DrapeRe
 
 }  // namespace
 
-void write_drape_outputs(const fs::path& dir, const Scene& scene, const DrapeResult& r,
-                         const std::vector<EdgeFit>* target, bool picture) {
-  const DrapeGrid& g = r.grid;
-  const int side = g.n + 1;
-  std::vector<int> pinned(r.positions.size(), 0);
-  for (int p : g.network.spec().pinned) pinned[p] = 1;
-
-  nlohmann::json summary = drape_summary(scene, r);
+DrapeReport drape_report(const Scene& scene, const DrapeResult& r,
+                         const std::vector<EdgeFit>* target) {
+  DrapeReport report{{}, drape_summary(scene, r)};
+  nlohmann::json& summary = report.summary;
+  std::vector<EdgeFit>& edges = report.edges;
   const bool finite = std::all_of(r.positions.begin(), r.positions.end(), is_finite);
   // The edges of a run that stopped early (a flat sheet, a diverged one) may not be measurable
   // (fit_polynomial needs 5 distinct abscissae): the outputs are still written, with the reason.
-  std::vector<EdgeFit> edges;
   if (finite) {
     try {
-      edges = measure_edges(g, r.positions);
+      edges = measure_edges(r.grid, r.positions);
     } catch (const std::invalid_argument& e) {
       summary["edges_error"] = e.what();
     }
   }
-  if (edges.empty()) remove_stale_output(dir / "edges.csv");
   if (!edges.empty()) {
-    write_file_atomic_with(dir / "edges.csv",
-                           [&](const std::string& tmp) { write_edges_csv(edges, tmp); });
     nlohmann::json coefficients = nlohmann::json::object();
     for (const EdgeFit& e : edges)
       coefficients[e.name] = std::vector<double>(e.coefficients.begin(), e.coefficients.end());
@@ -163,6 +156,28 @@ void write_drape_outputs(const fs::path& dir, const Scene& scene, const DrapeRes
       summary["target_edge_coefficients"] = target_coefficients;
     }
   }
+  return report;
+}
+
+void write_drape_outputs(const fs::path& dir, const Scene& scene, const DrapeResult& r,
+                         const std::vector<EdgeFit>* target, bool picture) {
+  write_drape_outputs(dir, scene, r, drape_report(scene, r, target), target, picture);
+}
+
+void write_drape_outputs(const fs::path& dir, const Scene& scene, const DrapeResult& r,
+                         const DrapeReport& report, const std::vector<EdgeFit>* target,
+                         bool picture) {
+  const DrapeGrid& g = r.grid;
+  const int side = g.n + 1;
+  std::vector<int> pinned(r.positions.size(), 0);
+  for (int p : g.network.spec().pinned) pinned[p] = 1;
+
+  const nlohmann::json& summary = report.summary;
+  const std::vector<EdgeFit>& edges = report.edges;
+  if (edges.empty()) remove_stale_output(dir / "edges.csv");
+  if (!edges.empty())
+    write_file_atomic_with(dir / "edges.csv",
+                           [&](const std::string& tmp) { write_edges_csv(edges, tmp); });
   if (target)
     write_file_atomic_with(dir / "target_edges.csv",
                            [&](const std::string& tmp) { write_edges_csv(*target, tmp); });

@@ -54,4 +54,19 @@ void write_drape_outputs(const std::filesystem::path& dir, const Scene& scene,
                          const DrapeResult& result, const std::vector<EdgeFit>* target = nullptr,
                          bool picture = true);
 
+// What write_drape_outputs derives from a run before it writes: the measured edges (empty where
+// the final state is not finite or not measurable) and summary.json as written (drape_summary
+// with edge_coefficients or edges_error, and with `target` the objective and the target's
+// coefficients). The Python module returns both without writing.
+struct DrapeReport {
+  std::vector<EdgeFit> edges;
+  nlohmann::json summary;
+};
+DrapeReport drape_report(const Scene& scene, const DrapeResult& result,
+                         const std::vector<EdgeFit>* target = nullptr);
+// write_drape_outputs with the report already made (the same files, byte for byte).
+void write_drape_outputs(const std::filesystem::path& dir, const Scene& scene,
+                         const DrapeResult& result, const DrapeReport& report,
+                         const std::vector<EdgeFit>* target = nullptr, bool picture = true);
+
 }  // namespace knitsim

@@ -1,0 +1,143 @@
+#include "src/python/fit_call.hpp"
+
+#include <cerrno>
+#include <cstdlib>
+#include <stdexcept>
+
+#include "src/base/text.hpp"
+
+namespace knitsim {
+
+namespace {
+
+struct FitOption {
+  std::string name, flag;
+  bool (*set)(Scene&, IcaOptions&, const std::string&);
+  const char* type;
+};
+
+bool to_double(const std::string& text, double& out) {
+  char* end = nullptr;
+  out = std::strtod(text.c_str(), &end);
+  return !text.empty() && end == text.c_str() + text.size();
+}
+
+template <typename I>
+bool to_integer(const std::string& text, I& out) {
+  if (text.empty() || text.find_first_not_of("-0123456789") != std::string::npos) return false;
+  char* end = nullptr;
+  errno = 0;
+  const long long v = std::strtoll(text.c_str(), &end, 10);
+  if (end != text.c_str() + text.size() || errno == ERANGE) return false;
+  out = static_cast<I>(v);
+  return static_cast<long long>(out) == v && (v >= 0 || I(-1) < I(0));
+}
+
+const std::vector<FitOption>& fit_options() {
+  using S = Scene;
+  using I = IcaOptions;
+  using T = const std::string&;
+  static const std::vector<FitOption> table = {
+      {"rtol", "--rtol", [](S& s, I&, T t) { return to_double(t, s.options.rtol); }, "a number"},
+      {"atol", "--atol", [](S& s, I&, T t) { return to_double(t, s.options.atol); }, "a number"},
+      {"velocity_atol", "--velocity-atol",
+       [](S& s, I&, T t) { return to_double(t, s.options.velocity_atol); }, "a number"},
+      {"seed", "--seed", [](S&, I& o, T t) { return to_integer(t, o.seed); },
+       "a decimal integer >= 0"},
+      {"jobs", "--jobs", [](S&, I& o, T t) { return to_integer(t, o.jobs); }, "an integer"},
+      {"decades", "--decades", [](S&, I& o, T t) { return to_integer(t, o.decades); },
+       "an integer"},
+      {"countries", "--countries", [](S&, I& o, T t) { return to_integer(t, o.countries); },
+       "an integer"},
+      {"imperialists", "--imperialists",
+       [](S&, I& o, T t) { return to_integer(t, o.imperialists); }, "an integer"},
+      {"beta", "--beta", [](S&, I& o, T t) { return to_double(t, o.beta); }, "a number"},
+      {"gamma", "--gamma", [](S&, I& o, T t) { return to_double(t, o.gamma); }, "a number"},
+      {"revolution", "--revolution",
+       [](S&, I& o, T t) { return to_double(t, o.revolution_rate); }, "a number"},
+      {"xi", "--xi", [](S&, I& o, T t) { return to_double(t, o.xi); }, "a number"},
+      {"stop_one_empire", "--stop-one-empire",
+       [](S&, I& o, T t) {
+         if (t != "True" && t != "False") return false;
+         o.stop_when_one_empire = t == "True";
+         return true;
+       },
+       "True or False"}};
+  return table;
+}
+
+// The ICA's field names as `knitsim fit` shows them (its flags).
+const std::vector<std::pair<std::string, std::string>>& ica_flag_names() {
+  static const std::vector<std::pair<std::string, std::string>> names = {
+      {"countries", "--countries"}, {"imperialists", "--imperialists"},
+      {"decades", "--decades"},     {"beta", "--beta"},
+      {"gamma", "--gamma"},         {"revolution_rate", "--revolution"},
+      {"xi", "--xi"},               {"jobs", "--jobs"},
+      {"integrator", "--integrator"}};
+  return names;
+}
+
+}  // namespace
+
+const std::vector<std::pair<std::string, std::string>>& fit_option_flags() {
+  static const std::vector<std::pair<std::string, std::string>> flags = [] {
+    std::vector<std::pair<std::string, std::string>> f;
+    for (const FitOption& o : fit_options()) f.emplace_back(o.name, o.flag);
+    return f;
+  }();
+  return flags;
+}
+
+FitCall fit_call(const FitRequest& request, const std::function<bool()>& stop) {
+  if (request.target.empty())
+    throw std::invalid_argument("--target: required (the target edges CSV, docs/fitting.md)");
+  Scene base = load_scene(request.scene, request.overrides);
+  base.options.rtol = 1e-8;  // knitsim fit's default (src/fit/drape_fit.hpp)
+  DrapeFitOptions options;
+  for (const auto& [name, value] : request.options) {
+    const FitOption* found = nullptr;
+    for (const FitOption& o : fit_options())
+      if (o.name == name) found = &o;
+    if (!found) {
+      std::vector<std::string> names;
+      for (const FitOption& o : fit_options()) names.push_back(o.name);
+      throw std::invalid_argument(unknown_key_message(name, names));
+    }
+    if (!found->set(base, options.ica, value))
+      throw std::invalid_argument(found->flag + " = " + printable(value) + ": must be " +
+                                  found->type);
+  }
+  for (const auto& [gene, lower, upper] : request.bounds) {
+    int g = 0;
+    while (g < kDrapeGenes && gene != drape_gene_names()[g]) ++g;
+    if (g == kDrapeGenes) {
+      std::vector<std::string> genes(drape_gene_names().begin(), drape_gene_names().end());
+      throw std::invalid_argument("bounds: " + unknown_key_message(gene, genes));
+    }
+    options.bounds.lower[g] = lower;
+    options.bounds.upper[g] = upper;
+  }
+  base.validate();
+  const Target target = read_target_csv(request.target);
+  options.integrator = request.integrator;
+  options.ica.stop_requested = stop;
+  std::unique_ptr<DrapeFitProblem> problem;
+  try {
+    problem = std::make_unique<DrapeFitProblem>(base, target, options);
+  } catch (const std::invalid_argument& e) {
+    rethrow_renamed(e, ica_flag_names());
+  }
+
+  FitCall call{fit_drape(*problem), problem->integrator(), problem->target_scene(), nullptr};
+  if (call.fit.status != IcaStatus::Interrupted) {
+    Scene fitted = problem->scene_of(call.fit.best_x);
+    DrapeResult drape = run_drape(fitted, problem->integrator());
+    DrapeReport report = drape_report(fitted, drape, &problem->measured());
+    call.drape = std::make_shared<DrapeCall>(DrapeCall{std::move(fitted), problem->integrator(),
+                                                       std::move(drape), true, problem->measured(),
+                                                       std::move(report)});
+  }
+  return call;
+}
+
+}  // namespace knitsim

@@ -1,0 +1,112 @@
+"""Ctrl-C during a call: the run ends with status interrupted, and the call raises
+KeyboardInterrupt carrying the partial result as .result. Each test runs in a fresh interpreter
+that sends itself SIGINT, so a signal that went astray cannot end this test session."""
+import json
+
+from conftest import run_python
+
+# A run of several seconds whose every step is short: verlet (explicit, a step every few
+# microseconds) on a finer four_corner; max_wall bounds it if the interrupt is missed.
+LONG = ("dict(scene='four_corner', integrator='verlet', max_wall=60, "
+        "overrides={'model.natural_length': 0.02, 'model.symmetry': 'none'})")
+
+SCRIPT = """
+import json, os, signal, threading, time
+import knitsim
+threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT)).start()
+start = time.monotonic()
+try:
+    knitsim.drape(**%s)
+    print(json.dumps({"raised": None}))
+except KeyboardInterrupt as e:
+    r = e.result
+    print(json.dumps({"raised": "KeyboardInterrupt", "status": r.status,
+                      "summary_status": r.summary["status"], "seconds": time.monotonic() - start,
+                      "finite": bool((r.positions == r.positions).all()), "n": len(r.positions)}))
+"""
+
+
+def test_ctrl_c_raises_keyboard_interrupt_with_the_partial_result():
+    p = run_python(SCRIPT % LONG, timeout=120)
+    assert p.returncode == 0, p.stderr
+    out = json.loads(p.stdout.strip().splitlines()[-1])
+    assert out["raised"] == "KeyboardInterrupt", out
+    assert out["status"] == out["summary_status"] == "interrupted"
+    assert out["finite"] and out["n"] == 26 * 26
+    assert out["seconds"] < 30, out  # ended by the interrupt, not by max_wall
+
+
+def test_the_interrupt_is_the_calls_own():
+    # A call on another thread, running while the main thread's call is interrupted, runs on to
+    # its equilibrium; Python delivers SIGINT to the main thread only.
+    script = """
+import json, os, signal, threading
+import knitsim
+other = {}
+def work():
+    other["r"] = knitsim.drape('four_corner', {'model.natural_length': 0.025,
+                                               'model.symmetry': 'none'}, 'cvode-bdf')
+t = threading.Thread(target=work)
+t.start()
+threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT)).start()
+try:
+    knitsim.drape(**%s)
+    main = "returned"
+except KeyboardInterrupt as e:
+    main = e.result.status
+t.join()
+print(json.dumps({"main": main, "other": other["r"].status}))
+""" % LONG
+    p = run_python(script, timeout=120)
+    assert p.returncode == 0, p.stderr
+    out = json.loads(p.stdout.strip().splitlines()[-1])
+    assert out == {"main": "interrupted", "other": "equilibrium"}, out
+
+
+def test_custom_signal_handler_exception_is_raised_with_the_result():
+    script = """
+import json, os, signal, threading
+import knitsim
+class Stop(Exception):
+    pass
+def handler(sig, frame):
+    raise Stop()
+signal.signal(signal.SIGINT, handler)
+threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT)).start()
+try:
+    knitsim.drape(**%s)
+    print(json.dumps({"raised": None}))
+except Stop as e:
+    print(json.dumps({"raised": "Stop", "status": e.result.status}))
+""" % LONG
+    p = run_python(script, timeout=120)
+    assert p.returncode == 0, p.stderr
+    assert json.loads(p.stdout.strip().splitlines()[-1]) == {"raised": "Stop",
+                                                             "status": "interrupted"}
+
+
+def test_a_cancel_flag_ends_a_run_on_another_thread():
+    # Ctrl-C reaches the main thread only; a run on a worker thread is ended by its Cancel.
+    import threading
+    import time
+
+    import knitsim
+    cancel = knitsim.Cancel()
+    out = {}
+
+    def work():
+        out["r"] = knitsim.drape("four_corner", {"model.natural_length": 0.02,
+                                                 "model.symmetry": "none"}, "verlet",
+                                 cancel=cancel, max_wall=60)
+
+    t = threading.Thread(target=work)
+    start = time.monotonic()
+    t.start()
+    time.sleep(0.3)
+    cancel.set()
+    t.join()
+    assert out["r"].status == "interrupted" and cancel.is_set()
+    assert time.monotonic() - start < 30
+    # A Cancel already set stops the next run at its first check; a fresh call has its own flag.
+    assert knitsim.drape(cancel=cancel, integrator="cvode-bdf").status == "interrupted"
+    assert knitsim.drape(integrator="cvode-bdf").status == "equilibrium"
