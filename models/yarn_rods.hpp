@@ -21,6 +21,14 @@
 //                rule through (a, b, c) (yarn_rods.cpp), analytic, no automatic differentiation.
 //   contact      E_c = sum_{segment pairs} sum_{k, m} w_km psi(|p_k - q_m|)        (see below)
 //
+// Rest curvature: kappa0 is a magnitude only (a twist-free rod has no material frame to give the
+// rest curvature a direction), so E_b is a cone in the curvature vector at kb = 0 when kappa0 > 0
+// (its gradient jumps there: a bent-at-rest vertex must not be straight) and is not convex for
+// 0 < kappa < kappa0 (a Mexican hat): there the stiffness is indefinite and Newton-type solvers
+// crawl until the vertex is bent past kappa0 (measured: docs/yarn_model.md). Start such yarns
+// bent at least as much as at rest. Yarns of spun cotton are straight at rest (kappa0 = 0, the
+// default), and then E_b is a convex quadratic in kb.
+//
 // Twist is left out: this is a Kirchhoff rod without twist (Kaldor et al. 2008, "Simulating
 // knitted cloth at the yarn level", SIGGRAPH, Sec. 4, whose yarn model also drops it). A
 // frictionless isotropic rod (round cross-section, straight rest shape about its own axis) whose

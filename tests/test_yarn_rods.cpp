@@ -45,7 +45,7 @@ std::vector<Vec3> hairpin(double leg, double sep, double step, Vec3 at) {
 }
 
 // Three yarns in contact: a hairpin whose legs are 0.85 d apart (same-yarn contact), a yarn
-// crossing it 0.85 d above, and a straight yarn; each vertex jittered by `jitter` d.
+// crossing it 0.85 d above, and a yarn curved at rest; each vertex jittered by `jitter` d.
 YarnRodsSpec contact_scene(const YarnParams& p, double jitter, unsigned seed) {
   const double d = p.diameter(), l = 0.5 * d;
   YarnRodsSpec s;
@@ -53,9 +53,17 @@ YarnRodsSpec contact_scene(const YarnParams& p, double jitter, unsigned seed) {
   s.rest.push_back(hairpin(8 * l, 0.85 * d, l, {0.0, 0.0, 0.0}));
   s.rest.push_back(straight({4 * l, -4 * l, 0.85 * d}, {0.0, 1.0, 0.0}, l, 10));
   s.rest.push_back(straight({-2 * l, -3 * d, 0.0}, {1.0, 0.0, 0.0}, l, 6));
+  s.initial = s.rest;
+  // The third yarn starts on an arc (turning 0.3 rad per vertex) and is curved at rest (0.2 at
+  // each vertex), so its bending energy's kappa0 terms are checked too.
+  s.rest_curvature = {std::vector<double>(s.rest[0].size(), 0.0),
+                      std::vector<double>(s.rest[1].size(), 0.0), std::vector<double>(7, 0.2)};
+  for (int i = 1; i <= 6; ++i) {
+    const double turn = 0.3 * i;
+    s.initial[2][i] = s.initial[2][i - 1] + Vec3{l * std::cos(turn), 0.0, l * std::sin(turn)};
+  }
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(-jitter * d, jitter * d);
-  s.initial = s.rest;
   for (auto& yarn : s.initial)
     for (Vec3& v : yarn) v = v + Vec3{u(rng), u(rng), u(rng)};
   s.pins = {{0, 0}, {1, 0}, {2, 0}};
@@ -212,6 +220,41 @@ TEST_CASE("yarn rods: forces are -dE/dx and the Jacobian matches finite differen
   }
 }
 
+TEST_CASE("a yarn curved at rest and clamped at one end relaxes to its rest shape, a regular "
+          "polygon on a circle") {
+  // kappa0 = 2 tan(theta / 2) at every vertex, theta = 2 pi / 24: the unloaded equilibrium is
+  // half of a regular 24-gon of edge l, circumradius l / (2 sin(theta / 2)), in the plane it
+  // starts bent in. It starts bent more (1.5 theta per vertex): below kappa0 the energy of a
+  // scalar rest curvature is not convex (models/yarn_rods.hpp, "Rest curvature").
+  const double l = 1e-3, theta = 2 * kPi / 24;
+  YarnRodsSpec s;
+  s.rest.push_back(straight({0, 0, 0}, {1.0, 0.0, 0.0}, l, 12));
+  s.rest_curvature = {std::vector<double>(13, 2 * std::tan(theta / 2))};
+  s.initial = s.rest;
+  for (int i = 2; i <= 12; ++i) {
+    const double a = 1.5 * theta * (i - 1);
+    s.initial[0][i] = s.initial[0][i - 1] + Vec3{l * std::cos(a), 0.0, l * std::sin(a)};
+  }
+  s.pins = {{0, 0}, {0, 1}};
+  s.residual_force_scale = s.yarn.bending_rigidity / (l * l);
+  s.contact = false;
+  YarnRods sys(s);
+  std::vector<double> x, v;
+  IntegratorOptions opt;
+  opt.max_wall_seconds = 30.0;  // a guard (it takes ~170 flow steps)
+  const RunStats st = run_to_equilibrium(sys, "equilibrium", opt, x, v);
+  INFO(st.message);
+  REQUIRE(st.status == RunStatus::Equilibrium);
+  std::vector<Vec3> pos;
+  sys.all_positions(x.data(), pos);
+  const double R = l / (2 * std::sin(theta / 2));
+  const Vec3 centre{0.5 * l, 0.0, std::sqrt(R * R - 0.25 * l * l)};
+  double worst = 0.0;
+  for (const Vec3& p : pos) worst = std::max(worst, std::abs(norm(p - centre) - R));
+  WARN("largest distance from the 24-gon's circle: " << worst / R << " R");
+  CHECK(worst < 1e-5 * R);  // kappa = 2 sin(phi / 2) in place of 2 tan would miss by 1e-2 R
+}
+
 TEST_CASE("one yarn's parts touch each other only beyond same_yarn_gap along it") {
   YarnParams p;
   const double d = p.diameter();
@@ -282,7 +325,7 @@ TEST_CASE("cantilevered elastica: small deflection P L^3 / (3 B) and large defle
     small_err.push_back(std::abs(ys / (3e-3 / 3.0) - 1.0));
     double dl = 0.0;
     const auto [xl, yl] = cantilever_tip(n, L, 2.0, &dl);
-    // Reference (tests/elastica_reference.py; Bisshopp & Drucker 1945 tabulate 0.4935 too).
+    // Reference: tests/elastica_reference.py (collocation and shooting agree to 8 digits).
     large_err.push_back(std::hypot(xl - 0.83935828, yl - 0.49345748));
     CHECK(std::abs(dl) < 0.01);  // length kept under the large deflection
     WARN("n = " << n << ": small deflection relative error " << small_err.back()
