@@ -224,14 +224,26 @@ YarnRods::YarnRods(YarnRodsSpec spec) : spec_(std::move(spec)) {
       for (int c = 0; c < 3; ++c) blocks[3 * r + c] = entry(b.v[r], b.v[c]);
     bend_blocks_.push_back(blocks);
   }
+  std::sort(near.begin(), near.end());
+  contact_first_.assign(edges_.size() + 1, 0);
   for (const auto& [i, j] : near) {
     const int v[4] = {edges_[i].a, edges_[i].b, edges_[j].a, edges_[j].b};
     std::array<int, 16> blocks;
     for (int r = 0; r < 4; ++r)
       for (int c = 0; c < 4; ++c) blocks[4 * r + c] = entry(v[r], v[c]);
-    contact_blocks_.emplace(pair_key(i, j), blocks);
+    contact_blocks_.push_back(blocks);
+    contact_partner_.push_back(j);
+    ++contact_first_[i + 1];
   }
+  for (size_t i = 0; i < edges_.size(); ++i) contact_first_[i + 1] += contact_first_[i];
   pos_.resize(nv);
+}
+
+const std::array<int, 16>* YarnRods::contact_blocks(int i, int j) const {
+  const auto first = contact_partner_.begin() + contact_first_[i];
+  const auto last = contact_partner_.begin() + contact_first_[i + 1];
+  const auto it = std::lower_bound(first, last, j);
+  return it != last && *it == j ? &contact_blocks_[it - contact_partner_.begin()] : nullptr;
 }
 
 void YarnRods::initial_state(double* x, double* v) const {
@@ -480,8 +492,8 @@ void YarnRods::contact_terms(const std::vector<Vec3>& pos, Mode mode, Accumulato
     if (!may_pair(i, j)) continue;
     const Edge &A = edges_[i], &B = edges_[j];
     const int verts[4] = {A.a, A.b, B.a, B.b};
-    const std::array<int, 16>* blocks = nullptr;
-    bool looked_up = false;
+    double local[12][12];  // the pair's energy Hessian over its 4 vertices (Stiffness)
+    bool active = false;
     const double w = (A.rest / A.samples) * (B.rest / B.samples) / d2;
     for (int k = 0; k < A.samples; ++k) {
       const double s = (k + 0.5) / A.samples;
@@ -511,30 +523,38 @@ void YarnRods::contact_terms(const std::vector<Vec3>& pos, Mode mode, Accumulato
           }
           continue;
         }
-        if (!looked_up) {
-          looked_up = true;
-          const auto it = contact_blocks_.find(pair_key(i, j));
-          if (it != contact_blocks_.end()) blocks = &it->second;
-          else ++pattern_misses_;
+        if (!active) {
+          active = true;
+          std::fill(&local[0][0], &local[0][0] + 144, 0.0);
         }
-        if (!blocks) continue;
         double H[9];
         const double t1 = bar.de / D;
         for (int a = 0; a < 3; ++a)
           for (int b = 0; b < 3; ++b)
             H[3 * a + b] = w * ((bar.dde - t1) * n[a] * n[b] + (a == b ? t1 : 0.0));
         for (int r = 0; r < 4; ++r)
-          for (int c = 0; c < 4; ++c) {
-            const int e = (*blocks)[4 * r + c];
-            if (e < 0) continue;
-            const int fc = free_index_[verts[c]];
-            const double scale = coef[r] * coef[c] / vertex_mass_[verts[r]];
+          for (int c = 0; c < 4; ++c)
             for (int a = 0; a < 3; ++a)
               for (int b = 0; b < 3; ++b)
-                acc.values[node_block_entry(nodes_, e, fc, a, b)] -= scale * H[3 * a + b];
-          }
+                local[3 * r + a][3 * c + b] += coef[r] * coef[c] * H[3 * a + b];
       }
     }
+    if (!active) continue;
+    const std::array<int, 16>* blocks = contact_blocks(i, j);
+    if (!blocks) {
+      ++pattern_misses_;
+      continue;
+    }
+    for (int r = 0; r < 4; ++r)
+      for (int c = 0; c < 4; ++c) {
+        const int e = (*blocks)[4 * r + c];
+        if (e < 0) continue;
+        const int fc = free_index_[verts[c]];
+        const double inv_m = 1.0 / vertex_mass_[verts[r]];
+        for (int a = 0; a < 3; ++a)
+          for (int b = 0; b < 3; ++b)
+            acc.values[node_block_entry(nodes_, e, fc, a, b)] -= local[3 * r + a][3 * c + b] * inv_m;
+      }
   }
 }
 

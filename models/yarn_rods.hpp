@@ -92,7 +92,6 @@
 #include <array>
 #include <cstdint>
 #include <string>
-#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -119,7 +118,7 @@ struct YarnParams {
   double contact_stiffness = 0.0;  // [0, 1e9]
   double core_fraction = 0.7;      // d0 / d; (0.25, 1)
   double same_yarn_gap = 2.0;      // in d: samples of one yarn closer along it never pair; [1, 100]
-  double pattern_radius = 4.0;     // in d: edge pairs this close at the start have blocks; [1, 1e3]
+  double pattern_radius = 2.0;     // in d: edge pairs this close at the start have blocks; [1, 1e3]
   double step_keep = 0.2;          // a step keeps at least this fraction of each gap to d0; [0, 1)
 
   // Throws std::invalid_argument "yarn.<field> = <value>: must be in <range>".
@@ -221,9 +220,6 @@ class YarnRods final : public MechanicalSystem {
   // True if some sample pair of edges i and j may interact (not wholly inside the same-yarn gap).
   bool may_pair(int i, int j) const;
   bool samples_pair(int i, double si, int j, double sj) const;
-  std::uint64_t pair_key(int i, int j) const {
-    return static_cast<std::uint64_t>(i) * edges_.size() + static_cast<std::uint64_t>(j);
-  }
 
   YarnRodsSpec spec_;
   double d_ = 0.0, d0_ = 0.0, kappa_c_ = 0.0, gap_ = 0.0;
@@ -239,7 +235,11 @@ class YarnRods final : public MechanicalSystem {
   CscPattern nodes_, pattern_;
   std::vector<std::array<int, 4>> edge_blocks_;   // (aa, ab, ba, bb)
   std::vector<std::array<int, 9>> bend_blocks_;   // (r, c) row-major over the stencil
-  std::unordered_map<std::uint64_t, std::array<int, 16>> contact_blocks_;
+  // Edge pairs (i < j) with contact blocks, by i: partners contact_partner_[contact_first_[i] ..
+  // contact_first_[i + 1]) sorted, each with its 16 blocks (r, c) over (a_i, b_i, a_j, b_j).
+  std::vector<int> contact_first_, contact_partner_;
+  std::vector<std::array<int, 16>> contact_blocks_;
+  const std::array<int, 16>* contact_blocks(int i, int j) const;
   mutable long pattern_misses_ = 0;
   mutable std::vector<Vec3> pos_;
   mutable std::vector<std::pair<int, int>> pairs_;
