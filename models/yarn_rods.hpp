@@ -11,7 +11,7 @@
 //                lbar_i = (l_{i-1} + l_i) / 2 (the vertex's Voronoi length),
 //                kappa_i = |kb_i| = 2 tan(phi_i / 2),  kb_i = 2 e_{i-1} x e_i /
 //                (|e_{i-1}| |e_i| + e_{i-1} . e_i)   (Bergou et al. 2008, "Discrete elastic
-//                rods", SIGGRAPH, Sec. 4.2; phi_i the turning angle at vertex i).
+//                rods", SIGGRAPH; phi_i the turning angle at vertex i).
 //                kappa_i / lbar_i is the pointwise curvature, so E_b -> 1/2 B int kappa^2 ds as
 //                the edges shrink; in Bergou's notation (l_i = |e_{i-1}| + |e_i| = 2 lbar_i) the
 //                same term reads B kappa_i^2 / l_i. kappa0_i: rest curvature (integrated, i.e.
@@ -30,11 +30,11 @@
 // default), and then E_b is a convex quadratic in kb.
 //
 // Twist is left out: this is a Kirchhoff rod without twist (Kaldor et al. 2008, "Simulating
-// knitted cloth at the yarn level", SIGGRAPH, Sec. 4, whose yarn model also drops it). A
+// knitted cloth at the yarn level", SIGGRAPH, whose knit yarns leave it out too). A
 // frictionless isotropic rod (round cross-section, straight rest shape about its own axis) whose
 // ends may spin freely carries no twisting moment at equilibrium: twist then relaxes along the
-// rod at once and decouples from the centreline (Bergou 2008, Sec. 4.3, the quasi-static twist
-// that is uniform and, with a free end, zero). Twist would matter where it cannot relax: a yarn
+// rod at once and decouples from the centreline (Bergou 2008 treat twist quasi-statically:
+// uniform between constraints, zero with a free end). Twist would matter where it cannot relax: a yarn
 // held against spinning at both ends and turned (twist-lively yarns, spirality of single
 // jersey knitted from singles yarn), a rest curvature that is not planar, anisotropic cross
 // sections, or friction at the contacts that stops the yarn rolling. None of these is modelled.
@@ -44,7 +44,7 @@
 // parameters s_k = (k + 1/2) / n_j (the midpoint rule): p = (1 - s_k) x_j + s_k x_{j+1}, affine in
 // the vertices. A pair of samples at distance D on edges a and b adds
 //   w psi(D),  w = (l_a / n_a)(l_b / n_b) / d^2 (dimensionless: the double integral over the two
-//   centrelines, Kaldor 2008 Sec. 4.2, in units of d^2),
+//   centrelines of Kaldor 2008's contact energy, in units of d^2),
 //   psi(D) = kappa_c (d - d0)^2 phi((D - d0) / (d - d0)),  phi(g) = -(g - 1)^2 ln g (0 < g < 1),
 //   phi = 0 for g >= 1 (the IPC barrier of Li et al. 2020, "Incremental potential contact",
 //   shifted to a core d0 = core_fraction d; as in models/yarn_contact.hpp).
@@ -114,7 +114,8 @@ struct YarnParams {
   // yarn's wave speed, 1414 m/s by default): the dynamics is then the gradient flow to the steady
   // state, not a transient in real time (docs/yarn_model.md, "Damping").
   double relaxation_time = 1e-8;
-  // kappa_c, N/m; 0: 10 B / d^3 (the barrier's force at half its width is then ~ 6 B / d^2).
+  // kappa_c, N/m; 0: 10 B / d^3 (a sample pair's force at half the barrier's width is then
+  // 3.6 w B / d^2 at the default core_fraction).
   double contact_stiffness = 0.0;  // [0, 1e9]
   double core_fraction = 0.7;      // d0 / d; (0.25, 1)
   double same_yarn_gap = 2.0;      // in d: samples of one yarn closer along it never pair; [1, 100]
