@@ -95,8 +95,9 @@ YarnRods::YarnRods(YarnRodsSpec spec) : spec_(std::move(spec)) {
   for (int y = 0; y < yarns; ++y) {
     const auto& r = spec_.rest[y];
     const int n = static_cast<int>(r.size());
-    if (n < 2) throw std::invalid_argument("yarn rods: yarn " + std::to_string(y) +
-                                           " has fewer than 2 vertices");
+    if (n < 2)
+      throw std::invalid_argument("yarn rods: yarn " + std::to_string(y) +
+                                  " has fewer than 2 vertices");
     if (!spec_.initial.empty() && static_cast<int>(spec_.initial[y].size()) != n)
       throw std::invalid_argument("yarn rods: initial[" + std::to_string(y) +
                                   "] must have as many vertices as rest");
@@ -195,15 +196,16 @@ YarnRods::YarnRods(YarnRodsSpec spec) : spec_(std::move(spec)) {
   if (spec_.contact) {
     const double radius = p.pattern_radius * d_;
     edge_pairs(start_, 0.5 * radius, near);
-    near.erase(std::remove_if(near.begin(), near.end(),
-                              [&](const std::pair<int, int>& q) {
-                                const Edge &a = edges_[q.first], &b = edges_[q.second];
-                                return !may_pair(q.first, q.second) ||
-                                       closest_points(start_[a.a], start_[a.b], start_[b.a],
-                                                      start_[b.b])
-                                               .distance >= radius;
-                              }),
-               near.end());
+    near.erase(
+        std::remove_if(
+            near.begin(), near.end(),
+            [&](const std::pair<int, int>& q) {
+              const Edge &a = edges_[q.first], &b = edges_[q.second];
+              return !may_pair(q.first, q.second) ||
+                     closest_points(start_[a.a], start_[a.b], start_[b.a], start_[b.b]).distance >=
+                         radius;
+            }),
+        near.end());
     for (const auto& [i, j] : near) {
       const int v[4] = {edges_[i].a, edges_[i].b, edges_[j].a, edges_[j].b};
       for (int r : v)
@@ -275,8 +277,10 @@ bool YarnRods::may_pair(int i, int j) const {
   const Edge &a = edges_[i], &b = edges_[j];
   if (i == j) return false;
   if (a.yarn != b.yarn) return true;
-  const double a_lo = a.arc + 0.5 * a.rest / a.samples, a_hi = a.arc + a.rest - 0.5 * a.rest / a.samples;
-  const double b_lo = b.arc + 0.5 * b.rest / b.samples, b_hi = b.arc + b.rest - 0.5 * b.rest / b.samples;
+  const double a_lo = a.arc + 0.5 * a.rest / a.samples,
+               a_hi = a.arc + a.rest - 0.5 * a.rest / a.samples;
+  const double b_lo = b.arc + 0.5 * b.rest / b.samples,
+               b_hi = b.arc + b.rest - 0.5 * b.rest / b.samples;
   return std::max(b_hi - a_lo, a_hi - b_lo) >= gap_;
 }
 
@@ -300,7 +304,7 @@ void YarnRods::edge_pairs(const std::vector<Vec3>& pos, double grow,
     }
   }
   if (!(cell > 0.0) || !std::isfinite(cell)) return;  // a non-finite state: no pairs
-  constexpr double kCells = 1 << 20;                   // cells per axis, so a key fits 63 bits
+  constexpr double kCells = 1 << 20;                  // cells per axis, so a key fits 63 bits
   for (int c = 0; c < 3; ++c) cell = std::max(cell, (top[c] - origin[c]) / kCells);
   auto index = [&](double v, int c) {
     return static_cast<std::uint64_t>(std::floor((v - origin[c]) / cell));
@@ -328,9 +332,9 @@ void YarnRods::edge_pairs(const std::vector<Vec3>& pos, double grow,
         for (int c = 0; c < 3 && overlap; ++c) overlap = bi[c] <= bj[3 + c] && bj[c] <= bi[3 + c];
         if (!overlap) continue;
         // Reported once: in the cell holding the low corner of the overlap.
-        const std::uint64_t owner = key(index(std::max(bi[0], bj[0]), 0),
-                                        index(std::max(bi[1], bj[1]), 1),
-                                        index(std::max(bi[2], bj[2]), 2));
+        const std::uint64_t owner =
+            key(index(std::max(bi[0], bj[0]), 0), index(std::max(bi[1], bj[1]), 1),
+                index(std::max(bi[2], bj[2]), 2));
         if (owner == cells_[g].first) out.emplace_back(std::min(i, j), std::max(i, j));
       }
     g = end;
@@ -553,7 +557,8 @@ void YarnRods::contact_terms(const std::vector<Vec3>& pos, Mode mode, Accumulato
         const double inv_m = 1.0 / vertex_mass_[verts[r]];
         for (int a = 0; a < 3; ++a)
           for (int b = 0; b < 3; ++b)
-            acc.values[node_block_entry(nodes_, e, fc, a, b)] -= local[3 * r + a][3 * c + b] * inv_m;
+            acc.values[node_block_entry(nodes_, e, fc, a, b)] -=
+                local[3 * r + a][3 * c + b] * inv_m;
       }
   }
 }
@@ -612,8 +617,8 @@ double YarnRods::residual_roundoff(double /*t*/, const double* x) const {
   constexpr double eps = std::numeric_limits<double>::epsilon();
   std::vector<double> floor_(vertex_count(), 0.0);
   for (const Edge& e : edges_) {
-    const double r = spec_.yarn.stretch_stiffness() / e.rest * eps *
-                     (norm(pos_[e.a]) + norm(pos_[e.b]));
+    const double r =
+        spec_.yarn.stretch_stiffness() / e.rest * eps * (norm(pos_[e.a]) + norm(pos_[e.b]));
     floor_[e.a] += r;
     floor_[e.b] += r;
   }
@@ -662,7 +667,8 @@ double YarnRods::admissible_step(double /*t*/, const double* x, const double* dx
         if (!samples_pair(i, s, j, t)) continue;
         const double D = norm(P - ((1.0 - t) * pos_[B.a] + t * pos_[B.b]));
         if (!(D > d0_)) return 0.0;
-        if (D - reach < d0_ + keep * (D - d0_)) admit = std::min(admit, (1.0 - keep) * (D - d0_) / reach);
+        if (D - reach < d0_ + keep * (D - d0_))
+          admit = std::min(admit, (1.0 - keep) * (D - d0_) / reach);
       }
     }
   }

@@ -34,8 +34,8 @@
 // frictionless isotropic rod (round cross-section, straight rest shape about its own axis) whose
 // ends may spin freely carries no twisting moment at equilibrium: twist then relaxes along the
 // rod at once and decouples from the centreline (Bergou 2008 treat twist quasi-statically:
-// uniform between constraints, zero with a free end). Twist would matter where it cannot relax: a yarn
-// held against spinning at both ends and turned (twist-lively yarns, spirality of single
+// uniform between constraints, zero with a free end). Twist would matter where it cannot relax: a
+// yarn held against spinning at both ends and turned (twist-lively yarns, spirality of single
 // jersey knitted from singles yarn), a rest curvature that is not planar, anisotropic cross
 // sections, or friction at the contacts that stops the yarn rolling. None of these is modelled.
 //
@@ -103,11 +103,11 @@ namespace knitsim {
 // One yarn's material, with units. Defaults: a 25 tex ring-spun cotton yarn (docs/yarn_model.md,
 // "Parameters", has the sources and the arithmetic).
 struct YarnParams {
-  double tex = 25.0;               // linear density, tex = g/km = 1e-6 kg/m; (0, 1e4]
-  double fibre_density = 1520.0;   // rho_f, kg/m^3 (cellulose, cotton); [500, 3000]
-  double packing_fraction = 0.6;   // phi, fibre area / yarn area; (0.1, 0.9]
+  double tex = 25.0;              // linear density, tex = g/km = 1e-6 kg/m; (0, 1e4]
+  double fibre_density = 1520.0;  // rho_f, kg/m^3 (cellulose, cotton); [500, 3000]
+  double packing_fraction = 0.6;  // phi, fibre area / yarn area; (0.1, 0.9]
   // Initial tensile modulus per linear density, N/tex: EA = tensile_modulus x tex, N.
-  double tensile_modulus = 2.0;    // (0, 100]
+  double tensile_modulus = 2.0;      // (0, 100]
   double bending_rigidity = 2.2e-9;  // B, N m^2; (0, 1e-3]
   // tau, s: gamma = 1 / tau on every dof; (0, 1e6]. The default overdamps every mode of a yarn
   // cut into edges of d/2 or longer (gamma >= 2 omega_max = 4 c / l, c = sqrt(EA / rho_l) the
@@ -128,7 +128,7 @@ struct YarnParams {
   // d = sqrt(4 tex 1e-6 / (pi rho_f phi)), m (the yarn a solid cylinder of packed fibres).
   double diameter() const;
   double stretch_stiffness() const { return tensile_modulus * tex; }  // EA, N
-  double contact_kappa() const;                                        // kappa_c, N/m
+  double contact_kappa() const;                                       // kappa_c, N/m
 };
 
 struct YarnVertex {
@@ -199,11 +199,11 @@ class YarnRods final : public MechanicalSystem {
 
  private:
   struct Edge {
-    int a, b;         // vertex indices
-    double rest;      // l, m
-    double arc;       // arc length of a along its yarn at rest, m
+    int a, b;     // vertex indices
+    double rest;  // l, m
+    double arc;   // arc length of a along its yarn at rest, m
     int yarn;
-    int samples;      // n
+    int samples;  // n
   };
   struct Bend {
     std::array<int, 3> v;  // vertex indices
@@ -234,8 +234,8 @@ class YarnRods final : public MechanicalSystem {
   double residual_scale_ = 1.0;
   // Pattern: node-level pattern (free vertices) and, per stencil block, its entry there.
   CscPattern nodes_, pattern_;
-  std::vector<std::array<int, 4>> edge_blocks_;   // (aa, ab, ba, bb)
-  std::vector<std::array<int, 9>> bend_blocks_;   // (r, c) row-major over the stencil
+  std::vector<std::array<int, 4>> edge_blocks_;  // (aa, ab, ba, bb)
+  std::vector<std::array<int, 9>> bend_blocks_;  // (r, c) row-major over the stencil
   // Edge pairs (i < j) with contact blocks, by i: partners contact_partner_[contact_first_[i] ..
   // contact_first_[i + 1]) sorted, each with its 16 blocks (r, c) over (a_i, b_i, a_j, b_j).
   std::vector<int> contact_first_, contact_partner_;

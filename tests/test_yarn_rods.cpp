@@ -3,8 +3,8 @@
 // yarn length kept. The elastica reference values come from tests/elastica_reference.py (scipy).
 #include <algorithm>
 #include <catch2/catch.hpp>
-#include <ctime>
 #include <cmath>
+#include <ctime>
 #include <iomanip>
 #include <random>
 #include <vector>
@@ -93,7 +93,8 @@ class CorruptBlock final : public MechanicalSystem {
   void stiffness_values(double t, const double* x, double* values) const override {
     s_.stiffness_values(t, x, values);
     for (int p = 0; p < 3; ++p)
-      for (int q = 0; q < 3; ++q) values[s_.stiffness_pattern().find(3 * r_ + p, 3 * c_ + q)] *= 1.01;
+      for (int q = 0; q < 3; ++q)
+        values[s_.stiffness_pattern().find(3 * r_ + p, 3 * c_ + q)] *= 1.01;
   }
   double static_residual(double t, const double* x) const override {
     return s_.static_residual(t, x);
@@ -164,8 +165,9 @@ std::pair<double, double> cantilever_tip(int n, double L, double alpha, double* 
 
 }  // namespace
 
-TEST_CASE("yarn diameter from tex, fibre density and packing fraction; the handbook's 4.44e-3 "
-          "hides a packing fraction of 0.646") {
+TEST_CASE(
+    "yarn diameter from tex, fibre density and packing fraction; the handbook's 4.44e-3 "
+    "hides a packing fraction of 0.646") {
   YarnParams p;  // 25 tex cotton, 1520 kg/m^3, 0.6
   CHECK(p.diameter() == Approx(std::sqrt(4 * 25e-6 / (kPi * 1520 * 0.6))).epsilon(1e-12));
   CHECK(p.diameter() == Approx(1.868e-4).epsilon(1e-3));  // m
@@ -179,8 +181,8 @@ TEST_CASE("yarn diameter from tex, fibre density and packing fraction; the handb
 TEST_CASE("yarn parameters out of range are refused naming the field") {
   YarnParams p;
   p.packing_fraction = 1.2;
-  CHECK_THROWS_WITH(p.validate(), Catch::Contains("yarn.packing_fraction") &&
-                                      Catch::Contains("(0.1, 0.9]"));
+  CHECK_THROWS_WITH(p.validate(),
+                    Catch::Contains("yarn.packing_fraction") && Catch::Contains("(0.1, 0.9]"));
   p = YarnParams{};
   p.core_fraction = 1.0;
   CHECK_THROWS_WITH(p.validate(), Catch::Contains("yarn.core_fraction"));
@@ -192,8 +194,9 @@ TEST_CASE("yarn parameters out of range are refused naming the field") {
   CHECK_THROWS_WITH(YarnRods(s), Catch::Contains("fewer than 2 vertices"));
 }
 
-TEST_CASE("yarn rods: forces are -dE/dx and the Jacobian matches finite differences, bent, in "
-          "contact (between yarns and within one)") {
+TEST_CASE(
+    "yarn rods: forces are -dE/dx and the Jacobian matches finite differences, bent, in "
+    "contact (between yarns and within one)") {
   // Soft stretching (1e-6 N/tex) lets bending and contact dominate the columns, so their
   // Hessians are checked as sharply as the stretching's (default modulus).
   for (double modulus : {2.0, 1e-6}) {
@@ -213,15 +216,16 @@ TEST_CASE("yarn rods: forces are -dE/dx and the Jacobian matches finite differen
       INFO("worst (" << c.worst_row << "," << c.worst_col << ") analytic " << c.worst_analytic
                      << " fd " << c.worst_fd);
       CHECK(c.max_relative_error < kJacobianTol);
-      WARN("modulus " << modulus << " N/tex, seed " << seed << ": force vs -dE/dx "
-                      << ge << ", Jacobian " << c.max_relative_error << " (relative)");
+      WARN("modulus " << modulus << " N/tex, seed " << seed << ": force vs -dE/dx " << ge
+                      << ", Jacobian " << c.max_relative_error << " (relative)");
       CHECK(sys.pattern_misses() == 0);
     }
   }
 }
 
-TEST_CASE("a yarn curved at rest and clamped at one end relaxes to its rest shape, a regular "
-          "polygon on a circle") {
+TEST_CASE(
+    "a yarn curved at rest and clamped at one end relaxes to its rest shape, a regular "
+    "polygon on a circle") {
   // kappa0 = 2 tan(theta / 2) at every vertex, theta = 2 pi / 24: the unloaded equilibrium is
   // half of a regular 24-gon of edge l, circumradius l / (2 sin(theta / 2)), in the plane it
   // starts bent in. It starts bent more (1.5 theta per vertex): below kappa0 the energy of a
@@ -272,8 +276,9 @@ TEST_CASE("one yarn's parts touch each other only beyond same_yarn_gap along it"
   CHECK(std::isinf(far.min_clearance(x.data())));
 }
 
-TEST_CASE("yarn rods: the Jacobian check catches a 1 % error in a bending-only and in a "
-          "contact-only block") {
+TEST_CASE(
+    "yarn rods: the Jacobian check catches a 1 % error in a bending-only and in a "
+    "contact-only block") {
   YarnParams p;
   p.tensile_modulus = 1e-6;
   YarnRods sys(contact_scene(p, 0.04, 1));
@@ -289,8 +294,9 @@ TEST_CASE("yarn rods: the Jacobian check catches a 1 % error in a bending-only a
         10 * kJacobianTol);
 }
 
-TEST_CASE("a straight yarn held at one end and pulled by F at the other stretches by F L / EA, "
-          "and keeps its length within 1 % under 0.1 N") {
+TEST_CASE(
+    "a straight yarn held at one end and pulled by F at the other stretches by F L / EA, "
+    "and keeps its length within 1 % under 0.1 N") {
   YarnRodsSpec s;
   const double L = 0.01;  // m
   const int n = 20;
@@ -317,8 +323,9 @@ TEST_CASE("a straight yarn held at one end and pulled by F at the other stretche
   }
 }
 
-TEST_CASE("cantilevered elastica: small deflection P L^3 / (3 B) and large deflection (P L^2 / "
-          "B = 2) against the elastica, converging with the segment count") {
+TEST_CASE(
+    "cantilevered elastica: small deflection P L^3 / (3 B) and large deflection (P L^2 / "
+    "B = 2) against the elastica, converging with the segment count") {
   const double L = 0.01;
   // Small: alpha = 3e-3, so the geometric nonlinearity (relative ~ alpha^2) is below 1e-5.
   std::vector<double> small_err, large_err;
@@ -331,8 +338,8 @@ TEST_CASE("cantilevered elastica: small deflection P L^3 / (3 B) and large defle
     large_err.push_back(std::hypot(xl - 0.83935828, yl - 0.49345748));
     CHECK(std::abs(dl) < 0.01);  // length kept under the large deflection
     WARN("n = " << n << ": small deflection relative error " << small_err.back()
-                << ", large deflection tip error / L " << large_err.back()
-                << ", length change " << dl);
+                << ", large deflection tip error / L " << large_err.back() << ", length change "
+                << dl);
   }
   CHECK(small_err.back() < 1e-3);
   CHECK(large_err.back() < 1e-3);
@@ -344,8 +351,9 @@ TEST_CASE("cantilevered elastica: small deflection P L^3 / (3 B) and large defle
   CHECK(large_order > 0.9);
 }
 
-TEST_CASE("two crossing yarns pushed together never pass through each other and settle about "
-          "one diameter apart (equilibrium and cvode-bdf); without contact they cross") {
+TEST_CASE(
+    "two crossing yarns pushed together never pass through each other and settle about "
+    "one diameter apart (equilibrium and cvode-bdf); without contact they cross") {
   // Held at both ends, a yarn pushed sideways stiffens as a string (its stretch grows as the
   // square of the deflection), so it is long (20 mm, 214 edges of d/2) to be pushed through.
   YarnParams p;
@@ -392,8 +400,9 @@ TEST_CASE("two crossing yarns pushed together never pass through each other and 
   }
 }
 
-TEST_CASE("yarn rods: the step filter admits the whole of a step that keeps away and cuts one "
-          "that would cross") {
+TEST_CASE(
+    "yarn rods: the step filter admits the whole of a step that keeps away and cuts one "
+    "that would cross") {
   YarnParams p;
   const double d = p.diameter();
   YarnRodsSpec s;
@@ -425,30 +434,32 @@ TEST_CASE("yarn rods: cost per evaluation", "[.][cost]") {
   const double d = p.diameter();
   for (int n : {1000, 10000})
     for (bool contact : {false, true}) {
-    YarnRodsSpec s;
-    s.contact = contact;
-    s.yarn = p;
-    std::vector<Vec3> v;
-    const double R = 1e-3, step = 0.5 * d;
-    const double per_turn = 2 * kPi * R / step;
-    for (int i = 0; i <= n; ++i) {
-      const double a = 2 * kPi * i / per_turn;
-      v.push_back({R * std::cos(a), R * std::sin(a), 0.9 * d * i / per_turn});
-    }
-    s.rest.push_back(v);
-    s.pins = {{0, 0}};
-    YarnRods sys(s);
-    std::vector<double> x = start_of(sys), f(sys.dof()), vals(sys.stiffness_pattern().nnz());
-    auto time = [&](auto&& fn) {  // process CPU time (the machine is shared), mean of 20
-      const std::clock_t c0 = std::clock();
-      for (int r = 0; r < 20; ++r) fn();
-      return static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC / 20;
-    };
-    const double tf = time([&] { sys.conservative_acceleration(0.0, x.data(), f.data()); });
-    const double tk = time([&] { sys.stiffness_values(0.0, x.data(), vals.data()); });
-    const double te = time([&] { sys.potential_energy(0.0, x.data()); });
-    WARN(n << " edges, " << (contact ? "contact" : "no contact") << ", " << sys.stiffness_pattern().nnz() / sys.dof() << " pattern entries per dof, contact energy " << sys.contact_energy(x.data()) << " J: forces "
-           << tf * 1e6 << " us, stiffness " << tk * 1e6 << " us, energy " << te * 1e6
-           << " us per evaluation (" << tf / n * 1e9 << " ns per vertex for forces)");
+      YarnRodsSpec s;
+      s.contact = contact;
+      s.yarn = p;
+      std::vector<Vec3> v;
+      const double R = 1e-3, step = 0.5 * d;
+      const double per_turn = 2 * kPi * R / step;
+      for (int i = 0; i <= n; ++i) {
+        const double a = 2 * kPi * i / per_turn;
+        v.push_back({R * std::cos(a), R * std::sin(a), 0.9 * d * i / per_turn});
+      }
+      s.rest.push_back(v);
+      s.pins = {{0, 0}};
+      YarnRods sys(s);
+      std::vector<double> x = start_of(sys), f(sys.dof()), vals(sys.stiffness_pattern().nnz());
+      auto time = [&](auto&& fn) {  // process CPU time (the machine is shared), mean of 20
+        const std::clock_t c0 = std::clock();
+        for (int r = 0; r < 20; ++r) fn();
+        return static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC / 20;
+      };
+      const double tf = time([&] { sys.conservative_acceleration(0.0, x.data(), f.data()); });
+      const double tk = time([&] { sys.stiffness_values(0.0, x.data(), vals.data()); });
+      const double te = time([&] { sys.potential_energy(0.0, x.data()); });
+      WARN(n << " edges, " << (contact ? "contact" : "no contact") << ", "
+             << sys.stiffness_pattern().nnz() / sys.dof()
+             << " pattern entries per dof, contact energy " << sys.contact_energy(x.data())
+             << " J: forces " << tf * 1e6 << " us, stiffness " << tk * 1e6 << " us, energy "
+             << te * 1e6 << " us per evaluation (" << tf / n * 1e9 << " ns per vertex for forces)");
     }
 }
