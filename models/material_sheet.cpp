@@ -286,6 +286,14 @@ MaterialSheet::MaterialSheet(MaterialSheetParams params) : params_(std::move(par
         stencils_.push_back({{a, c, b}, params_.bending_wale * hx_ * edge_weight(j, nx_) / hy_});
     }
 
+  // A stencil centred on a clamp's last row, across it: the clamped side is straight, so its
+  // turning angle is that of the free side alone, kappa h / 2 + O(h^2), half an interior one; the
+  // energy it stands for is the free half cell's, 1/2 B kappa^2 h/2. Both together: twice the
+  // interior stiffness (the linear limit is the clamped beam's mirror-ghost scheme, second order).
+  for (BendStencil& s : stencils_)
+    if (free_index_[s.v[1]] < 0 && (free_index_[s.v[0]] < 0) != (free_index_[s.v[2]] < 0))
+      s.stiffness *= 2.0;
+
   // Stiffness pattern: every ordered pair of free vertices of an element.
   std::vector<std::pair<int, int>> pairs;
   auto element_pairs = [&](const int* vs) {

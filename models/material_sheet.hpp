@@ -22,7 +22,10 @@
 //     phi the turning angle between e1 and e2, t_v the vertex's share of the width across the row
 //     (hy inside, hy / 2 on the two boundary rows). For a smooth curve 2 tan(phi/2) = kappa h + O(h^3),
 //     so E_v -> 1/2 B_c kappa^2 (h t_v): the Riemann sum of the continuum energy. Columns the same
-//     with B_w, hy and hx. Each stencil lies on one row or one column: the two directions never
+//     with B_w, hy and hx. At a clamp's last row the stencil across it has twice that stiffness:
+//     its clamped side is straight, so it sees half the turning angle (kappa h / 2) over the free
+//     half cell (h / 2): 1/2 B kappa^2 h/2 = 2 x 1/2 B (kappa/2)^2 h (second order at the clamp,
+//     as the mirror-ghost scheme of a clamped beam; first order without). Each stencil lies on one row or one column: the two directions never
 //     couple (a cylindrical bend along x costs B_c only, whatever B_w).
 //   Gravity: m_i g z_i, masses lumped by area (rho_A hx hy x 1 inside, 1/2 on an edge, 1/4 at a
 //     corner; total rho_A W L). Edge loads: -f . x_i with f = q l_i, q (N/m) the load per unit
