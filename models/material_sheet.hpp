@@ -4,7 +4,7 @@
 // Specimen and axes: width W along x (the courses), length L along y (the wales), flat at z = 0
 // at rest; gravity along -z. Mesh: nx = `cells` cells along the width, ny = max(1, round(nx L / W))
 // along the length, so the cells are hx = W / nx by hy = L / ny, near-square (hy / hx within
-// 1 +- 1 / (2 ny) of 1). Vertex (i, j) (row i along y, column j along x) is at (j hx, i hy, 0).
+// 1 +- 1 / (2 ny) of 1 where nx L / W >= 1/2; a sheet thinner than half a cell has one cell). Vertex (i, j) (row i along y, column j along x) is at (j hx, i hy, 0).
 //
 // Energy (J), the continuum limit and its discretisation:
 //   Membrane: orthotropic plane-stress St Venant-Kirchhoff on the Green strain E = (F^T F - I)/2,

@@ -8,6 +8,8 @@
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "models/material_sheet.hpp"
@@ -406,4 +408,40 @@ TEST_CASE("material sheet: uniaxial tension gives the orthotropic stiffness and 
     CHECK(T / eps_axial == Approx(A).epsilon(5e-3));
     CHECK(-eps_lateral / eps_axial == Approx(nu).epsilon(1e-2));
   }
+}
+
+TEST_CASE("material sheet: bad parameters name the field and its range", "[material_sheet]") {
+  auto message = [](const MaterialSheetParams& p) -> std::string {
+    try {
+      MaterialSheet sheet(p);
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "";
+  };
+  MaterialSheetParams p;
+  CHECK(message(p).empty());
+  CHECK(MaterialSheet(p).ny() == 20);  // square sheet: as many cells along as across
+  p.length = 0.26;  // 20 x 0.26 / 0.5 = 10.4 -> 10
+  CHECK(MaterialSheet(p).ny() == 10);
+  MaterialSheetParams q = p;
+  q.cells = 0;
+  CHECK_THAT(message(q), Catch::Contains("cells must be in [1, 2000]"));
+  q = p;
+  q.poisson_cw = 1.5;  // 2.25 x 500 / 500 >= 1: not positive definite
+  CHECK_THAT(message(q), Catch::Contains("poisson_cw"));
+  q = p;
+  q.bending_wale = 0.0;
+  CHECK_THAT(message(q), Catch::Contains("bending_wale must be in (0, 1e3] N m"));
+  q = p;
+  q.areal_density = -1.0;
+  CHECK_THAT(message(q), Catch::Contains("areal_density"));
+  q = p;
+  q.clamps = {{SheetEdge::YMin, 0.001}};  // under half a cell (0.026 m): would hold one row only
+  CHECK_THAT(message(q), Catch::Contains("clamp length"));
+  q.clamps = {{SheetEdge::YMin, 0.026}};  // one cell: 2 rows, the slope held
+  const MaterialSheet clamped(q);
+  CHECK(clamped.dof() == 3 * 21 * 9);
+  q.gravity = {0.0, 0.0, 0.0};
+  CHECK_THAT(message(q), Catch::Contains("needs gravity or an edge load"));
 }
