@@ -26,7 +26,8 @@ void require(bool ok, const char* message) {
 }
 
 // A value with its gradient and (if Second) its Hessian with respect to N variables: forward-mode
-// automatic differentiation of the element energies, exact to round-off.
+// automatic differentiation of the element energies, exact to round-off. The Hessian is symmetric:
+// only its upper triangle h[i N + j], i <= j, is computed (the rest stays zero).
 template <int N, bool Second>
 struct Jet {
   double v = 0.0;
@@ -46,7 +47,7 @@ struct Jet {
     for (int i = 0; i < N; ++i) r.g[i] = d1 * g[i];
     if constexpr (Second)
       for (int i = 0; i < N; ++i)
-        for (int j = 0; j < N; ++j) r.h[i * N + j] = d1 * h[i * N + j] + d2 * g[i] * g[j];
+        for (int j = i; j < N; ++j) r.h[i * N + j] = d1 * h[i * N + j] + d2 * g[i] * g[j];
     return r;
   }
 };
@@ -86,7 +87,7 @@ Jet<N, S> operator*(const Jet<N, S>& a, const Jet<N, S>& b) {
   for (int i = 0; i < N; ++i) r.g[i] = a.v * b.g[i] + b.v * a.g[i];
   if constexpr (S)
     for (int i = 0; i < N; ++i)
-      for (int j = 0; j < N; ++j)
+      for (int j = i; j < N; ++j)
         r.h[i * N + j] = a.v * b.h[i * N + j] + b.v * a.h[i * N + j] + a.g[i] * b.g[j] +
                          b.g[i] * a.g[j];
   return r;
@@ -102,19 +103,26 @@ Jet<N, S> operator/(const Jet<N, S>& a, const Jet<N, S>& b) {
   return a * b.chain(r, -r * r, 2.0 * r * r * r);
 }
 
-using Coords = std::array<double, 9>;
+// Each element's energy is a function of 6 variables u, two 3-vectors that are fixed linear
+// combinations of its 3 vertices: u_(c, k) = sum_v alpha[c][v] x_(v, k) (c = 0, 1; k = x, y, z),
+// stored u[3 c + k]. Differentiating in u and mapping back (g_x = alpha^T g_u, H_x = alpha^T H_u
+// alpha per coordinate pair) costs a quarter of differentiating in the 9 coordinates.
+using Alpha = std::array<std::array<double, 3>, 2>;
 
-// Membrane energy of one triangle (vertices 0, 1, 2; coordinates 3 per vertex).
-template <class T>
-T membrane_energy(const std::array<T, 9>& x, const MaterialSheet::Triangle& tri, double c11,
-                  double c12, double c22, double c66) {
+// Triangle: u = the two columns of F = [x1 - x0, x2 - x0] D^-1.
+Alpha membrane_alpha(const MaterialSheet::Triangle& tri) {
   const double* d = tri.dinv;
-  std::array<T, 3> f0, f1;  // the two columns of F = [x1 - x0, x2 - x0] D^-1
-  for (int k = 0; k < 3; ++k) {
-    const T e1 = x[3 + k] - x[k], e2 = x[6 + k] - x[k];
-    f0[k] = d[0] * e1 + d[2] * e2;
-    f1[k] = d[1] * e1 + d[3] * e2;
-  }
+  return {{{-(d[0] + d[2]), d[0], d[2]}, {-(d[1] + d[3]), d[1], d[3]}}};
+}
+
+// Stencil (a, centre, b): u = (e1, e2) = (x_c - x_a, x_b - x_c).
+constexpr Alpha kBendAlpha{{{-1.0, 1.0, 0.0}, {0.0, -1.0, 1.0}}};
+
+// Membrane energy of one triangle from the columns f0 = u[0..2], f1 = u[3..5] of F.
+template <class T>
+T membrane_energy(const std::array<T, 6>& u, const MaterialSheet::Triangle& tri, double c11,
+                  double c12, double c22, double c66) {
+  const std::array<T, 3> f0{u[0], u[1], u[2]}, f1{u[3], u[4], u[5]};
   const T c00 = f0[0] * f0[0] + f0[1] * f0[1] + f0[2] * f0[2];
   const T c01 = f0[0] * f1[0] + f0[1] * f1[1] + f0[2] * f1[2];
   const T cc11 = f1[0] * f1[0] + f1[1] * f1[1] + f1[2] * f1[2];
@@ -124,14 +132,11 @@ T membrane_energy(const std::array<T, 9>& x, const MaterialSheet::Triangle& tri,
   return tri.area * w;
 }
 
-// Bending energy of one stencil (a, centre, b): stiffness/2 x 4 tan^2(phi/2).
+// Bending energy of one stencil from its edges e1 = u[0..2], e2 = u[3..5]:
+// stiffness/2 x 4 tan^2(phi/2).
 template <class T>
-T bending_energy(const std::array<T, 9>& x, double stiffness) {
-  std::array<T, 3> e1, e2;
-  for (int k = 0; k < 3; ++k) {
-    e1[k] = x[3 + k] - x[k];
-    e2[k] = x[6 + k] - x[3 + k];
-  }
+T bending_energy(const std::array<T, 6>& u, double stiffness) {
+  const std::array<T, 3> e1{u[0], u[1], u[2]}, e2{u[3], u[4], u[5]};
   const T l1 = sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]);
   const T l2 = sqrt(e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]);
   const T d = e1[0] * e2[0] + e1[1] * e2[1] + e1[2] * e2[2];
@@ -346,45 +351,56 @@ void MaterialSheet::initial_state(double* x, double* v) const {
 template <bool Hessian>
 void MaterialSheet::assemble(const double* x, double* energy, double* force,
                              double* values) const {
-  using J = Jet<9, Hessian>;
-  auto element = [&](const int* vs, const int* slot, auto&& energy_of) {
-    std::array<J, 9> q;
-    for (int a = 0; a < 3; ++a) {
-      const Vec3 p = position(x, vs[a]);
-      q[3 * a] = J::variable(p.x, 3 * a);
-      q[3 * a + 1] = J::variable(p.y, 3 * a + 1);
-      q[3 * a + 2] = J::variable(p.z, 3 * a + 2);
+  using J = Jet<6, Hessian>;
+  auto element = [&](const int* vs, const int* slot, const Alpha& alpha, auto&& energy_of) {
+    const Vec3 p[3] = {position(x, vs[0]), position(x, vs[1]), position(x, vs[2])};
+    std::array<J, 6> u;
+    for (int c = 0; c < 2; ++c) {
+      const Vec3 w = alpha[c][0] * p[0] + alpha[c][1] * p[1] + alpha[c][2] * p[2];
+      u[3 * c] = J::variable(w.x, 3 * c);
+      u[3 * c + 1] = J::variable(w.y, 3 * c + 1);
+      u[3 * c + 2] = J::variable(w.z, 3 * c + 2);
     }
-    const J e = energy_of(q);
+    const J e = energy_of(u);
     if (energy) *energy += e.v;
+    // H_u in full from its upper triangle.
+    double hu[36];
+    if constexpr (Hessian)
+      for (int i = 0; i < 6; ++i)
+        for (int j = 0; j < 6; ++j) hu[6 * i + j] = i <= j ? e.h[6 * i + j] : e.h[6 * j + i];
     for (int a = 0; a < 3; ++a) {
       const int fa = free_index_[vs[a]];
       if (fa < 0) continue;
       if (force)
-        for (int p = 0; p < 3; ++p) force[3 * fa + p] -= e.g[3 * a + p];
+        for (int k = 0; k < 3; ++k)
+          force[3 * fa + k] -= alpha[0][a] * e.g[k] + alpha[1][a] * e.g[3 + k];
       if constexpr (Hessian) {
         const double inv_m = 1.0 / vertex_mass_[vs[a]];
         for (int b = 0; b < 3; ++b) {
           const int entry = slot[3 * a + b];
           if (entry < 0) continue;
           const int fb = free_index_[vs[b]];
-          for (int p = 0; p < 3; ++p)
-            for (int r = 0; r < 3; ++r)
-              values[node_block_entry(nodes_, entry, fb, p, r)] -=
-                  inv_m * e.h[(3 * a + p) * 9 + 3 * b + r];
+          for (int k = 0; k < 3; ++k)
+            for (int l = 0; l < 3; ++l) {
+              double h = 0.0;
+              for (int c = 0; c < 2; ++c)
+                for (int d = 0; d < 2; ++d)
+                  h += alpha[c][a] * alpha[d][b] * hu[6 * (3 * c + k) + 3 * d + l];
+              values[node_block_entry(nodes_, entry, fb, k, l)] -= inv_m * h;
+            }
         }
       }
     }
   };
   for (std::size_t k = 0; k < triangles_.size(); ++k) {
     const Triangle& t = triangles_[k];
-    element(t.v, &tri_slots_[9 * k],
-            [&](const std::array<J, 9>& q) { return membrane_energy(q, t, c11_, c12_, c22_, c66_); });
+    element(t.v, &tri_slots_[9 * k], membrane_alpha(t),
+            [&](const std::array<J, 6>& u) { return membrane_energy(u, t, c11_, c12_, c22_, c66_); });
   }
   for (std::size_t k = 0; k < stencils_.size(); ++k) {
     const BendStencil& s = stencils_[k];
-    element(s.v, &stencil_slots_[9 * k],
-            [&](const std::array<J, 9>& q) { return bending_energy(q, s.stiffness); });
+    element(s.v, &stencil_slots_[9 * k], kBendAlpha,
+            [&](const std::array<J, 6>& u) { return bending_energy(u, s.stiffness); });
   }
 }
 
