@@ -283,7 +283,7 @@ TEST_CASE("heavy elastica reference: converged, small-deflection limit, Peirce's
 }
 
 TEST_CASE("Peirce's cantilever: the sheet converges to the heavy elastica",
-          "[material_sheet][cantilever]") {
+          "[material_sheet][.cantilever]") {
   const double B = 1e-5;  // N m
   std::printf("cantilever  G=wL^3/B  L/c  cells(overhang)  drop/L  err_drop%%  order  chord_deg  "
               "err_chord%%  order  elastica_drop/L  elastica_chord  Peirce_c/c  steps  seconds\n");
@@ -328,7 +328,7 @@ TEST_CASE("Peirce's cantilever: the sheet converges to the heavy elastica",
 }
 
 TEST_CASE("material sheet: isotropic strips agree along x and y; anisotropic ones differ as B",
-          "[material_sheet][cantilever]") {
+          "[material_sheet][.cantilever]") {
   const double B = 1e-5;
   const Strip y = solve_strip(strip_params(1.0, 2, true, B, B), true);
   const Strip x = solve_strip(strip_params(1.0, 2, false, B, B), false);
