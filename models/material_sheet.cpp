@@ -11,10 +11,14 @@ namespace knitsim {
 
 const char* to_string(SheetEdge e) {
   switch (e) {
-    case SheetEdge::XMin: return "x_min";
-    case SheetEdge::XMax: return "x_max";
-    case SheetEdge::YMin: return "y_min";
-    case SheetEdge::YMax: return "y_max";
+    case SheetEdge::XMin:
+      return "x_min";
+    case SheetEdge::XMax:
+      return "x_max";
+    case SheetEdge::YMin:
+      return "y_min";
+    case SheetEdge::YMax:
+      return "y_max";
   }
   return "?";
 }
@@ -88,8 +92,8 @@ Jet<N, S> operator*(const Jet<N, S>& a, const Jet<N, S>& b) {
   if constexpr (S)
     for (int i = 0; i < N; ++i)
       for (int j = i; j < N; ++j)
-        r.h[i * N + j] = a.v * b.h[i * N + j] + b.v * a.h[i * N + j] + a.g[i] * b.g[j] +
-                         b.g[i] * a.g[j];
+        r.h[i * N + j] =
+            a.v * b.h[i * N + j] + b.v * a.h[i * N + j] + a.g[i] * b.g[j] + b.g[i] * a.g[j];
   return r;
 }
 template <int N, bool S>
@@ -165,9 +169,9 @@ void MaterialSheetParams::validate() const {
           "material sheet: membrane_course must be in (0, 1e12] N/m");
   require(positive(membrane_shear, 1e12),
           "material sheet: membrane_shear must be in (0, 1e12] N/m");
-  require(std::isfinite(poisson_cw) &&
-              poisson_cw * poisson_cw * membrane_wale / membrane_course < 1.0,
-          "material sheet: poisson_cw must satisfy poisson_cw^2 membrane_wale / membrane_course < 1");
+  require(
+      std::isfinite(poisson_cw) && poisson_cw * poisson_cw * membrane_wale / membrane_course < 1.0,
+      "material sheet: poisson_cw must satisfy poisson_cw^2 membrane_wale / membrane_course < 1");
   require(positive(bending_wale, 1e3), "material sheet: bending_wale must be in (0, 1e3] N m");
   require(positive(bending_course, 1e3), "material sheet: bending_course must be in (0, 1e3] N m");
   require(std::isfinite(damping_rate) && damping_rate >= 0.0,
@@ -227,7 +231,8 @@ MaterialSheet::MaterialSheet(MaterialSheetParams params) : params_(std::move(par
     for (int j = 0; j <= nx_; ++j)
       vertex_mass_[vertex(i, j)] = rho * hx_ * hy_ * edge_weight(i, ny_) * edge_weight(j, nx_);
   for (const SheetEdgeLoad& l : params_.loads) {
-    const bool along_y = l.edge == SheetEdge::XMin || l.edge == SheetEdge::XMax;  // edge runs along y
+    const bool along_y =
+        l.edge == SheetEdge::XMin || l.edge == SheetEdge::XMax;  // edge runs along y
     const int count = along_y ? ny_ : nx_;
     const double h = along_y ? hy_ : hx_;
     for (int k = 0; k <= count; ++k) {
@@ -349,8 +354,7 @@ void MaterialSheet::initial_state(double* x, double* v) const {
 }
 
 template <bool Hessian>
-void MaterialSheet::assemble(const double* x, double* energy, double* force,
-                             double* values) const {
+void MaterialSheet::assemble(const double* x, double* energy, double* force, double* values) const {
   using J = Jet<6, Hessian>;
   auto element = [&](const int* vs, const int* slot, const Alpha& alpha, auto&& energy_of) {
     const Vec3 p[3] = {position(x, vs[0]), position(x, vs[1]), position(x, vs[2])};
@@ -394,8 +398,9 @@ void MaterialSheet::assemble(const double* x, double* energy, double* force,
   };
   for (std::size_t k = 0; k < triangles_.size(); ++k) {
     const Triangle& t = triangles_[k];
-    element(t.v, &tri_slots_[9 * k], membrane_alpha(t),
-            [&](const std::array<J, 6>& u) { return membrane_energy(u, t, c11_, c12_, c22_, c66_); });
+    element(t.v, &tri_slots_[9 * k], membrane_alpha(t), [&](const std::array<J, 6>& u) {
+      return membrane_energy(u, t, c11_, c12_, c22_, c66_);
+    });
   }
   for (std::size_t k = 0; k < stencils_.size(); ++k) {
     const BendStencil& s = stencils_[k];

@@ -4,7 +4,8 @@
 // Specimen and axes: width W along x (the courses), length L along y (the wales), flat at z = 0
 // at rest; gravity along -z. Mesh: nx = `cells` cells along the width, ny = max(1, round(nx L / W))
 // along the length, so the cells are hx = W / nx by hy = L / ny, near-square (hy / hx within
-// 1 +- 1 / (2 ny) of 1 where nx L / W >= 1/2; a sheet thinner than half a cell has one cell). Vertex (i, j) (row i along y, column j along x) is at (j hx, i hy, 0).
+// 1 +- 1 / (2 ny) of 1 where nx L / W >= 1/2; a sheet thinner than half a cell has one cell).
+// Vertex (i, j) (row i along y, column j along x) is at (j hx, i hy, 0).
 //
 // Energy (J), the continuum limit and its discretisation:
 //   Membrane: orthotropic plane-stress St Venant-Kirchhoff on the Green strain E = (F^T F - I)/2,
@@ -18,15 +19,17 @@
 //   Bending: 1/2 (B_w kappa_w^2 + B_c kappa_c^2) per unit area, kappa_c the curvature of the grid
 //     rows (lines along x), kappa_w that of the columns (lines along y). Per interior vertex of a
 //     row (neighbours a, b along the row, e1 = x_v - x_a, e2 = x_b - x_v, rest spacing h = hx):
-//       E_v = B_c / 2 (2 tan(phi/2) / h)^2 h t_v,   4 tan^2(phi/2) = 4 (|e1||e2| - e1.e2) / (|e1||e2| + e1.e2)
+//       E_v = B_c / 2 (2 tan(phi/2) / h)^2 h t_v,
+//       4 tan^2(phi/2) = 4 (|e1||e2| - e1.e2) / (|e1||e2| + e1.e2),
 //     phi the turning angle between e1 and e2, t_v the vertex's share of the width across the row
-//     (hy inside, hy / 2 on the two boundary rows). For a smooth curve 2 tan(phi/2) = kappa h + O(h^3),
-//     so E_v -> 1/2 B_c kappa^2 (h t_v): the Riemann sum of the continuum energy. Columns the same
-//     with B_w, hy and hx. At a clamp's last row the stencil across it has twice that stiffness:
-//     its clamped side is straight, so it sees half the turning angle (kappa h / 2) over the free
-//     half cell (h / 2): 1/2 B kappa^2 h/2 = 2 x 1/2 B (kappa/2)^2 h (second order at the clamp,
-//     as the mirror-ghost scheme of a clamped beam; first order without). Each stencil lies on one row or one column: the two directions never
-//     couple (a cylindrical bend along x costs B_c only, whatever B_w).
+//     (hy inside, hy / 2 on the two boundary rows). For a smooth curve 2 tan(phi/2) = kappa h +
+//     O(h^3), so E_v -> 1/2 B_c kappa^2 (h t_v): the Riemann sum of the continuum energy. Columns
+//     the same with B_w, hy and hx. At a clamp's last row the stencil across it has twice that
+//     stiffness: its clamped side is straight, so it sees half the turning angle (kappa h / 2) over
+//     the free half cell (h / 2): 1/2 B kappa^2 h/2 = 2 x 1/2 B (kappa/2)^2 h (second order at the
+//     clamp, as the mirror-ghost scheme of a clamped beam; first order without). Each stencil lies
+//     on one row or one column: the two directions never couple (a cylindrical bend along x costs
+//     B_c only, whatever B_w).
 //   Gravity: m_i g z_i, masses lumped by area (rho_A hx hy x 1 inside, 1/2 on an edge, 1/4 at a
 //     corner; total rho_A W L). Edge loads: -f . x_i with f = q l_i, q (N/m) the load per unit
 //     length of edge, l_i the vertex's share of that edge.

@@ -276,8 +276,9 @@ TEST_CASE("heavy elastica reference: converged, small-deflection limit, Peirce's
   CHECK(p.tip_slope * kDeg == Approx(53.9).margin(0.05));
   // Peirce's closed formula from that chord gives c about 2 % off (c = L/2).
   const double c_peirce = peirce_bending_length(1.0, p.chord());
-  std::printf("elastica G=8: chord %.4f deg, tip slope %.4f deg, Peirce c/L %.5f (exact 0.5, %+.2f %%)\n",
-              p.chord() * kDeg, p.tip_slope * kDeg, c_peirce, 100.0 * (c_peirce / 0.5 - 1.0));
+  std::printf(
+      "elastica G=8: chord %.4f deg, tip slope %.4f deg, Peirce c/L %.5f (exact 0.5, %+.2f %%)\n",
+      p.chord() * kDeg, p.tip_slope * kDeg, c_peirce, 100.0 * (c_peirce / 0.5 - 1.0));
   CHECK(std::abs(c_peirce / 0.5 - 1.0) > 0.01);
   CHECK(std::abs(c_peirce / 0.5 - 1.0) < 0.03);
 }
@@ -285,12 +286,14 @@ TEST_CASE("heavy elastica reference: converged, small-deflection limit, Peirce's
 TEST_CASE("Peirce's cantilever: the sheet converges to the heavy elastica",
           "[material_sheet][.cantilever]") {
   const double B = 1e-5;  // N m
-  std::printf("cantilever  G=wL^3/B  L/c  cells(overhang)  drop/L  err_drop%%  order  chord_deg  "
-              "err_chord%%  order  elastica_drop/L  elastica_chord  Peirce_c/c  steps  seconds\n");
+  std::printf(
+      "cantilever  G=wL^3/B  L/c  cells(overhang)  drop/L  err_drop%%  order  chord_deg  "
+      "err_chord%%  order  elastica_drop/L  elastica_chord  Peirce_c/c  steps  seconds\n");
   for (double G : {0.1, 8.0, 20.0}) {
     const Elastica ref = elastica(G);
     const double L = std::cbrt(G * B / weight_per_area());
-    const double c_peirce = peirce_bending_length(L, ref.chord()) / std::cbrt(B / weight_per_area());
+    const double c_peirce =
+        peirce_bending_length(L, ref.chord()) / std::cbrt(B / weight_per_area());
     double prev_drop = 0.0, prev_chord = 0.0, first_drop = 0.0, first_chord = 0.0;
     for (int n : {1, 2, 4, 8}) {
       const Strip s = solve_strip(strip_params(G, n, true, B, B), true);
@@ -300,10 +303,12 @@ TEST_CASE("Peirce's cantilever: the sheet converges to the heavy elastica",
       // Observed order of one halving, log2(e_2h / e_h); NaN where the error changes sign.
       const double order_drop = n > 1 ? std::log2(prev_drop / err_drop) : NAN;
       const double order_chord = n > 1 ? std::log2(prev_chord / err_chord) : NAN;
-      std::printf("cantilever  %g  %.4f  %d  %.6f  %+.4f  %.2f  %.4f  %+.4f  %.2f  %.6f  %.4f  %.4f  %ld  %.2f\n",
-                  G, std::cbrt(G), 8 * n, s.tip_drop / L, 100 * err_drop, order_drop,
-                  s.chord() * kDeg, 100 * err_chord, order_chord, ref.tip_drop, ref.chord() * kDeg,
-                  c_peirce, s.stats.steps, s.seconds);
+      std::printf(
+          "cantilever  %g  %.4f  %d  %.6f  %+.4f  %.2f  %.4f  %+.4f  %.2f  %.6f  %.4f  %.4f  %ld  "
+          "%.2f\n",
+          G, std::cbrt(G), 8 * n, s.tip_drop / L, 100 * err_drop, order_drop, s.chord() * kDeg,
+          100 * err_chord, order_chord, ref.tip_drop, ref.chord() * kDeg, c_peirce, s.stats.steps,
+          s.seconds);
       CHECK(s.stats.certificate == "stable_minimum");
       if (n == 1) {
         first_drop = err_drop;
@@ -349,10 +354,11 @@ TEST_CASE("material sheet: isotropic strips agree along x and y; anisotropic one
   REQUIRE(ax.stats.status == RunStatus::Equilibrium);
   const double L = py.length / 1.25;
   const double w = weight_per_area();
-  std::printf("anisotropic strips: wale drop %.6e m (w L^4/8B_w %.6e), course drop %.6e m "
-              "(w L^4/8B_c %.6e), ratio %.4f (closed form 4)\n",
-              ay.tip_drop, w * std::pow(L, 4) / (8 * 4 * B), ax.tip_drop,
-              w * std::pow(L, 4) / (8 * B), ax.tip_drop / ay.tip_drop);
+  std::printf(
+      "anisotropic strips: wale drop %.6e m (w L^4/8B_w %.6e), course drop %.6e m "
+      "(w L^4/8B_c %.6e), ratio %.4f (closed form 4)\n",
+      ay.tip_drop, w * std::pow(L, 4) / (8 * 4 * B), ax.tip_drop, w * std::pow(L, 4) / (8 * B),
+      ax.tip_drop / ay.tip_drop);
   // Closed-form ratio B_w / B_c = 4, up to the (G-dependent) geometric nonlinearity: the
   // elastica's own ratio at these loads.
   const double expected = elastica(4 * G).tip_drop / elastica(G).tip_drop;
@@ -387,7 +393,8 @@ TEST_CASE("material sheet: uniaxial tension gives the orthotropic stiffness and 
     REQUIRE(st.status == RunStatus::Equilibrium);
     // Mean axial position of the lines at 3/8 and 5/8 of the length (3 widths from the clamp),
     // and the width across at 1/2.
-    const int n_long = along_x ? sheet.nx() : sheet.ny(), n_short = along_x ? sheet.ny() : sheet.nx();
+    const int n_long = along_x ? sheet.nx() : sheet.ny(),
+              n_short = along_x ? sheet.ny() : sheet.nx();
     auto at = [&](int a, int b) {  // a along the strip, b across
       return sheet.position(x.data(), along_x ? sheet.vertex(b, a) : sheet.vertex(a, b));
     };
@@ -403,8 +410,9 @@ TEST_CASE("material sheet: uniaxial tension gives the orthotropic stiffness and 
     const double eps_lateral = (along_x ? hi.y - lo.y : hi.x - lo.x) / short_side - 1.0;
     const double A = along_x ? A_c : A_w;
     const double nu = along_x ? nu_cw : nu_cw * A_w / A_c;  // reciprocity nu_cw / A_c = nu_wc / A_w
-    std::printf("tension along %s: stiffness %.4f N/m (continuum %.1f), Poisson %.5f (continuum %.5f)\n",
-                along_x ? "x (courses)" : "y (wales)", T / eps_axial, A, -eps_lateral / eps_axial, nu);
+    std::printf(
+        "tension along %s: stiffness %.4f N/m (continuum %.1f), Poisson %.5f (continuum %.5f)\n",
+        along_x ? "x (courses)" : "y (wales)", T / eps_axial, A, -eps_lateral / eps_axial, nu);
     CHECK(T / eps_axial == Approx(A).epsilon(5e-3));
     CHECK(-eps_lateral / eps_axial == Approx(nu).epsilon(1e-2));
   }
@@ -422,7 +430,7 @@ TEST_CASE("material sheet: bad parameters name the field and its range", "[mater
   MaterialSheetParams p;
   CHECK(message(p).empty());
   CHECK(MaterialSheet(p).ny() == 20);  // square sheet: as many cells along as across
-  p.length = 0.26;  // 20 x 0.26 / 0.5 = 10.4 -> 10
+  p.length = 0.26;                     // 20 x 0.26 / 0.5 = 10.4 -> 10
   CHECK(MaterialSheet(p).ny() == 10);
   MaterialSheetParams q = p;
   q.cells = 0;
