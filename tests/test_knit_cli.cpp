@@ -1,6 +1,6 @@
-// `knitsim knit` against the command-line contract (SPEC 2.10): a settled small chart writes
-// outputs that agree with the model; a bad chart exits 2 with one line naming row and column
-// and writes nothing.
+// `knitsim knit` against the command-line contract (docs/commands.md): a settled small chart
+// writes outputs that agree with the model; a knit scene writes what --chart writes; a bad chart
+// exits 2 with one line naming row and column and writes nothing.
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
@@ -307,4 +307,106 @@ TEST_CASE("knitsim knit: bad input exits 2 with one line and writes nothing") {
     CHECK(!fs::exists(out));
   }
   fs::remove_all(tmp);
+}
+
+namespace {
+
+// summary.json without what a clock decides (wall and CPU seconds).
+nlohmann::json without_timings(nlohmann::json j) {
+  if (j.is_object()) {
+    for (auto it = j.begin(); it != j.end();) {
+      if (it.key().find("_seconds") != std::string::npos) {
+        it = j.erase(it);
+      } else {
+        it.value() = without_timings(it.value());
+        ++it;
+      }
+    }
+  }
+  return j;
+}
+
+// Every file under `a` (manifest.json aside: it records the command line and the clock) has
+// the same bytes under `b`, summary.json up to its timings; returns how many were compared.
+int compare_outputs(const fs::path& a, const fs::path& b) {
+  int compared = 0;
+  for (const auto& e : fs::recursive_directory_iterator(a)) {
+    if (!e.is_regular_file() || e.path().filename() == "manifest.json") continue;
+    const fs::path other = b / fs::relative(e.path(), a);
+    CAPTURE(other.string());
+    REQUIRE(fs::exists(other));
+    if (e.path().filename() == "summary.json")
+      CHECK(without_timings(nlohmann::json::parse(slurp(e.path()))) ==
+            without_timings(nlohmann::json::parse(slurp(other))));
+    else
+      CHECK(slurp(e.path()) == slurp(other));
+    ++compared;
+  }
+  return compared;
+}
+
+}  // namespace
+
+TEST_CASE("knitsim knit: a scene naming a chart and a key writes what --chart and --set write") {
+  TempDir tmp("knit-scene");
+  const std::string chart_text = "KKKKK\nKKTKK\nKKKKK\n";
+  fs::create_directories(tmp.path / "charts");
+  std::ofstream(tmp.path / "charts" / "small.chart") << chart_text;
+  std::ofstream(tmp.path / "small.toml")
+      << "# a knit scene\n# the small chart, its stabiliser raised\n[knit]\n"
+         "chart = \"charts/small.chart\"\nstabiliser = 0.2\ncontact = 0\n"
+         "[run]\nequilibrium_tol = 1e-8\n";
+  const std::string common = " --frames 2 --no-pictures --quiet --out '";
+  std::string err;
+  REQUIRE(run_knit("--chart '" + (tmp.path / "charts" / "small.chart").string() +
+                       "' --set knit.stabiliser=0.2 --set knit.contact=0" + common +
+                       (tmp.path / "by_chart").string() + "'",
+                   err) == 0);
+  INFO(err);
+  REQUIRE(run_knit("--scene '" + (tmp.path / "small.toml").string() + "'" + common +
+                       (tmp.path / "by_scene").string() + "'",
+                   err) == 0);
+  CHECK(compare_outputs(tmp.path / "by_chart", tmp.path / "by_scene") >= 8);
+  const auto summary = nlohmann::json::parse(slurp(tmp.path / "by_scene" / "summary.json"));
+  CHECK(summary["params"]["stabiliser_ratio"] == 0.2);  // the scene's key reached the model
+  CHECK(summary["chart"] == "small");
+
+  // The same chart inline: the same points.
+  std::ofstream(tmp.path / "inline.toml")
+      << "[knit]\nchart_text = \"\"\"\n" << chart_text
+      << "\"\"\"\nstabiliser = 0.2\ncontact = 0\n";
+  REQUIRE(run_knit("--scene '" + (tmp.path / "inline.toml").string() + "'" + common +
+                       (tmp.path / "inline").string() + "'",
+                   err) == 0);
+  CHECK(slurp(tmp.path / "inline" / "points.csv") == slurp(tmp.path / "by_chart" / "points.csv"));
+  CHECK(nlohmann::json::parse(slurp(tmp.path / "inline" / "summary.json"))["chart"] == "inline");
+}
+
+TEST_CASE("knitsim knit: a scene whose chart cannot be read exits 2 with one line naming it") {
+  TempDir tmp("knit-scene-bad");
+  std::ofstream(tmp.path / "lost.toml") << "[knit]\nchart = \"missing.chart\"\n";
+  std::ofstream(tmp.path / "both.toml")
+      << "[knit]\nchart = \"a.chart\"\nchart_text = \"KK\"\n";
+  const fs::path out = tmp.path / "should-not-exist";
+  struct Case {
+    std::string args, names;
+  };
+  const std::vector<Case> cases = {
+      {"--scene '" + (tmp.path / "lost.toml").string() + "'",
+       "knit.chart = missing.chart (" + (tmp.path / "lost.toml").string() +
+           " line 2): cannot read the file"},
+      {"--scene '" + (tmp.path / "both.toml").string() + "'", "give one of knit.chart"},
+      {"--scene '" + (tmp.path / "nope.toml").string() + "'", "cannot read"},
+      {"--scene '" + (tmp.path / "lost.toml").string() + "' --chart x.chart",
+       "--chart and --scene: give one of them"},
+      {"", "--chart or --scene is required"},
+  };
+  for (const Case& c : cases) {
+    CAPTURE(c.args);
+    std::string err;
+    CHECK(run_knit(c.args + " --out '" + out.string() + "'", err) == 2);
+    CHECK(count_lines(err) == 1);
+    CHECK(err.find(c.names) != std::string::npos);
+    CHECK(!fs::exists(out));
+  }
 }

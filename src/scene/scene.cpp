@@ -241,16 +241,19 @@ std::string shown(const toml::node& node) {
   return os.str();
 }
 
-void apply_toml(Scene& scene, const std::string& text, const std::string& source) {
-  toml::table root;
+toml::table parse_toml(const std::string& text, const std::string& source) {
   try {
-    root = toml::parse(text, source);
+    return toml::parse(text, source);
   } catch (const toml::parse_error& e) {
     std::ostringstream os;
     os << "scene " << source << ": TOML syntax error at line " << e.source().begin.line
        << ", column " << e.source().begin.column << ": " << printable(std::string(e.description()));
     throw std::invalid_argument(os.str());
   }
+}
+
+void apply_toml(Scene& scene, const std::string& text, const std::string& source) {
+  const toml::table root = parse_toml(text, source);
   auto where = [&source](const toml::node& node) {
     return " (" + source + " line " + std::to_string(node.source().begin.line) + ")";
   };
@@ -372,6 +375,30 @@ std::string scene_description(const std::string& toml_text) {
 }
 
 std::string default_integrator() { return "equilibrium"; }
+
+std::vector<SceneEntry> scene_entries(const std::string& text, const std::string& source) {
+  std::vector<SceneEntry> entries;
+  for (const auto& [section, section_node] : parse_toml(text, source)) {
+    const toml::table* table = section_node.as_table();
+    const int line = static_cast<int>(section_node.source().begin.line);
+    if (!table)
+      throw std::invalid_argument("scene " + source + " line " + std::to_string(line) + ": " +
+                                  std::string(section.str()) +
+                                  ": a key outside a section ([section] key = value)");
+    for (const auto& [name, node] : *table) {
+      std::string value;
+      if (node.is_string())
+        value = node.value<std::string>().value();
+      else if (node.is_floating_point())
+        append_number(value, node.as_floating_point()->get());  // reads back as the same double
+      else
+        value = shown(node);
+      entries.push_back({std::string(section.str()) + "." + std::string(name.str()), value,
+                         static_cast<int>(node.source().begin.line)});
+    }
+  }
+  return entries;
+}
 
 namespace {
 

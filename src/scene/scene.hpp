@@ -86,6 +86,17 @@ std::string scene_key_value(const Scene& scene, const std::string& name);
 // The keys of `among` that neither the scene file nor a --set gave (Scene::keys_given).
 std::vector<std::string> keys_not_given(const Scene& scene, const std::vector<std::string>& among);
 
+// The entries of a scene file's TOML text, in file order, with no key checked: what a knit scene
+// is read from (docs/knit.md, "Running a chart"). Strings as their text, numbers as text that reads
+// back as the same value (anything else as TOML shows it, for the key to refuse). Throws std::invalid_argument for a
+// syntax error or a key outside a section, naming `source` and the line.
+struct SceneEntry {
+  std::string key;  // "section.key"
+  std::string value;
+  int line = 0;
+};
+std::vector<SceneEntry> scene_entries(const std::string& text, const std::string& source);
+
 // The one-line description of a scene file: its line 2 without the leading "#".
 std::string scene_description(const std::string& toml_text);
 
