@@ -9,13 +9,10 @@
 // writes everything and exits 3 -- or 128 + the signal (130, 143) when Ctrl-C or SIGTERM stopped
 // it (status interrupted, src/cli/interrupt.hpp).
 #include <CLI/CLI.hpp>
-#include <algorithm>
-#include <cctype>
 #include <filesystem>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
-#include <optional>
 #include <stdexcept>
 
 #include "models/knit_loops.hpp"
@@ -30,6 +27,7 @@
 #include "src/io/run_state.hpp"
 #include "src/io/step_log.hpp"
 #include "src/scene/knit_run.hpp"
+#include "src/scene/knit_scene.hpp"
 
 namespace knitsim {
 
@@ -136,87 +134,6 @@ nlohmann::json knit_model_keys(const KnitChart& chart, KnitParams params) {
   return keys;
 }
 
-// The chart file at `path`; `what` names it in messages ("--chart FILE", "knit.chart = FILE").
-KnitChart read_chart(const std::string& path, const std::string& what) {
-  // 4 million points (KnitParams::max_points) are ~4 MB of letters: a larger file is refused.
-  constexpr std::size_t kMaxChartFileBytes = std::size_t{16} << 20;
-  std::string text, why;
-  if (!read_input_file(path, kMaxChartFileBytes, text, why))
-    throw std::invalid_argument(what + ": cannot read the file: " + why);
-  try {
-    return parse_knit_chart(text);
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(path + ": " + e.what());
-  }
-}
-
-// --chart FILE: a scene of that chart and nothing else.
-KnitScene scene_of_chart(const std::string& path) {
-  KnitScene scene;
-  scene.chart = read_chart(path, "--chart " + path);
-  scene.chart_file = path;
-  scene.name = fs::path(path).stem().string();
-  return scene;
-}
-
-bool is_name(const std::string& s) {
-  return !s.empty() && std::all_of(s.begin(), s.end(), [](unsigned char c) {
-    return std::isalnum(c) || c == '_' || c == '-';
-  });
-}
-
-// --scene FILE (docs/knit.md, "Running a chart"): the chart by path (knit.chart, relative to the
-// file) or inline (knit.chart_text), scene.name, and the file's other keys as assignments put
-// before the command line's --set ones in `sets`.
-KnitScene read_scene_file(const std::string& path, std::vector<std::string>& sets) {
-  std::string text, why;
-  if (!read_input_file(path, kMaxSceneFileBytes, text, why))
-    throw std::invalid_argument("scene: cannot read " + path + ": " + why);
-  std::vector<std::string> from_file;
-  std::optional<SceneEntry> chart, chart_text, name;
-  for (const SceneEntry& e : scene_entries(text, path)) {
-    if (e.key == "knit.chart")
-      chart = e;
-    else if (e.key == "knit.chart_text")
-      chart_text = e;
-    else if (e.key == "scene.name")
-      name = e;
-    else
-      from_file.push_back(e.key + "=" + e.value);
-  }
-  const auto where = [&path](const SceneEntry& e) {
-    return " (" + path + " line " + std::to_string(e.line) + ")";
-  };
-  if (chart.has_value() == chart_text.has_value())
-    throw std::invalid_argument("scene " + path +
-                                ": give one of knit.chart (a chart file, relative to the scene "
-                                "file) and knit.chart_text (the chart inline)");
-  KnitScene scene;
-  if (chart) {
-    const fs::path file = fs::path(path).parent_path() / chart->value;
-    scene.chart = read_chart(file.string(), "knit.chart = " + chart->value + where(*chart));
-    scene.chart_file = file.lexically_normal().string();  // "models/charts/x.chart"
-    scene.name = fs::path(chart->value).stem().string();
-  } else {
-    try {
-      scene.chart = parse_knit_chart(chart_text->value);
-    } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument("knit.chart_text" + where(*chart_text) + ": " + e.what());
-    }
-    scene.chart_file = path;
-    scene.name = fs::path(path).stem().string();
-  }
-  if (name) {
-    if (!is_name(name->value))
-      throw std::invalid_argument("scene.name = " + name->value +
-                                  ": must be a non-empty name of letters, digits, _ and -" +
-                                  where(*name));
-    scene.name = name->value;
-  }
-  sets.insert(sets.begin(), from_file.begin(), from_file.end());
-  return scene;
-}
-
 // The warnings before a run: no damping, --dt to an adaptive method, an explicit method with yarn
 // contact (docs/knit.md, "What is not met, and why"), paper 2's bare network.
 void warn_before_run(const KnitScene& scene, const std::string& integrator,
@@ -288,7 +205,7 @@ void run(const KnitArgs& args) {
                                                    : "--chart and --scene: give one of them");
   std::vector<std::string> sets = args.sets;
   KnitScene scene =
-      args.scene.empty() ? scene_of_chart(args.chart) : read_scene_file(args.scene, sets);
+      args.scene.empty() ? knit_scene_of_chart(args.chart) : read_knit_scene(args.scene, sets);
   const std::string inputs = args.scene.empty() ? "--chart and --set" : "--scene and --set";
   scene.frames = args.frames;
   apply_sets(sets, scene.params, scene.options);

@@ -15,19 +15,10 @@
 #include "src/core/vec3.hpp"
 #include "src/measure/yarn_measures.hpp"
 #include "src/scene/frame_recorder.hpp"
+#include "src/scene/knit_scene.hpp"
 #include "src/scene/scene.hpp"
 
 namespace knitsim {
-
-// What a knit run integrates and how.
-struct KnitScene {
-  std::string name = "knit";  // labels the outputs (the chart file's stem)
-  std::string chart_file;     // where the chart was read, as given (summary.json chart_file)
-  KnitChart chart;
-  KnitParams params;
-  IntegratorOptions options;
-  int frames = 4;  // captured states, >= 1 (FrameRecorder)
-};
 
 // The knit model's integrator: cvode-bdf, which keeps a flat chart in its plane; on paper 2's
 // network (a mechanism, its stiffness singular) the overdamped flow of `equilibrium` crawls along

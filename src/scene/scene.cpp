@@ -376,6 +376,8 @@ std::string scene_description(const std::string& toml_text) {
 
 std::string default_integrator() { return "equilibrium"; }
 
+bool is_scene_name(const std::string& name) { return is_name(name); }
+
 std::vector<SceneEntry> scene_entries(const std::string& text, const std::string& source) {
   std::vector<SceneEntry> entries;
   for (const auto& [section, section_node] : parse_toml(text, source)) {

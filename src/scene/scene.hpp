@@ -96,6 +96,8 @@ struct SceneEntry {
   int line = 0;
 };
 std::vector<SceneEntry> scene_entries(const std::string& text, const std::string& source);
+// What scene.name accepts: a non-empty name of letters, digits, _ and -.
+bool is_scene_name(const std::string& name);
 
 // The one-line description of a scene file: its line 2 without the leading "#".
 std::string scene_description(const std::string& toml_text);
