@@ -590,7 +590,7 @@ void run(const KnitArgs& args) {
   try {
     opt.validate();
   } catch (const std::invalid_argument& e) {
-    rethrow_with_flag_names(e, run_option_names());  // run.t_max, --rtol, ...
+    rethrow_as_typed(e);  // run.t_max, --rtol, ...
   }
   if (args.frames < 1)
     throw std::invalid_argument("--frames = " + std::to_string(args.frames) + ": must be >= 1");
