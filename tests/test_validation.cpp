@@ -89,14 +89,15 @@ TEST_CASE("knit --set: messages name the keys the user types, nearest key sugges
   expect_bad_input(base + "--set knit.dampng=1",
                    "knit.dampng: unknown key; did you mean knit.damping?", tmp);
   // Before: "model.loop_radius = nan: ..." although the user typed knit.loop_radius.
-  expect_bad_input(base + "--set knit.loop_radius=nan", "knit.loop_radius = nan: must be > 0 m",
-                   tmp);
-  expect_bad_input(base + "--set knit.stabiliser=inf", "knit.stabiliser = inf: must be in [0, 1]",
-                   tmp);
+  expect_bad_input(base + "--set knit.loop_radius=nan",
+                   "knit.loop_radius = nan: must be a number > 0 m", tmp);
+  expect_bad_input(base + "--set knit.stabiliser=inf",
+                   "knit.stabiliser = inf: must be a number in [0, 1]", tmp);
   expect_bad_input(base + "--set knit.areal_density=-1",
                    "knit.areal_density = -1: must be > 0 g/m^2", tmp);
   // Before: "t_max = inf: must be > 0 s" and "rtol = nan: ..." (struct field names).
-  expect_bad_input(base + "--set run.t_max=inf", "run.t_max = inf: must be in [1e-9, 1e15] s", tmp);
+  expect_bad_input(base + "--set run.t_max=inf",
+                   "run.t_max = inf: must be a number in [1e-9, 1e15] s", tmp);
   expect_bad_input(base + "--set run.position_tol=1",
                    "run.position_tol = 1: must be in (0, 1e-2] m", tmp);
   expect_bad_input(base + "--rtol nan", "--rtol = nan: must be in (0, 1)", tmp);

@@ -110,75 +110,11 @@ struct KnitArgs {
   std::string continue_from;  // --continue DIR
 };
 
-// The --set keys, each bound to one field.
-struct SetKey {
-  const char* name;
-  double* field;
-};
-
-std::vector<SetKey> set_keys(KnitParams& p, IntegratorOptions& o) {
-  return {{"knit.loop_radius", &p.loop_radius},
-          {"knit.wale_stiffness", &p.wale_stiffness},
-          {"knit.course_stiffness", &p.course_stiffness},
-          {"knit.damping", &p.damping},
-          {"knit.areal_density", &p.areal_density},
-          {"knit.stabiliser", &p.stabiliser_ratio},
-          {"knit.bending", &p.bending_ratio},
-          {"knit.contact", &p.contact_ratio},
-          {"run.t_max", &o.t_max},
-          {"run.equilibrium_tol", &o.equilibrium_tol},
-          {"run.position_tol", &o.position_tol}};
-}
-
-// The one --set key whose value is a name: knit.network = stabilised | paper.
-constexpr const char* kNetworkKey = "knit.network";
-
-// Applies "key=value" overrides; throws std::invalid_argument naming the bad --set.
-// knit.network = paper with an explicit knit.stabiliser, knit.bending or knit.contact > 0 is
-// refused (the paper's network has none of them).
-void apply_sets(const std::vector<std::string>& sets, KnitParams& p, IntegratorOptions& o) {
-  const std::vector<SetKey> keys = set_keys(p, o);
-  bool stabiliser_given = false;
-  for (const std::string& s : sets) {
-    const size_t eq = s.find('=');
-    const std::string key = s.substr(0, eq);
-    if (key == kNetworkKey) {
-      p.network = parse_knit_network(eq == std::string::npos ? "" : s.substr(eq + 1));
-      continue;
-    }
-    stabiliser_given = stabiliser_given || key == "knit.stabiliser" || key == "knit.bending" ||
-                       key == "knit.contact";
-    const SetKey* found = nullptr;
-    for (const SetKey& k : keys)
-      if (key == k.name) found = &k;
-    if (found == nullptr) {
-      std::vector<std::string> names;
-      for (const SetKey& k : keys) names.push_back(k.name);
-      names.push_back(kNetworkKey);
-      throw std::invalid_argument(unknown_key_message(key, names));
-    }
-    const std::string value = eq == std::string::npos ? "" : s.substr(eq + 1);
-    size_t used = 0;
-    double v = 0.0;
-    try {
-      v = std::stod(value, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (value.empty() || used != value.size())
-      throw std::invalid_argument("--set " + s + ": expected " + key + "=<number>");
-    *found->field = v;
-  }
-  if (p.network == KnitNetwork::Paper && stabiliser_given &&
-      (p.stabiliser_ratio > 0.0 || p.bending_ratio > 0.0 || p.contact_ratio > 0.0))
-    throw std::invalid_argument(
-        "--set knit.stabiliser, knit.bending or knit.contact with knit.network = paper: paper 2's "
-        "network has no stabiliser, bending or contact (drop one of them)");
-}
-
 // What a knit run integrates, as SavedRun::model (--continue): the chart, one string of stitch
-// letters per course from the bottom, and the knit.* parameters under their --set names.
-nlohmann::json knit_model_keys(const KnitChart& chart, KnitParams params) {
+// letters per course from the bottom, and the knit.* parameters under their --set names (a text
+// key at its default is left out unless it is knit.network, so that state files written before
+// it existed still match).
+nlohmann::json knit_model_keys(const KnitChart& chart, const Scene& scene) {
   nlohmann::json keys = nlohmann::json::object();
   std::vector<std::string> courses;
   for (int c = 0; c < chart.courses; ++c) {
@@ -187,10 +123,14 @@ nlohmann::json knit_model_keys(const KnitChart& chart, KnitParams params) {
     courses.push_back(row);
   }
   keys["chart"] = courses;
-  keys[kNetworkKey] = to_string(params.network);
-  IntegratorOptions unused;
-  for (const SetKey& k : set_keys(params, unused))
-    if (std::string(k.name).rfind("knit.", 0) == 0) keys[k.name] = *k.field;
+  Scene defaults;
+  for (const Key& k : key_table()) {
+    if (k.model != KeyModel::Knit) continue;
+    if (k.number)
+      keys[k.name] = k.number(const_cast<Scene&>(scene));  // read only
+    else if (k.name == "knit.network" || k.get(scene) != k.get(defaults))
+      keys[k.name] = k.get(scene);
+  }
   return keys;
 }
 
@@ -570,9 +510,9 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
 
 void run(const KnitArgs& args) {
   const KnitChart chart = read_chart(args.chart);
-  KnitParams params;
-  IntegratorOptions opt;
-  apply_sets(args.sets, params, opt);
+  Scene scene = knit_scene(args.chart, args.sets);
+  const KnitParams& params = scene.knit;
+  IntegratorOptions& opt = scene.options;
   copy_run_flags(args.options, opt);
   const std::string integrator =
       args.integrator.empty() ? default_knit_integrator(params.yarn_contact()) : args.integrator;
@@ -587,11 +527,7 @@ void run(const KnitArgs& args) {
   const bool stabilised_default =
       !args.velocity_atol_given && !params.mechanism() && integ->info().adaptive;
   if (stabilised_default) opt.velocity_atol = kStabilisedVelocityAtol;
-  try {
-    opt.validate();
-  } catch (const std::invalid_argument& e) {
-    rethrow_as_typed(e);  // run.t_max, --rtol, ...
-  }
+  scene.validate();  // run.t_max, --rtol, knit.* ...
   if (args.frames < 1)
     throw std::invalid_argument("--frames = " + std::to_string(args.frames) + ": must be >= 1");
   const KnitModel model = build_knit(chart, params);  // validates params
@@ -599,7 +535,7 @@ void run(const KnitArgs& args) {
   model.network.initial_state(x.data(), v.data());
   double t0 = 0.0;
   if (!args.continue_from.empty()) {
-    const RunState from = continue_state(args.continue_from, "knit", knit_model_keys(chart, params),
+    const RunState from = continue_state(args.continue_from, "knit", knit_model_keys(chart, scene),
                                          "--chart and --set", integrator, opt);
     if (from.x.size() != x.size())  // same chart and parameters: only a corrupt file gets here
       throw std::invalid_argument("--continue " + args.continue_from + ": the state has " +
@@ -691,7 +627,7 @@ void run(const KnitArgs& args) {
          " designed crossings changed over/under order");
   write_run_state(
       dir,
-      {"knit", {stats.t_final, x, v}, stats.integrator, stats.dt, knit_model_keys(chart, params)});
+      {"knit", {stats.t_final, x, v}, stats.integrator, stats.dt, knit_model_keys(chart, scene)});
   if (!args.quiet) {
     Table t;
     t.columns = {"knit", name + " (" + args.chart + ")"};
@@ -737,11 +673,15 @@ void register_knit_command(CLI::App& app) {
       "points.csv, typevalue.csv, centerlines.csv/.vtk, before/after.png, frames/, summary.json, "
       "state.json and manifest.json into --out");
   cmd->add_option("--chart", args->chart, "Stitch chart file (K knit, T tuck, M miss)")->required();
+  std::string keys;  // the knit's and the run's keys (key_table), a text key with its values
+  for (const Key& k : key_table()) {
+    if (k.name.empty() || k.model == KeyModel::Drape) continue;
+    std::string values;
+    for (const std::string& c : k.choices) values += (values.empty() ? " (" : " | ") + c;
+    keys += (keys.empty() ? "" : ", ") + k.name + values + (values.empty() ? "" : ")");
+  }
   cmd->add_option("--set", args->sets,
-                  "Override a parameter, e.g. knit.network=paper (repeatable); keys "
-                  "knit.network (stabilised | paper), knit.loop_radius, knit.wale_stiffness, "
-                  "knit.course_stiffness, knit.damping, knit.areal_density, knit.stabiliser, "
-                  "knit.bending, knit.contact, run.t_max, run.equilibrium_tol, run.position_tol")
+                  "Override a parameter, e.g. knit.network=paper (repeatable); keys " + keys)
       ->allow_extra_args(false)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_option("--integrator", args->integrator,

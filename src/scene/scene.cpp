@@ -200,6 +200,44 @@ std::vector<Key> make_table() {
   number(
       "pins.move_time", [](Scene& s) -> double& { return s.params.pin_move_time; }, "s",
       "duration of that pin move");
+  // The knit's keys (models/knit_loops.hpp, docs/knit.md).
+  auto knit = [&number](const char* name, double KnitParams::*field, const char* unit,
+                        const char* meaning) {
+    number(
+        name, [field](Scene& s) -> double& { return s.knit.*field; }, unit, meaning,
+        KeyModel::Knit);
+  };
+  knit("knit.loop_radius", &KnitParams::loop_radius, "m",
+       "loop radius r; wale spacing w = 8 r, course spacing h = 7 r (14 wales/cm)");
+  knit("knit.wale_stiffness", &KnitParams::wale_stiffness, "N/m",
+       "spring constant k_w along the wales");
+  knit("knit.course_stiffness", &KnitParams::course_stiffness, "N/m",
+       "spring constant k_c along the courses");
+  knit("knit.damping", &KnitParams::damping, "N s/m", "damping c per point");
+  knit("knit.areal_density", &KnitParams::areal_density, "g/m^2",
+       "mass per area, spread over the points");
+  knit("knit.stabiliser", &KnitParams::stabiliser_ratio, "1",
+       "stabiliser's shear and bending springs relative to k_w, k_c (0 = off: paper 2's "
+       "network)");
+  knit("knit.bending", &KnitParams::bending_ratio, "1",
+       "out-of-plane bending rigidity as a multiple of the yarn's (0 = off: the chart stays in "
+       "its plane; needs knit.contact = 0)");
+  knit("knit.contact", &KnitParams::contact_ratio, "1",
+       "yarn contact's barrier stiffness relative to k_w (0 = off: yarns may pass through each "
+       "other)");
+  other(
+      "knit.network", Kind::Text,
+      [](Scene& s, const std::string& v) {
+        if (v != "stabilised" && v != "paper") return false;
+        s.knit.network = parse_knit_network(v);
+        return true;
+      },
+      "stabilised (the default) or paper (paper 2's network)",
+      [](const Scene& s) { return std::string(to_string(s.knit.network)); },
+      "stabilised, or paper: paper 2's bare network, no stabiliser, bending or contact (a "
+      "mechanism)",
+      KeyModel::Knit);
+  k.back().choices = {"stabilised", "paper"};
   option("run.t_max", "", "t_max", &IntegratorOptions::t_max, "s",
          "end time if no equilibrium is reached (status time_limit, exit 3)");
   option("run.equilibrium_tol", "", "equilibrium_tol", &IntegratorOptions::equilibrium_tol, "1",
@@ -286,6 +324,7 @@ std::string validated_range(const Key& key) {
   try {
     probe.params.validate();
     probe.options.validate();
+    probe.knit.validate();
   } catch (const InvalidField& e) {
     const std::string must = "must be ";
     if (e.field() == key.field && e.accepted().rfind(must, 0) == 0)
@@ -337,8 +376,9 @@ std::string trim(const std::string& s) {
 void apply_override(Scene& scene, KeyModel model, const std::string& assignment) {
   const size_t eq = assignment.find('=');
   if (eq == std::string::npos)
-    throw std::invalid_argument("--set " + printable(assignment) + ": expected key=value, e.g. " +
-                                "model.stiffness=900");
+    throw std::invalid_argument(
+        "--set " + printable(assignment) + ": expected key=value, e.g. " +
+        (model == KeyModel::Knit ? "knit.contact=0" : "model.stiffness=900"));
   const std::string name = trim(assignment.substr(0, eq));
   std::string value = trim(assignment.substr(eq + 1));
   const Key& key = find_key(name, model, "");
@@ -441,9 +481,19 @@ void rethrow_as_typed(const std::invalid_argument& e, const Scene* scene) {
 }
 
 void Scene::validate() const {
+  const auto given = [this](const char* key) {
+    return std::find(keys_given.begin(), keys_given.end(), key) != keys_given.end();
+  };
+  if (knit.network == KnitNetwork::Paper &&
+      (given("knit.stabiliser") || given("knit.bending") || given("knit.contact")) &&
+      (knit.stabiliser_ratio > 0.0 || knit.bending_ratio > 0.0 || knit.contact_ratio > 0.0))
+    throw std::invalid_argument(
+        "--set knit.stabiliser, knit.bending or knit.contact with knit.network = paper: paper 2's "
+        "network has no stabiliser, bending or contact (drop one of them)");
   try {
     params.validate();
     options.validate();
+    knit.validate();
   } catch (const std::invalid_argument& e) {
     // The validators name struct fields; the user wrote a scene key or a command-line flag.
     rethrow_as_typed(e, this);
@@ -458,6 +508,15 @@ Scene load_scene_text(const std::string& text, const std::string& name, const st
   apply_toml(scene, KeyModel::Drape, text, source == "built-in" ? "built-in " + name : source);
   for (const std::string& o : overrides) apply_override(scene, KeyModel::Drape, o);
   scene.validate();
+  return scene;
+}
+
+Scene knit_scene(const std::string& chart, const std::vector<std::string>& overrides) {
+  Scene scene;
+  scene.name = std::filesystem::path(chart).stem().string();
+  scene.source = "command line";
+  scene.chart = chart;
+  for (const std::string& o : overrides) apply_override(scene, KeyModel::Knit, o);
   return scene;
 }
 

@@ -39,6 +39,7 @@
 #include <vector>
 
 #include "models/drape_grid.hpp"
+#include "models/knit_loops.hpp"
 #include "solvers/integrator.hpp"
 #include "src/base/table.hpp"
 #include "src/core/invalid_field.hpp"
@@ -58,14 +59,19 @@ struct Scene {
   // Run options: the scene sets t_max and equilibrium_tol ([run]); the command line may set
   // the integrator's tolerances, step and caps. Everything else keeps its default.
   IntegratorOptions options;
+  // The knit model (knitsim knit): its parameters (knit.* keys) and stitch chart file.
+  KnitParams knit;
+  std::string chart;
   // The keys the scene file or a --set gave, in that order (a key may repeat): every other
   // key has its default, sample 1's value (`knitsim list keys`).
   std::vector<std::string> keys_given;
   // Each given key's value as the user typed it (the last one given), for messages.
   std::map<std::string, std::string> typed;
 
-  // DrapeParams::validate and IntegratorOptions::validate, each bad field named as the user
-  // writes it (run.t_max, --rtol, --max-wall, ...) with its value as typed.
+  // DrapeParams::validate, IntegratorOptions::validate and KnitParams::validate, each bad field
+  // named as the user writes it (run.t_max, --rtol, --max-wall, ...) with its value as typed;
+  // and knit.network = paper refused beside an explicit knit.stabiliser, knit.bending or
+  // knit.contact > 0 (paper 2's network has none of them).
   void validate() const;
 };
 
@@ -122,6 +128,11 @@ constexpr std::size_t kMaxSceneFileBytes = std::size_t{1} << 20;  // scene files
 // ("built-in" for a built-in scene) as messages show it. load_scene reads, then calls this.
 Scene load_scene_text(const std::string& text, const std::string& name, const std::string& source,
                       const std::vector<std::string>& overrides = {});
+
+// The knit's scene from `knitsim knit --chart CHART --set ...`: the knit's defaults (KnitParams,
+// IntegratorOptions) with the overrides, keys of the knit and the run only, applied in order.
+// Not validated (the command validates once it has its flags: Scene::validate).
+Scene knit_scene(const std::string& chart, const std::vector<std::string>& overrides);
 
 // The scene keys of `model`'s scenes (its own and the run's), dotted ("model.stiffness"), in
 // file order.
