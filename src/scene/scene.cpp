@@ -225,19 +225,40 @@ std::vector<Key> make_table() {
   knit("knit.contact", &KnitParams::contact_ratio, "1",
        "yarn contact's barrier stiffness relative to k_w (0 = off: yarns may pass through each "
        "other)");
-  other(
-      "knit.network", Kind::Text,
-      [](Scene& s, const std::string& v) {
-        if (v != "stabilised" && v != "paper") return false;
-        s.knit.network = parse_knit_network(v);
-        return true;
-      },
-      "stabilised (the default) or paper (paper 2's network)",
-      [](const Scene& s) { return std::string(to_string(s.knit.network)); },
-      "stabilised, or paper: paper 2's bare network, no stabiliser, bending or contact (a "
-      "mechanism)",
-      KeyModel::Knit);
-  k.back().choices = {"stabilised", "paper"};
+  // A knit key naming one of a few values of the KnitParams member `field`: (name, value) pairs;
+  // `accepted` says what it takes in messages ("" = "one of" the names).
+  auto knit_choice = [&k](const char* name, auto field, auto values, std::string accepted,
+                          const char* meaning) {
+    Key key;
+    key.name = key.field = name;
+    key.model = KeyModel::Knit;
+    key.kind = Kind::Text;
+    for (const auto& value : values) key.choices.push_back(value.first);
+    if (accepted.empty()) {
+      accepted = "one of ";
+      for (std::size_t i = 0; i < key.choices.size(); ++i)
+        accepted += (i > 0 ? ", " : "") + key.choices[i];
+    }
+    key.accepted = accepted;
+    key.set = [field, values](Scene& s, const std::string& v) {
+      for (const auto& [text, value] : values)
+        if (v == text) return (s.knit.*field = value, true);
+      return false;
+    };
+    key.get = [field, values](const Scene& s) {
+      for (const auto& [text, value] : values)
+        if (s.knit.*field == value) return text;
+      return std::string("?");
+    };
+    key.meaning = meaning;
+    k.push_back(std::move(key));
+  };
+  knit_choice("knit.network", &KnitParams::network,
+              std::vector<std::pair<std::string, KnitNetwork>>{
+                  {"stabilised", KnitNetwork::Stabilised}, {"paper", KnitNetwork::Paper}},
+              "stabilised (the default) or paper (paper 2's network)",
+              "stabilised, or paper: paper 2's bare network, no stabiliser, bending or contact "
+              "(a mechanism)");
   option("run.t_max", "", "t_max", &IntegratorOptions::t_max, "s",
          "end time if no equilibrium is reached (status time_limit, exit 3)");
   option("run.equilibrium_tol", "", "equilibrium_tol", &IntegratorOptions::equilibrium_tol, "1",
