@@ -259,6 +259,16 @@ std::vector<Key> make_table() {
               "stabilised (the default) or paper (paper 2's network)",
               "stabilised, or paper: paper 2's bare network, no stabiliser, bending or contact "
               "(a mechanism)");
+  knit_choice("knit.pins", &KnitParams::pins,
+              std::vector<std::pair<std::string, KnitPins>>{{"none", KnitPins::None},
+                                                            {"bottom", KnitPins::Bottom},
+                                                            {"top", KnitPins::Top},
+                                                            {"both", KnitPins::BottomAndTop}},
+              "", "edge levels held fixed: none, the bottom edge, the top edge, or both");
+  knit_choice("knit.gravity", &KnitParams::gravity,
+              std::vector<std::pair<std::string, bool>>{
+                  {"off", false}, {"on", true}, {"0", false}, {"1", true}},
+              "", "gravity, g = 9.81 m/s^2 along -y (off: paper 2 has no external force)");
   option("run.t_max", "", "t_max", &IntegratorOptions::t_max, "s",
          "end time if no equilibrium is reached (status time_limit, exit 3)");
   option("run.equilibrium_tol", "", "equilibrium_tol", &IntegratorOptions::equilibrium_tol, "1",
