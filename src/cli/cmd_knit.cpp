@@ -50,75 +50,11 @@ struct KnitArgs {
   std::string continue_from;  // --continue DIR
 };
 
-// The --set keys, each bound to one field.
-struct SetKey {
-  const char* name;
-  double* field;
-};
-
-std::vector<SetKey> set_keys(KnitParams& p, IntegratorOptions& o) {
-  return {{"knit.loop_radius", &p.loop_radius},
-          {"knit.wale_stiffness", &p.wale_stiffness},
-          {"knit.course_stiffness", &p.course_stiffness},
-          {"knit.damping", &p.damping},
-          {"knit.areal_density", &p.areal_density},
-          {"knit.stabiliser", &p.stabiliser_ratio},
-          {"knit.bending", &p.bending_ratio},
-          {"knit.contact", &p.contact_ratio},
-          {"run.t_max", &o.t_max},
-          {"run.equilibrium_tol", &o.equilibrium_tol},
-          {"run.position_tol", &o.position_tol}};
-}
-
-// The one --set key whose value is a name: knit.network = stabilised | paper.
-constexpr const char* kNetworkKey = "knit.network";
-
-// Applies "key=value" overrides; throws std::invalid_argument naming the bad --set.
-// knit.network = paper with an explicit knit.stabiliser, knit.bending or knit.contact > 0 is
-// refused (the paper's network has none of them).
-void apply_sets(const std::vector<std::string>& sets, KnitParams& p, IntegratorOptions& o) {
-  const std::vector<SetKey> keys = set_keys(p, o);
-  bool stabiliser_given = false;
-  for (const std::string& s : sets) {
-    const size_t eq = s.find('=');
-    const std::string key = s.substr(0, eq);
-    if (key == kNetworkKey) {
-      p.network = parse_knit_network(eq == std::string::npos ? "" : s.substr(eq + 1));
-      continue;
-    }
-    stabiliser_given = stabiliser_given || key == "knit.stabiliser" || key == "knit.bending" ||
-                       key == "knit.contact";
-    const SetKey* found = nullptr;
-    for (const SetKey& k : keys)
-      if (key == k.name) found = &k;
-    if (found == nullptr) {
-      std::vector<std::string> names;
-      for (const SetKey& k : keys) names.push_back(k.name);
-      names.push_back(kNetworkKey);
-      throw std::invalid_argument(unknown_key_message(key, names));
-    }
-    const std::string value = eq == std::string::npos ? "" : s.substr(eq + 1);
-    size_t used = 0;
-    double v = 0.0;
-    try {
-      v = std::stod(value, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (value.empty() || used != value.size())
-      throw std::invalid_argument("--set " + s + ": expected " + key + "=<number>");
-    *found->field = v;
-  }
-  if (p.network == KnitNetwork::Paper && stabiliser_given &&
-      (p.stabiliser_ratio > 0.0 || p.bending_ratio > 0.0 || p.contact_ratio > 0.0))
-    throw std::invalid_argument(
-        "--set knit.stabiliser, knit.bending or knit.contact with knit.network = paper: paper 2's "
-        "network has no stabiliser, bending or contact (drop one of them)");
-}
-
 // What a knit run integrates, as SavedRun::model (--continue): the chart, one string of stitch
-// letters per course from the bottom, and the knit.* parameters under their --set names.
-nlohmann::json knit_model_keys(const KnitChart& chart, KnitParams params) {
+// letters per course from the bottom, and the knit.* parameters under their --set names (a text
+// key at its default is left out unless it is knit.network, so that state files written before
+// it existed still match).
+nlohmann::json knit_model_keys(const KnitChart& chart, const Scene& scene) {
   nlohmann::json keys = nlohmann::json::object();
   std::vector<std::string> courses;
   for (int c = 0; c < chart.courses; ++c) {
@@ -127,10 +63,15 @@ nlohmann::json knit_model_keys(const KnitChart& chart, KnitParams params) {
     courses.push_back(row);
   }
   keys["chart"] = courses;
-  keys[kNetworkKey] = to_string(params.network);
-  IntegratorOptions unused;
-  for (const SetKey& k : set_keys(params, unused))
-    if (std::string(k.name).rfind("knit.", 0) == 0) keys[k.name] = *k.field;
+  Scene defaults;
+  for (const Key& k : key_table()) {
+    if (k.model != KeyModel::Knit || k.name == "knit.chart" || k.name == "knit.chart_text")
+      continue;  // the chart is "chart", as its letters
+    if (k.number)
+      keys[k.name] = k.number(const_cast<Scene&>(scene));  // read only
+    else if (k.name == "knit.network" || k.get(scene) != k.get(defaults))
+      keys[k.name] = k.get(scene);
+  }
   return keys;
 }
 
@@ -203,15 +144,19 @@ void run(const KnitArgs& args) {
   if (args.chart.empty() == args.scene.empty())
     throw std::invalid_argument(args.chart.empty() ? "--chart or --scene is required"
                                                    : "--chart and --scene: give one of them");
-  std::vector<std::string> sets = args.sets;
-  KnitScene scene =
-      args.scene.empty() ? knit_scene_of_chart(args.chart) : read_knit_scene(args.scene, sets);
+  Scene input;  // the keys as given: the knit's, the run's
+  KnitChart chart;
+  if (args.scene.empty()) {  // --chart: the chart is read before the --set keys apply
+    chart = read_knit_chart(knit_scene(args.chart, {}));
+    input = knit_scene(args.chart, args.sets);
+  } else {
+    input = load_knit_scene(args.scene, args.sets);
+    chart = read_knit_chart(input);
+  }
   const std::string inputs = args.scene.empty() ? "--chart and --set" : "--scene and --set";
-  scene.frames = args.frames;
-  apply_sets(sets, scene.params, scene.options);
-  copy_run_flags(args.options, scene.options);
+  copy_run_flags(args.options, input.options);
   const std::string integrator = args.integrator.empty()
-                                     ? default_knit_integrator(scene.params.yarn_contact())
+                                     ? default_knit_integrator(input.knit.yarn_contact())
                                      : args.integrator;
   std::unique_ptr<Integrator> integ;
   try {
@@ -220,19 +165,16 @@ void run(const KnitArgs& args) {
     throw std::invalid_argument(std::string("--") + e.what());  // "--integrator = X: ..."
   }
   if (!args.velocity_atol_given)
-    set_default_knit_velocity_atol(scene.options, scene.params, integ->info());
-  try {
-    scene.options.validate();
-  } catch (const std::invalid_argument& e) {
-    rethrow_with_flag_names(e, run_option_names());  // run.t_max, --rtol, ...
-  }
-  if (scene.frames < 1)
-    throw std::invalid_argument("--frames = " + std::to_string(scene.frames) + ": must be >= 1");
+    set_default_knit_velocity_atol(input.options, input.knit, integ->info());
+  input.validate();  // run.t_max, --rtol, knit.* ...
+  if (args.frames < 1)
+    throw std::invalid_argument("--frames = " + std::to_string(args.frames) + ": must be >= 1");
+  KnitScene scene = make_knit_scene(input, std::move(chart), args.frames);
   KnitStart start = start_knit(scene);  // validates the parameters
   if (!args.continue_from.empty()) {
-    const RunState from =
-        continue_state(args.continue_from, "knit", knit_model_keys(scene.chart, scene.params),
-                       inputs, integrator, scene.options);
+    const RunState from = continue_state(args.continue_from, "knit",
+                                         knit_model_keys(scene.chart, input), inputs, integrator,
+                                         scene.options);
     try {
       continue_knit(start, from);
     } catch (const std::invalid_argument& e) {
@@ -264,7 +206,7 @@ void run(const KnitArgs& args) {
     write_file_atomic(dir / "steps.csv", steps_csv);
   else
     remove_stale_output(dir / "steps.csv");
-  write_knit_outputs(dir, scene, result, knit_model_keys(scene.chart, scene.params),
+  write_knit_outputs(dir, scene, result, knit_model_keys(scene.chart, input),
                      !args.no_pictures);
   warn_about_overlap(result.measures);
   if (!args.quiet) std::cout << human_summary(scene, result, dir.string()) << std::flush;
@@ -272,7 +214,6 @@ void run(const KnitArgs& args) {
 }
 
 }  // namespace
-
 
 void register_knit_command(CLI::App& app) {
   auto args = std::make_shared<KnitArgs>();
@@ -285,11 +226,15 @@ void register_knit_command(CLI::App& app) {
   cmd->add_option("--scene", args->scene,
                   "Knit scene file (TOML: the chart by path or inline, knit and run keys; "
                   "docs/knit.md), instead of --chart");
+  std::string keys;  // the knit's and the run's keys (key_table), a text key with its values
+  for (const Key& k : key_table()) {
+    if (k.name.empty() || k.model == KeyModel::Drape) continue;
+    std::string values;
+    for (const std::string& c : k.choices) values += (values.empty() ? " (" : " | ") + c;
+    keys += (keys.empty() ? "" : ", ") + k.name + values + (values.empty() ? "" : ")");
+  }
   cmd->add_option("--set", args->sets,
-                  "Override a parameter, e.g. knit.network=paper (repeatable); keys "
-                  "knit.network (stabilised | paper), knit.loop_radius, knit.wale_stiffness, "
-                  "knit.course_stiffness, knit.damping, knit.areal_density, knit.stabiliser, "
-                  "knit.bending, knit.contact, run.t_max, run.equilibrium_tol, run.position_tol")
+                  "Override a parameter, e.g. knit.network=paper (repeatable); keys " + keys)
       ->allow_extra_args(false)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_option("--integrator", args->integrator,
