@@ -333,7 +333,7 @@ TEST_CASE("knitsim knit: bad input exits 2 with one line and writes nothing") {
       {"--chart '" + (tmp / "bad.chart").string() + "'", "chart row 2 (line 2), column 3"},
       {"--chart '" + (tmp / "nope.chart").string() + "'", "cannot read"},
       {"--chart '" + (tmp / "good.chart").string() + "' --set knit.stifness=1",
-       "valid keys: scene.name knit.loop_radius"},
+       "valid keys: knit.loop_radius"},
       {"--chart '" + (tmp / "good.chart").string() + "' --set knit.stabiliser=2",
        "knit.stabiliser = 2: must be in [0, 1]"},
       {"--chart '" + (tmp / "good.chart").string() + "' --set knit.network=bare",

@@ -50,59 +50,12 @@ struct KnitArgs {
   std::string continue_from;  // --continue DIR
 };
 
-// What a knit run integrates, as SavedRun::model (--continue): the chart, one string of stitch
-// letters per course from the bottom, and the knit.* parameters under their --set names (a text
-// key at its default is left out unless it is knit.network, so that state files written before
-// it existed still match).
-nlohmann::json knit_model_keys(const KnitChart& chart, const Scene& scene) {
-  nlohmann::json keys = nlohmann::json::object();
-  std::vector<std::string> courses;
-  for (int c = 0; c < chart.courses; ++c) {
-    std::string row;
-    for (int w = 0; w < chart.wales; ++w) row += static_cast<char>(chart.at(w, c));
-    courses.push_back(row);
-  }
-  keys["chart"] = courses;
-  Scene defaults;
-  for (const Key& k : key_table()) {
-    if (k.model != KeyModel::Knit || k.name == "knit.chart" || k.name == "knit.chart_text")
-      continue;  // the chart is "chart", as its letters
-    if (k.number)
-      keys[k.name] = k.number(const_cast<Scene&>(scene));  // read only
-    else if (k.name == "knit.network" || k.get(scene) != k.get(defaults))
-      keys[k.name] = k.get(scene);
-  }
-  return keys;
-}
-
-// The warnings before a run: no damping, --dt to an adaptive method, an explicit method with yarn
-// contact (docs/knit.md, "What is not met, and why"), paper 2's bare network.
+// The warnings before a run: no damping, --dt to an adaptive method (as drape's), and the knit's
+// own (knit_run_warnings).
 void warn_before_run(const KnitScene& scene, const std::string& integrator,
                      const IntegratorInfo& info, const IntegratorOptions& flags) {
-  const KnitParams& params = scene.params;
-  warn_about_run("knit.damping", params.damping, info, flags, scene.options.t_max);
-  if (params.yarn_contact() && info.explicit_method)
-    warn("yarn contact with " + integrator +
-         ": the chart's first impacts (~10 us in) carry more energy than the barrier holds above "
-         "its core in double precision, so it fails there whatever its step (docs/knit.md, \"What "
-         "is not met, and why\"); equilibrium (the default) and implicit-euler keep every pair "
-         "off its core");
-  if (params.mechanism())
-    warn(std::string(params.network == KnitNetwork::Paper ? "knit.network = paper"
-                                                          : "knit.stabiliser = 0") +
-         ": paper 2's bare network is a mechanism (blocks of fabric shear and swing at no "
-         "energy); its steady state depends on the path (integrator, step, tolerances)");
-}
-
-// One `warning:` line where the yarns came closer than kClearanceWarning r or crossed.
-void warn_about_overlap(const KnitMeasures& m) {
-  if (m.crossings.changed > 0 || m.min_clearance.over_r < kClearanceWarning)
-    warn("yarns overlap: clearance down to " + format_number(m.min_clearance.over_r, 3) +
-         " r (courses " + std::to_string(m.min_clearance.a.course) + " and " +
-         std::to_string(m.min_clearance.b.course) + ", at check " +
-         std::to_string(m.check_min_clearance) + ", t = " + format_number(m.t_min_clearance, 3) +
-         " s), " + std::to_string(m.crossings.changed) + " of " +
-         std::to_string(m.crossings.designed) + " designed crossings changed over/under order");
+  warn_about_run("knit.damping", scene.params.damping, info, flags, scene.options.t_max);
+  for (const std::string& w : knit_run_warnings(scene.params, integrator, info)) warn(w);
 }
 
 std::string human_summary(const KnitScene& scene, const KnitResult& r, const std::string& dir) {
@@ -208,7 +161,7 @@ void run(const KnitArgs& args) {
     remove_stale_output(dir / "steps.csv");
   write_knit_outputs(dir, scene, result, knit_model_keys(scene.chart, input),
                      !args.no_pictures);
-  warn_about_overlap(result.measures);
+  if (const std::string w = knit_overlap_warning(result.measures); !w.empty()) warn(w);
   if (!args.quiet) std::cout << human_summary(scene, result, dir.string()) << std::flush;
   exit_with_run_status("knit", result.stats, interrupt, dir.string());
 }

@@ -56,6 +56,15 @@ struct KnitMeasures {
   CrossingCheck crossings;      // at the end against the rest state (changed -1: not finite)
 };
 
+// The warnings of a knit run before it starts, one line each: an explicit method with yarn
+// contact (it fails at the first impacts: docs/knit.md, "What is not met, and why"), and paper 2's
+// bare network (a mechanism: its steady state depends on the path).
+std::vector<std::string> knit_run_warnings(const KnitParams& params, const std::string& integrator,
+                                           const IntegratorInfo& info);
+// After it: the yarns came closer than kClearanceWarning r or a designed crossing changed its
+// over/under order ("" if neither).
+std::string knit_overlap_warning(const KnitMeasures& measures);
+
 // A knit run's model and start: the chart built, and the state the run starts from.
 struct KnitStart {
   KnitModel model;

@@ -1,6 +1,8 @@
 #include "src/scene/knit_scene.hpp"
 
 #include <stdexcept>
+#include <string>
+#include <vector>
 #include <utility>
 
 #include "src/base/files.hpp"
@@ -38,6 +40,27 @@ KnitChart read_knit_chart(const Scene& scene) {
 KnitScene make_knit_scene(const Scene& scene, KnitChart chart, int frames) {
   return {scene.name,   scene.chart.empty() ? scene.source : scene.chart,
           std::move(chart), scene.knit, scene.options, frames};
+}
+
+nlohmann::json knit_model_keys(const KnitChart& chart, const Scene& scene) {
+  nlohmann::json keys = nlohmann::json::object();
+  std::vector<std::string> courses;
+  for (int c = 0; c < chart.courses; ++c) {
+    std::string row;
+    for (int w = 0; w < chart.wales; ++w) row += static_cast<char>(chart.at(w, c));
+    courses.push_back(row);
+  }
+  keys["chart"] = courses;
+  Scene defaults;
+  for (const Key& k : key_table()) {
+    if (k.model != KeyModel::Knit || k.name == "knit.chart" || k.name == "knit.chart_text")
+      continue;  // the chart is "chart", as its letters
+    if (k.number)
+      keys[k.name] = k.number(const_cast<Scene&>(scene));  // read only
+    else if (k.name == "knit.network" || k.get(scene) != k.get(defaults))
+      keys[k.name] = k.get(scene);
+  }
+  return keys;
 }
 
 }  // namespace knitsim

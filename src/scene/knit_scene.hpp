@@ -7,6 +7,7 @@
 // file: ...", "FILE: chart row 2 (line 2), column 3: ...").
 #pragma once
 
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "models/knit_loops.hpp"
@@ -30,5 +31,11 @@ KnitChart read_knit_chart(const Scene& scene);
 
 // The run's scene: `scene`'s name, knit parameters and run options with its chart, read.
 KnitScene make_knit_scene(const Scene& scene, KnitChart chart, int frames);
+
+// What a knit run integrates, as state.json's model (SavedRun::model, knitsim knit --continue):
+// the chart, one string of stitch letters per course from the bottom, and the knit.* keys of
+// `scene` under their names (a text key at its default is left out unless it is knit.network, so
+// that state files written before it existed still match; the chart keys are the letters).
+nlohmann::json knit_model_keys(const KnitChart& chart, const Scene& scene);
 
 }  // namespace knitsim

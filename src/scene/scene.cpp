@@ -137,9 +137,7 @@ std::vector<Key> make_table() {
       "scene.name", Kind::Text,
       [](Scene& s, const std::string& v) { return is_name(v) ? (s.name = v, true) : false; },
       "a non-empty name of letters, digits, _ and -", [](const Scene& s) { return s.name; },
-      "the label in outputs (default: the built-in name or the file's stem; a knit scene's: "
-      "its chart file's stem)",
-      KeyModel::Both);
+      "the label in outputs (default: the built-in name or the file's stem)");
   number(
       "fabric.width", [](Scene& s) -> double& { return s.params.width; }, "m",
       "side W of the square sample; the model's side is n L0 with n = round(W / L0)");
@@ -575,13 +573,9 @@ Scene load_knit_scene(const std::string& path, const std::vector<std::string>& o
   if (!scene.chart.empty())  // relative to the scene file, as "models/charts/x.chart"
     scene.chart =
         (std::filesystem::path(path).parent_path() / scene.chart).lexically_normal().string();
-  const bool named = std::find(scene.keys_given.begin(), scene.keys_given.end(), "scene.name") !=
-                     scene.keys_given.end();
-  if (!named) {
-    const std::string stem =
-        std::filesystem::path(scene.chart.empty() ? path : scene.chart).stem().string();
-    scene.name = is_name(stem) ? stem : "knit";
-  }
+  const std::string stem =
+      std::filesystem::path(scene.chart.empty() ? path : scene.chart).stem().string();
+  scene.name = is_name(stem) ? stem : "knit";
   for (const std::string& o : overrides) apply_override(scene, KeyModel::Knit, o);
   if (scene.chart.empty() == scene.chart_text.empty())
     throw std::invalid_argument("scene " + path +

@@ -136,9 +136,9 @@ Scene load_scene_text(const std::string& text, const std::string& name, const st
 Scene knit_scene(const std::string& chart, const std::vector<std::string>& overrides);
 
 // A knit scene file (knitsim knit --scene; docs/knit.md, "Running a chart"): the knit's
-// defaults with the file's knit, run and scene keys, then the overrides. knit.chart is taken
-// relative to the file's folder; scene.name defaults to the chart file's stem (the scene file's
-// for an inline chart). Exactly one of knit.chart and knit.chart_text (std::invalid_argument
+// defaults with the file's knit and run keys, then the overrides. knit.chart is taken relative
+// to the file's folder; the scene's name is the chart file's stem (the scene file's for an
+// inline chart). Exactly one of knit.chart and knit.chart_text (std::invalid_argument
 // otherwise). Not validated, as knit_scene.
 Scene load_knit_scene(const std::string& path, const std::vector<std::string>& overrides = {});
 
