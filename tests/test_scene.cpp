@@ -78,12 +78,11 @@ TEST_CASE("built-in scenes load with the paper's sample-1 parameters") {
 }
 
 TEST_CASE("--set overrides change the parameters, in order, parsed by the key's type") {
-  const Scene s =
-      load_scene("four_corner",
-                 {"model.stiffness=900", "model.topology=b", "fabric.areal_density = 58.26",
-                  "model.seed=7", "pins.layout=\"two_corner\"", "pins.span=0.5", "run.t_max=5e3",
-                  "run.equilibrium_tol=1e-6", "scene.name=mine", "model.stiffness=1000"});
-  CHECK(s.params.stiffness == 1000.0);  // the later --set wins
+  const Scene s = load_scene(
+      "four_corner", {"model.stiffness=900", "model.topology=b", "fabric.areal_density = 58.26",
+                      "model.seed=7", "pins.layout=\"two_corner\"", "pins.span=0.5",
+                      "run.t_max=5e3", "run.equilibrium_tol=1e-6", "scene.name=mine"});
+  CHECK(s.params.stiffness == 900.0);  // a key given twice by --set is refused (below)
   CHECK(s.params.topology == 'b');
   CHECK(s.params.areal_density == 58.26);
   CHECK(s.params.seed == 7u);
@@ -232,6 +231,43 @@ TEST_CASE("knit keys are rows of the table: set, validated and refused like the 
         "network has no stabiliser, bending or contact (drop one of them)");
   CHECK(knit_error({"knit.network=paper"}).empty());  // the paper network ignores the defaults
   CHECK(knit_error({"run.position_tol=1"}) == "run.position_tol = 1: must be in (0, 1e-2] m");
+}
+
+TEST_CASE("messages say what was typed: values as given, long text cut, one value per key") {
+  // The value as typed, not as a double prints (100.0000001 printed at 6 digits is 100, which
+  // looks in range).
+  CHECK(knit_error({"knit.contact=100.0000001"}) ==
+        "knit.contact = 100.0000001: must be in [0, 100]");
+  CHECK(load_error("four_corner", {"model.stiffness=-0.0000123456789"}) ==
+        "model.stiffness = -0.0000123456789: must be > 0 N/m");
+  // A value changed after it was typed is shown as it is now.
+  Scene s = load_scene("four_corner", {"model.stiffness=900"});
+  s.params.stiffness = -1.0;
+  CHECK(error_of([&] { s.validate(); }) == "model.stiffness = -1: must be > 0 N/m");
+  // Long keys and values: the first 60 characters, "...", the length.
+  const std::string long_key(500000, 'k');
+  const std::string unknown = load_error("four_corner", {long_key + "=1"});
+  CHECK(unknown.rfind(std::string(60, 'k') + "... (500000 characters): unknown key; valid keys: ",
+                      0) == 0);
+  CHECK(unknown.size() < 1000);
+  const std::string long_value = "-" + std::string(200, '1');
+  CHECK(load_error("four_corner", {"model.stiffness=" + long_value}) ==
+        "model.stiffness = " + long_value.substr(0, 60) + "... (201 characters): must be > 0 N/m");
+  CHECK(load_error("four_corner", {"pins.layout=" + std::string(100, 'x')}) ==
+        "pins.layout = " + std::string(60, 'x') +
+            "... (100 characters): must be one of four_corner, two_corner");
+  // The same key twice among the --set is refused (the first value would vanish unchecked);
+  // a --set over the scene file's value is what --set is for.
+  CHECK(load_error("four_corner", {"model.stiffness=-1", "model.stiffness=900"}) ==
+        "--set model.stiffness: given twice (-1, then 900); give each key once");
+  CHECK(knit_error({"knit.contact=0", "knit.damping=1", "knit.contact=5"}) ==
+        "--set knit.contact: given twice (0, then 5); give each key once");
+  CHECK(load_scene("four_corner", {"model.stiffness=900"}).params.stiffness == 900.0);
+  // An empty key says so, with the form expected.
+  CHECK(load_error("four_corner", {"=5"}) ==
+        "--set =5: the key is empty; expected key=value, e.g. model.stiffness=900");
+  CHECK(knit_error({" =5"}) ==
+        "--set  =5: the key is empty; expected key=value, e.g. knit.contact=0");
 }
 
 TEST_CASE("the target scene follows the pins, not the scene's name") {

@@ -101,6 +101,14 @@ TEST_CASE("knit --set: messages name the keys the user types, nearest key sugges
   expect_bad_input(base + "--set run.position_tol=1",
                    "run.position_tol = 1: must be in (0, 1e-2] m", tmp);
   expect_bad_input(base + "--rtol nan", "--rtol = nan: must be in (0, 1)", tmp);
+  // Values as typed (printed as a double, 100.0000001 was "100", which looks in range); a key
+  // given twice by --set is refused; an empty key says so.
+  expect_bad_input(base + "--set knit.contact=100.0000001",
+                   "knit.contact = 100.0000001: must be in [0, 100]", tmp);
+  expect_bad_input(base + "--set knit.contact=-1 --set knit.contact=5",
+                   "--set knit.contact: given twice (-1, then 5); give each key once", tmp);
+  expect_bad_input(base + "--set =5",
+                   "--set =5: the key is empty; expected key=value, e.g. knit.contact=0", tmp);
   CHECK(!fs::exists(tmp.path / "out"));
 }
 
@@ -112,6 +120,8 @@ TEST_CASE("drape: NaN and inf in --set, scene files and flags name the key and t
   expect_bad_input("drape --set pins.span=nan" + out, "pins.span = nan: must be a number in (0, 1]",
                    tmp);
   expect_bad_input("drape --rtol inf" + out, "--rtol = inf: must be in (0, 1)", tmp);
+  expect_bad_input("drape --set model.stiffness=-1 --set model.stiffness=900" + out,
+                   "--set model.stiffness: given twice (-1, then 900); give each key once", tmp);
   // An infinite wall-clock cap would be no cap at all (0 is the way to say so).
   expect_bad_input("drape --max-wall inf" + out,
                    "--max-wall = inf: must be >= 0 s and finite (0 = no cap)", tmp);

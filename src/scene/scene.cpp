@@ -339,13 +339,28 @@ std::vector<Key> make_table() {
   return k;
 }
 
+// Text the user typed, for a one-line message: past kShownMax bytes, its first kShownHead
+// (to a whole UTF-8 character) and "... (N characters)"; then printable().
+constexpr std::size_t kShownMax = 80, kShownHead = 60;
+std::string shown_cut(const std::string& text) {
+  if (text.size() <= kShownMax) return printable(text);
+  std::size_t head = kShownHead;
+  while (head > 0 && (static_cast<unsigned char>(text[head]) & 0xC0) == 0x80) --head;
+  return printable(text.substr(0, head)) + "... (" + std::to_string(text.size()) + " characters)";
+}
+
 // Whether `key` is one of `model`'s (Both: of any model).
 bool applies(const Key& key, KeyModel model) {
   return key.model == model || key.model == KeyModel::Both || model == KeyModel::Both;
 }
 
 [[noreturn]] void unknown_key(const std::string& key, KeyModel model, const std::string& where) {
-  throw std::invalid_argument(unknown_key_message(key, scene_keys(model)) + where);
+  // A long key is cut first: its message stays one short line, and no key is that long.
+  const std::string shown =
+      key.size() <= kShownMax
+          ? key
+          : key.substr(0, kShownHead) + "... (" + std::to_string(key.size()) + " characters)";
+  throw std::invalid_argument(unknown_key_message(shown, scene_keys(model)) + where);
 }
 
 // The key `name` of `model`'s scenes.
@@ -385,7 +400,7 @@ std::string accepted(const Key& key) {
 }
 
 [[noreturn]] void bad_value(const Key& key, const std::string& shown, const std::string& where) {
-  throw std::invalid_argument(key.name + " = " + printable(shown) + ": must be " + accepted(key) +
+  throw std::invalid_argument(key.name + " = " + shown_cut(shown) + ": must be " + accepted(key) +
                               where);
 }
 
@@ -417,19 +432,40 @@ std::string trim(const std::string& s) {
   return s.substr(b, s.find_last_not_of(" \t") - b + 1);
 }
 
-void apply_override(Scene& scene, KeyModel model, const std::string& assignment) {
+// Applies one "key=value"; returns its key.
+const Key& apply_override(Scene& scene, KeyModel model, const std::string& assignment) {
   const size_t eq = assignment.find('=');
+  const std::string example = model == KeyModel::Knit ? "knit.contact=0" : "model.stiffness=900";
   if (eq == std::string::npos)
-    throw std::invalid_argument(
-        "--set " + printable(assignment) + ": expected key=value, e.g. " +
-        (model == KeyModel::Knit ? "knit.contact=0" : "model.stiffness=900"));
+    throw std::invalid_argument("--set " + shown_cut(assignment) + ": expected key=value, e.g. " +
+                                example);
   const std::string name = trim(assignment.substr(0, eq));
+  if (name.empty())
+    throw std::invalid_argument("--set " + shown_cut(assignment) +
+                                ": the key is empty; expected key=value, e.g. " + example);
   std::string value = trim(assignment.substr(eq + 1));
   const Key& key = find_key(name, model, "");
   if (key.kind == Kind::Text && value.size() >= 2 && value.front() == '"' && value.back() == '"')
     value = value.substr(1, value.size() - 2);
   set_from_text(scene, key, value, value, "");
   scene.keys_given.push_back(key.name);
+  return key;
+}
+
+// Applies the --set overrides in order. A key may come from the scene file and again from a
+// --set (the --set wins: that is what it is for), but not twice from --set: the first value
+// would vanish unchecked (docs/scenes.md, "Overrides").
+void apply_overrides(Scene& scene, KeyModel model, const std::vector<std::string>& overrides) {
+  std::map<std::string, std::string> given;  // key -> its value as the --set typed it
+  for (const std::string& o : overrides) {
+    const Key& key = apply_override(scene, model, o);
+    const std::string value = scene.typed[key.name];
+    const auto [first, fresh] = given.emplace(key.name, value);
+    if (!fresh)
+      throw std::invalid_argument("--set " + key.name + ": given twice (" +
+                                  shown_cut(first->second) + ", then " + shown_cut(value) +
+                                  "); give each key once");
+  }
 }
 
 // A TOML value as it appears in the file, for messages.
@@ -519,7 +555,7 @@ void rethrow_as_typed(const std::invalid_argument& e, const Scene* scene) {
         if (v == k.number(const_cast<Scene&>(*scene)) && *end == '\0') value = typed->second;
       }
     }
-    throw InvalidField(k.label(), value, bad->accepted());
+    throw InvalidField(k.label(), shown_cut(value), bad->accepted());
   }
   throw e;
 }
@@ -550,7 +586,7 @@ Scene load_scene_text(const std::string& text, const std::string& name, const st
   scene.name = name;
   scene.source = source;
   apply_toml(scene, KeyModel::Drape, text, source == "built-in" ? "built-in " + name : source);
-  for (const std::string& o : overrides) apply_override(scene, KeyModel::Drape, o);
+  apply_overrides(scene, KeyModel::Drape, overrides);
   scene.validate();
   return scene;
 }
@@ -560,7 +596,7 @@ Scene knit_scene(const std::string& chart, const std::vector<std::string>& overr
   scene.name = std::filesystem::path(chart).stem().string();
   scene.source = "command line";
   scene.chart = chart;
-  for (const std::string& o : overrides) apply_override(scene, KeyModel::Knit, o);
+  apply_overrides(scene, KeyModel::Knit, overrides);
   return scene;
 }
 
@@ -576,7 +612,7 @@ Scene load_knit_scene(const std::string& path, const std::vector<std::string>& o
   const std::string stem =
       std::filesystem::path(scene.chart.empty() ? path : scene.chart).stem().string();
   scene.name = is_name(stem) ? stem : "knit";
-  for (const std::string& o : overrides) apply_override(scene, KeyModel::Knit, o);
+  apply_overrides(scene, KeyModel::Knit, overrides);
   if (scene.chart.empty() == scene.chart_text.empty())
     throw std::invalid_argument("scene " + path +
                                 ": give one of knit.chart (a chart file, relative to the scene "
