@@ -2,9 +2,9 @@
 // (src/scene/knit_run.hpp), its outputs written by src/io/knit_outputs.hpp. What the outputs,
 // the frames, the networks and the velocity tolerance mean: docs/knit.md.
 //
-// Order of work, as drape's: parse the flags, read and parse the chart, apply --set, check the
-// parameters, the run options and the integrator name, build the model, read --continue; only
-// then create --out, run and write. Bad input (a bad chart: one line naming row and column)
+// Order of work, as drape's: parse the flags, read the chart and the keys (--chart and --set, or
+// the knit scene --scene and --set), check the parameters, the run options and the integrator
+// name, build the model, read --continue; only then create --out, run and write. Bad input (a bad chart: one line naming row and column)
 // therefore writes nothing and exits 2; a run that ends in any status but equilibrium still
 // writes everything and exits 3 -- or 128 + the signal (130, 143) when Ctrl-C or SIGTERM stopped
 // it (status interrupted, src/cli/interrupt.hpp).
@@ -12,10 +12,8 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
-#include <nlohmann/json.hpp>
 #include <stdexcept>
 
-#include "models/knit_loops.hpp"
 #include "src/base/files.hpp"
 #include "src/base/table.hpp"
 #include "src/base/text.hpp"
