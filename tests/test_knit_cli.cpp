@@ -5,7 +5,9 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "models/knit_loops.hpp"
 #include "tests/cli_runner.hpp"
@@ -40,6 +42,63 @@ int run_small_chart(const TempDir& tmp, const std::string& args, std::string& er
 }
 
 }  // namespace
+
+// knit.pins and knit.gravity reach the model through --set: a plain 5 x 3 chart hung from its
+// top edge settles, its top edge stays where it was and its bottom edge hangs below its rest
+// height and below where the same chart settles without gravity.
+TEST_CASE("knitsim knit: knit.pins=top with knit.gravity=on hangs the chart down") {
+  TempDir tmp("knit-cli-hang");
+  std::ofstream(tmp.path / "plain.chart") << "KKKKK\nKKKKK\nKKKKK\n";
+  // points.csv as rows id,wale,level,x,y,z,x0,y0,z0.
+  auto settle = [&tmp](const std::string& sets) {
+    std::string err;
+    const int status = run_knit("--chart '" + (tmp.path / "plain.chart").string() + "' " + sets +
+                                    " --set knit.pins=top --set knit.contact=0 --no-pictures "
+                                    "--quiet --out '" +
+                                    (tmp.path / "out").string() + "'",
+                                err);
+    INFO(err);
+    REQUIRE(status == 0);
+    const nlohmann::json summary =
+        nlohmann::json::parse(std::ifstream(tmp.path / "out" / "summary.json"));
+    CHECK(summary["status"] == "equilibrium");
+    std::ifstream points(tmp.path / "out" / "points.csv");
+    std::string line;
+    std::getline(points, line);
+    REQUIRE(line == "id,wale,level,x,y,z,x0,y0,z0");
+    std::vector<std::vector<double>> rows;
+    while (std::getline(points, line)) {
+      std::vector<double> f;
+      std::stringstream fields(line);
+      for (std::string v; std::getline(fields, v, ',');) f.push_back(std::stod(v));
+      rows.push_back(f);
+    }
+    return rows;
+  };
+  const auto hung = settle("--set knit.gravity=on");
+  const auto still = settle("--set knit.gravity=off");
+  REQUIRE(hung.size() == still.size());
+  int top_level = 0;
+  for (const auto& f : hung) top_level = std::max(top_level, static_cast<int>(f[2]));
+  int bottom = 0, top = 0;
+  for (std::size_t i = 0; i < hung.size(); ++i) {
+    const auto& f = hung[i];
+    if (f[2] == 0) {  // the free bottom edge
+      CHECK(f[4] < f[7]);
+      CHECK(f[4] < still[i][4]);
+      ++bottom;
+    } else if (f[2] == top_level) {  // the pinned top edge
+      CHECK(f[4] == f[7]);
+      ++top;
+    }
+  }
+  CHECK(bottom == 5);
+  CHECK(top == 5);
+  std::string err;
+  CHECK(run_small_chart(tmp, "--set knit.pins=middle", err) == 2);
+  CHECK(err.find("knit.pins = middle: must be one of none, bottom, top, both") !=
+        std::string::npos);
+}
 
 TEST_CASE("knitsim knit: a small tuck chart settles and its outputs agree with the model") {
   const fs::path tmp = fs::temp_directory_path() / ("knitsim-knit-cli-" + std::to_string(getpid()));
@@ -393,8 +452,8 @@ TEST_CASE("knitsim knit: a scene whose chart cannot be read exits 2 with one lin
   };
   const std::vector<Case> cases = {
       {"--scene '" + (tmp.path / "lost.toml").string() + "'",
-       "knit.chart = missing.chart (" + (tmp.path / "lost.toml").string() +
-           " line 2): cannot read the file"},
+       "knit.chart = 'missing.chart' (" + (tmp.path / "lost.toml").string() +
+           "): cannot read the file"},
       {"--scene '" + (tmp.path / "both.toml").string() + "'", "give one of knit.chart"},
       {"--scene '" + (tmp.path / "nope.toml").string() + "'", "cannot read"},
       {"--scene '" + (tmp.path / "lost.toml").string() + "' --chart x.chart",
