@@ -11,8 +11,9 @@
 What is generated:
   <command>.md     `knitsim <command> --help`, every flag with its default (and `knitsim --help`
                    in knitsim.md)
-  scene_keys.md    `knitsim list keys --format markdown`: every scene key, unit, default,
-                   accepted values
+  scene_keys.md    `knitsim list keys --format markdown`: every parameter (scene key, or the
+                   flag of a run option), the model it applies to, unit, default, accepted
+                   values, meaning
   integrators.md   `knitsim list integrators --format markdown`
   outputs.md       the files quick runs of drape, knit, fit (ICA and LM) and targets write: each
                    CSV's header, each JSON file's top-level keys, and summary.json's `units` map
@@ -143,8 +144,12 @@ def generate(knitsim):
     pages = {"knitsim.md": help_page(knitsim, None)}
     for command in COMMANDS:
         pages[command + ".md"] = help_page(knitsim, command)
-    pages["scene_keys.md"] = (HEADER + "# Scene keys\n\n`knitsim list keys` (units: `-` a text "
-                              "key, `1` a ratio). What they mean and how a scene file is read: "
+    pages["scene_keys.md"] = (HEADER + "# Scene keys\n\n`knitsim list keys`: every parameter, "
+                              "one row each (units: `-` a text key, `1` a ratio or a count). A "
+                              "key is set in a scene file or by `--set key=value`; a row named "
+                              "by its flag is a run option set on the command line only. "
+                              "`model` says which command reads it: drape, knit, or both. What "
+                              "they mean and how a scene file is read: "
                               "[../scenes.md](../scenes.md).\n\n"
                               + run(knitsim, ["list", "keys", "--format", "markdown"]))
     pages["integrators.md"] = (HEADER + "# Integrators\n\n`knitsim list integrators`. What each "

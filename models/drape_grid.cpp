@@ -5,17 +5,9 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "src/core/invalid_field.hpp"
+
 namespace knitsim {
-
-namespace {
-
-[[noreturn]] void bad(const std::string& field, double value, const std::string& range) {
-  std::ostringstream os;
-  os << field << " = " << value << ": " << range;
-  throw std::invalid_argument(os.str());
-}
-
-}  // namespace
 
 const char* to_string(PinLayout layout) {
   return layout == PinLayout::FourCorner ? "four_corner" : "two_corner";
@@ -42,39 +34,39 @@ int DrapeParams::cells() const {
 }
 
 void DrapeParams::validate() const {
-  if (!(width > 0.0) || !std::isfinite(width)) bad("fabric.width", width, "must be > 0 m");
+  if (!(width > 0.0) || !std::isfinite(width)) bad_field("fabric.width", width, "must be > 0 m");
   if (!(areal_density > 0.0) || !std::isfinite(areal_density))
-    bad("fabric.areal_density", areal_density, "must be > 0 g/m^2");
+    bad_field("fabric.areal_density", areal_density, "must be > 0 g/m^2");
   if (!(stiffness > 0.0) || !std::isfinite(stiffness))
-    bad("model.stiffness", stiffness, "must be > 0 N/m");
+    bad_field("model.stiffness", stiffness, "must be > 0 N/m");
   if (!(damping >= 0.0) || !std::isfinite(damping))
-    bad("model.damping", damping, "must be >= 0 N s/m");
+    bad_field("model.damping", damping, "must be >= 0 N s/m");
   if (!(elongation_limit >= 0.0) || !std::isfinite(elongation_limit))
-    bad("model.elongation_limit", elongation_limit, "must be >= 0 percent (0 disables it)");
+    bad_field("model.elongation_limit", elongation_limit, "must be >= 0 percent (0 disables it)");
   if (!(natural_length > 0.0) || !std::isfinite(natural_length))
-    bad("model.natural_length", natural_length, "must be > 0 m");
+    bad_field("model.natural_length", natural_length, "must be > 0 m");
   if (!(natural_length <= width / 1.5)) {  // round(W / L0) >= 2 cells per side
     std::ostringstream os;
     os << "must be <= fabric.width / 1.5 = " << width / 1.5 << " m (2 cells per side at least)";
-    bad("model.natural_length", natural_length, os.str());
+    bad_field("model.natural_length", natural_length, os.str());
   }
   if (topology != 'a' && topology != 'b' && topology != 'c')
     throw std::invalid_argument(std::string("model.topology = ") + topology +
                                 ": must be one of a, b, c");
-  if (!(pin_span > 0.0 && pin_span <= 1.0)) bad("pins.span", pin_span, "must be in (0, 1]");
+  if (!(pin_span > 0.0 && pin_span <= 1.0)) bad_field("pins.span", pin_span, "must be in (0, 1]");
   if (!(pin_move_time >= 0.0) || !std::isfinite(pin_move_time))
-    bad("pins.move_time", pin_move_time, "must be >= 0 s");
+    bad_field("pins.move_time", pin_move_time, "must be >= 0 s");
   if (!(perturbation >= 0.0) || !std::isfinite(perturbation))
-    bad("model.perturbation", perturbation, "must be >= 0 m");
+    bad_field("model.perturbation", perturbation, "must be >= 0 m");
   if ((symmetry == DrapeSymmetry::Quarter || symmetry == DrapeSymmetry::Eighth) &&
       layout != PinLayout::FourCorner)
     throw std::invalid_argument(std::string("model.symmetry = ") + to_string(symmetry) +
                                 ": needs pins.layout = four_corner (two_corner is not symmetric "
                                 "about the mid-plane y = W/2)");
   if (symmetry != DrapeSymmetry::None && symmetry != DrapeSymmetry::Auto && perturbation != 0.0)
-    bad("model.perturbation", perturbation,
-        std::string("must be 0 with model.symmetry = ") + to_string(symmetry) +
-            " (a perturbed start is not mirror-symmetric)");
+    bad_field("model.perturbation", perturbation,
+              std::string("must be 0 with model.symmetry = ") + to_string(symmetry) +
+                  " (a perturbed start is not mirror-symmetric)");
   const double n = std::floor(width / natural_length + 0.5);
   if ((n + 1) * (n + 1) > static_cast<double>(max_particles)) {
     std::ostringstream os;

@@ -6,6 +6,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "src/core/invalid_field.hpp"
+
 namespace knitsim {
 
 namespace {
@@ -23,12 +25,6 @@ const char* const kAcceptedLetters = "accepted letters: K knit, T tuck, M miss";
 const char* const kChartRules =
     "chart rules: no tuck or miss in the bottom course or on an edge wale, no miss in the top "
     "course";
-
-[[noreturn]] void bad(const std::string& field, double value, const std::string& range) {
-  std::ostringstream os;
-  os << field << " = " << value << ": " << range;
-  throw std::invalid_argument(os.str());
-}
 
 // "chart row R (line L), column C: <what> (<accepts>)" with R counted from the top as drawn,
 // L the row's line in the file (row_lines, top row first; without them no line).
@@ -279,26 +275,26 @@ KnitChart parse_knit_chart(const std::string& text) {
 
 void KnitParams::validate() const {
   if (!(loop_radius > 0.0) || !std::isfinite(loop_radius))
-    bad("knit.loop_radius", loop_radius, "must be > 0 m");
+    bad_field("knit.loop_radius", loop_radius, "must be > 0 m");
   if (!(wale_stiffness > 0.0) || !std::isfinite(wale_stiffness))
-    bad("knit.wale_stiffness", wale_stiffness, "must be > 0 N/m");
+    bad_field("knit.wale_stiffness", wale_stiffness, "must be > 0 N/m");
   if (!(course_stiffness > 0.0) || !std::isfinite(course_stiffness))
-    bad("knit.course_stiffness", course_stiffness, "must be > 0 N/m");
+    bad_field("knit.course_stiffness", course_stiffness, "must be > 0 N/m");
   if (!(damping >= 0.0) || !std::isfinite(damping))
-    bad("knit.damping", damping, "must be >= 0 N s/m");
+    bad_field("knit.damping", damping, "must be >= 0 N s/m");
   if (!(areal_density > 0.0) || !std::isfinite(areal_density))
-    bad("knit.areal_density", areal_density, "must be > 0 g/m^2");
+    bad_field("knit.areal_density", areal_density, "must be > 0 g/m^2");
   if (!(stabiliser_ratio >= 0.0 && stabiliser_ratio <= 1.0))
-    bad("knit.stabiliser", stabiliser_ratio, "must be in [0, 1]");
+    bad_field("knit.stabiliser", stabiliser_ratio, "must be in [0, 1]");
   if (!(bending_ratio >= 0.0 && bending_ratio <= 10.0))
-    bad("knit.bending", bending_ratio, "must be in [0, 10]");
+    bad_field("knit.bending", bending_ratio, "must be in [0, 10]");
   if (!(contact_ratio >= 0.0 && contact_ratio <= 100.0))
-    bad("knit.contact", contact_ratio, "must be in [0, 100]");
+    bad_field("knit.contact", contact_ratio, "must be in [0, 100]");
   if (contact_ratio > 0.0 && bending_ratio > 0.0 && !mechanism())
-    bad("knit.bending", bending_ratio,
-        "must be 0 with knit.contact > 0 (the contact, on by default, keeps the chart in its "
-        "plane; set knit.contact=0 to bend it out of the plane)");
-  if (max_points < 1) bad("max_points", static_cast<double>(max_points), "must be >= 1");
+    bad_field("knit.bending", bending_ratio,
+              "must be 0 with knit.contact > 0 (the contact, on by default, keeps the chart in its "
+              "plane; set knit.contact=0 to bend it out of the plane)");
+  if (max_points < 1) bad_field("max_points", static_cast<double>(max_points), "must be >= 1");
 }
 
 const char* to_string(KnitNetwork network) {
@@ -574,7 +570,7 @@ std::vector<NurbsCurve> course_curves(const KnitModel& m, const std::vector<Vec3
 
 std::vector<CurveSamples> course_centerlines(const KnitModel& m, const std::vector<Vec3>& positions,
                                              int samples_per_point) {
-  if (samples_per_point < 1) bad("samples_per_point", samples_per_point, "must be >= 1");
+  if (samples_per_point < 1) bad_field("samples_per_point", samples_per_point, "must be >= 1");
   std::vector<CurveSamples> out;
   for (const NurbsCurve& c : course_curves(m, positions)) {
     const int intervals = static_cast<int>(c.control.size()) - 1;

@@ -39,6 +39,7 @@
 
 #include "solvers/factories.hpp"
 #include "solvers/sundials_common.hpp"
+#include "src/core/invalid_field.hpp"
 
 namespace knitsim::detail {
 
@@ -120,10 +121,9 @@ class Arkode final : public Integrator {
     const bool erk = method_ == ArkMethod::Erk;
     const int lo = erk ? 2 : 3, hi = erk ? 8 : 5;
     if (opt.max_order != 0 && (opt.max_order < lo || opt.max_order > hi)) {
-      std::ostringstream os;
-      os << "max_order = " << opt.max_order << ": must be 0 (default 4) or in " << lo << ".." << hi
-         << " for " << info_.name;
-      throw std::invalid_argument(os.str());
+      bad_field("max_order", opt.max_order,
+                "must be 0 (default 4) or in " + std::to_string(lo) + ".." + std::to_string(hi) +
+                    " for " + info_.name);
     }
     const int n = sys.dof();
     s_.reset();  // free the previous run's SUNDIALS objects before making new ones

@@ -74,6 +74,7 @@
 #include "solvers/schur_matrix.hpp"
 #include "solvers/sundials_common.hpp"
 #include "solvers/symmetric_factor.hpp"
+#include "src/core/invalid_field.hpp"
 
 namespace knitsim::detail {
 
@@ -293,10 +294,9 @@ class Cvode final : public Integrator {
     const bool bdf = method_ != CvodeMethod::AdamsFixedPoint;
     const int order_cap = bdf ? 5 : 12;
     if (opt.max_order > order_cap) {
-      std::ostringstream os;
-      os << "max_order = " << opt.max_order << ": must be in 0.." << order_cap << " for "
-         << info_.name << " (0 = " << order_cap << ")";
-      throw std::invalid_argument(os.str());
+      bad_field("max_order", opt.max_order,
+                "must be in 0.." + std::to_string(order_cap) + " for " + info_.name +
+                    " (0 = " + std::to_string(order_cap) + ")");
     }
     if (method_ == CvodeMethod::BdfDense && 2L * n > kDenseLimit) {
       std::ostringstream os;

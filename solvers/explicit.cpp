@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "solvers/factories.hpp"
+#include "src/core/invalid_field.hpp"
 
 namespace knitsim::detail {
 
@@ -45,10 +46,9 @@ class FixedStepExplicit : public Integrator {
     dt_ = opt.dt > 0.0 ? opt.dt : opt.dt_safety * dt_predicted_;
     if (!(dt_ > 0.0) || !std::isfinite(dt_)) {
       std::ostringstream os;
-      os << "dt = 0 (automatic): " << info_.name
-         << " has no stable step for this system (predicted limit " << dt_predicted_
+      os << info_.name << " has no stable step for this system (predicted limit " << dt_predicted_
          << " s); give dt > 0 explicitly";
-      throw std::invalid_argument(os.str());
+      throw InvalidField("dt", "0 (automatic)", os.str());
     }
     prepare();
   }

@@ -13,6 +13,7 @@
 
 #include "solvers/equilibrium_check.hpp"
 #include "solvers/factories.hpp"
+#include "src/core/invalid_field.hpp"
 
 namespace knitsim {
 
@@ -33,12 +34,6 @@ constexpr long kProbeEvery = 50;
 constexpr double kEnergyRoundoff = 1e-9;
 // Fewer steps than this across the pins' motion: the energy check is inconclusive (below).
 constexpr long kMotionSteps = 10;
-
-[[noreturn]] void bad_option(const std::string& field, double value, const std::string& range) {
-  std::ostringstream os;
-  os << field << " = " << value << ": " << range;
-  throw std::invalid_argument(os.str());
-}
 
 struct Entry {
   IntegratorInfo info;
@@ -72,36 +67,36 @@ const std::vector<Entry>& registry() {
 }  // namespace
 
 void IntegratorOptions::validate() const {
-  if (!(rtol > 0.0 && rtol < 1.0)) bad_option("rtol", rtol, "must be in (0, 1)");
-  if (!(atol > 0.0) || !std::isfinite(atol)) bad_option("atol", atol, "must be > 0");
+  if (!(rtol > 0.0 && rtol < 1.0)) bad_field("rtol", rtol, "must be in (0, 1)");
+  if (!(atol > 0.0) || !std::isfinite(atol)) bad_field("atol", atol, "must be > 0");
   if (!(velocity_atol >= 0.0) || !std::isfinite(velocity_atol))
-    bad_option("velocity_atol", velocity_atol, "must be >= 0 m/s and finite (0 = same as atol)");
-  if (!(dt >= 0.0) || !std::isfinite(dt)) bad_option("dt", dt, "must be >= 0 s (0 = automatic)");
+    bad_field("velocity_atol", velocity_atol, "must be >= 0 m/s and finite (0 = same as atol)");
+  if (!(dt >= 0.0) || !std::isfinite(dt)) bad_field("dt", dt, "must be >= 0 s (0 = automatic)");
   if (!(dt_safety > 0.0 && dt_safety <= 1.0))
-    bad_option("dt_safety", dt_safety, "must be in (0, 1]");
+    bad_field("dt_safety", dt_safety, "must be in (0, 1]");
   if (max_order < 0 || max_order > 12)
-    bad_option("max_order", max_order, "must be in 0..12 (0 = method default)");
-  if (max_steps <= 0) bad_option("max_steps", static_cast<double>(max_steps), "must be > 0");
+    bad_field("max_order", max_order, "must be in 0..12 (0 = method default)");
+  if (max_steps <= 0) bad_field("max_steps", static_cast<double>(max_steps), "must be > 0");
   // Bounded where the adaptive integrators still work: CVODE and ARKODE take t_max as their
   // output and stop time, and their first-step heuristic fails beyond ~1e21 s (CV_ERR_FAILURE
   // at t = 0) or at 1e-300 s ("tstop is behind current t").
-  if (!(t_max >= 1e-9 && t_max <= 1e15)) bad_option("t_max", t_max, "must be in [1e-9, 1e15] s");
+  if (!(t_max >= 1e-9 && t_max <= 1e15)) bad_field("t_max", t_max, "must be in [1e-9, 1e15] s");
   if (!(equilibrium_tol > 0.0) || !std::isfinite(equilibrium_tol))
-    bad_option("equilibrium_tol", equilibrium_tol, "must be > 0");
+    bad_field("equilibrium_tol", equilibrium_tol, "must be > 0");
   if (!(position_tol > 0.0 && position_tol <= 1e-2))
-    bad_option("position_tol", position_tol, "must be in (0, 1e-2] m");
+    bad_field("position_tol", position_tol, "must be in (0, 1e-2] m");
   if (!(max_wall_seconds >= 0.0) || !std::isfinite(max_wall_seconds))
-    bad_option("max_wall_seconds", max_wall_seconds, "must be >= 0 s and finite (0 = no cap)");
+    bad_field("max_wall_seconds", max_wall_seconds, "must be >= 0 s and finite (0 = no cap)");
   if (check_every < 0)
-    bad_option("check_every", static_cast<double>(check_every), "must be >= 0 (0 = automatic)");
+    bad_field("check_every", static_cast<double>(check_every), "must be >= 0 (0 = automatic)");
   if (!(runaway_position > 0.0) || !std::isfinite(runaway_position))
-    bad_option("runaway_position", runaway_position, "must be > 0 m and finite");
+    bad_field("runaway_position", runaway_position, "must be > 0 m and finite");
   if (max_restarts < 0 || max_restarts > 1000)
-    bad_option("max_restarts", max_restarts, "must be in 0..1000 (0 = never restart)");
+    bad_field("max_restarts", max_restarts, "must be in 0..1000 (0 = never restart)");
   if (krylov_dim < 0 || krylov_dim > 500)
-    bad_option("krylov_dim", krylov_dim, "must be in 0..500 (0 = default)");
+    bad_field("krylov_dim", krylov_dim, "must be in 0..500 (0 = default)");
   if (!(krylov_eps_lin > 0.0 && krylov_eps_lin <= 1.0))
-    bad_option("krylov_eps_lin", krylov_eps_lin, "must be in (0, 1]");
+    bad_field("krylov_eps_lin", krylov_eps_lin, "must be in (0, 1]");
 }
 
 const char* to_string(IntegratorOptions::NewtonSolver s) {

@@ -394,16 +394,22 @@ TEST_CASE("knitsim list keys: every scene key with its unit, default and accepte
   TempDir tmp("list-keys");
   const Run text = run_knitsim("list keys", tmp);
   REQUIRE(text.status == 0);
-  CHECK(lines(text.out).size() == 1 + scene_keys().size());
+  CHECK(lines(text.out).size() == 1 + scene_key_table().rows.size());
   for (const std::string& key : scene_keys()) CHECK(text.out.find(key) != std::string::npos);
+  // The knit's keys and the run options' flags too, each saying which model reads it.
+  for (const std::string& key : scene_keys(KeyModel::Knit))
+    CHECK(text.out.find(key) != std::string::npos);
+  CHECK(text.out.find("--eps-lin") != std::string::npos);
   // The ranges are the validators' own, the defaults sample 1's.
   CHECK(text.out.find("> 0 N/m") != std::string::npos);
   CHECK(text.out.find("a = structural + shear + bending, b = structural + shear, c = structural "
                       "+ bending") != std::string::npos);
   const Run md = run_knitsim("list keys --format markdown", tmp);
   REQUIRE(md.status == 0);
-  CHECK(md.out.rfind("| key | unit | default | accepted | meaning |", 0) == 0);
-  CHECK(md.out.find("| model.stiffness | N/m | 852 | > 0 N/m |") != std::string::npos);
+  CHECK(md.out.rfind("| key | model | unit | default | accepted | meaning |", 0) == 0);
+  CHECK(md.out.find("| model.stiffness | drape | N/m | 852 | > 0 N/m |") != std::string::npos);
+  CHECK(md.out.find("| run.t_max | both | s | 1e+07 | in [1e-9, 1e15] s |") != std::string::npos);
+  CHECK(md.out.find("| --rtol | both | 1 | 1e-06 | in (0, 1) |") != std::string::npos);
   // drape --help lists the keys and defines the topologies.
   const Run help = run_knitsim("drape --help", tmp);
   CHECK(help.out.find("model.elongation_limit") != std::string::npos);

@@ -1,11 +1,13 @@
-// `knitsim knit` against the command-line contract (docs/commands.md): a settled small chart writes
-// outputs that agree with the model; a bad chart exits 2 with one line naming row and column
-// and writes nothing.
+// `knitsim knit` against the command-line contract (docs/commands.md): a settled small chart
+// writes outputs that agree with the model; a knit scene writes what --chart writes; a bad chart
+// exits 2 with one line naming row and column and writes nothing.
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "models/knit_loops.hpp"
 #include "tests/cli_runner.hpp"
@@ -40,6 +42,63 @@ int run_small_chart(const TempDir& tmp, const std::string& args, std::string& er
 }
 
 }  // namespace
+
+// knit.pins and knit.gravity reach the model through --set: a plain 5 x 3 chart hung from its
+// top edge settles, its top edge stays where it was and its bottom edge hangs below its rest
+// height and below where the same chart settles without gravity.
+TEST_CASE("knitsim knit: knit.pins=top with knit.gravity=on hangs the chart down") {
+  TempDir tmp("knit-cli-hang");
+  std::ofstream(tmp.path / "plain.chart") << "KKKKK\nKKKKK\nKKKKK\n";
+  // points.csv as rows id,wale,level,x,y,z,x0,y0,z0.
+  auto settle = [&tmp](const std::string& sets) {
+    std::string err;
+    const int status = run_knit("--chart '" + (tmp.path / "plain.chart").string() + "' " + sets +
+                                    " --set knit.pins=top --set knit.contact=0 --no-pictures "
+                                    "--quiet --out '" +
+                                    (tmp.path / "out").string() + "'",
+                                err);
+    INFO(err);
+    REQUIRE(status == 0);
+    const nlohmann::json summary =
+        nlohmann::json::parse(std::ifstream(tmp.path / "out" / "summary.json"));
+    CHECK(summary["status"] == "equilibrium");
+    std::ifstream points(tmp.path / "out" / "points.csv");
+    std::string line;
+    std::getline(points, line);
+    REQUIRE(line == "id,wale,level,x,y,z,x0,y0,z0");
+    std::vector<std::vector<double>> rows;
+    while (std::getline(points, line)) {
+      std::vector<double> f;
+      std::stringstream fields(line);
+      for (std::string v; std::getline(fields, v, ',');) f.push_back(std::stod(v));
+      rows.push_back(f);
+    }
+    return rows;
+  };
+  const auto hung = settle("--set knit.gravity=on");
+  const auto still = settle("--set knit.gravity=off");
+  REQUIRE(hung.size() == still.size());
+  int top_level = 0;
+  for (const auto& f : hung) top_level = std::max(top_level, static_cast<int>(f[2]));
+  int bottom = 0, top = 0;
+  for (std::size_t i = 0; i < hung.size(); ++i) {
+    const auto& f = hung[i];
+    if (f[2] == 0) {  // the free bottom edge
+      CHECK(f[4] < f[7]);
+      CHECK(f[4] < still[i][4]);
+      ++bottom;
+    } else if (f[2] == top_level) {  // the pinned top edge
+      CHECK(f[4] == f[7]);
+      ++top;
+    }
+  }
+  CHECK(bottom == 5);
+  CHECK(top == 5);
+  std::string err;
+  CHECK(run_small_chart(tmp, "--set knit.pins=middle", err) == 2);
+  CHECK(err.find("knit.pins = middle: must be one of none, bottom, top, both") !=
+        std::string::npos);
+}
 
 TEST_CASE("knitsim knit: a small tuck chart settles and its outputs agree with the model") {
   const fs::path tmp = fs::temp_directory_path() / ("knitsim-knit-cli-" + std::to_string(getpid()));
@@ -307,4 +366,106 @@ TEST_CASE("knitsim knit: bad input exits 2 with one line and writes nothing") {
     CHECK(!fs::exists(out));
   }
   fs::remove_all(tmp);
+}
+
+namespace {
+
+// summary.json without what a clock decides (wall and CPU seconds).
+nlohmann::json without_timings(nlohmann::json j) {
+  if (j.is_object()) {
+    for (auto it = j.begin(); it != j.end();) {
+      if (it.key().find("_seconds") != std::string::npos) {
+        it = j.erase(it);
+      } else {
+        it.value() = without_timings(it.value());
+        ++it;
+      }
+    }
+  }
+  return j;
+}
+
+// Every file under `a` (manifest.json aside: it records the command line and the clock) has
+// the same bytes under `b`, summary.json up to its timings; returns how many were compared.
+int compare_outputs(const fs::path& a, const fs::path& b) {
+  int compared = 0;
+  for (const auto& e : fs::recursive_directory_iterator(a)) {
+    if (!e.is_regular_file() || e.path().filename() == "manifest.json") continue;
+    const fs::path other = b / fs::relative(e.path(), a);
+    CAPTURE(other.string());
+    REQUIRE(fs::exists(other));
+    if (e.path().filename() == "summary.json")
+      CHECK(without_timings(nlohmann::json::parse(slurp(e.path()))) ==
+            without_timings(nlohmann::json::parse(slurp(other))));
+    else
+      CHECK(slurp(e.path()) == slurp(other));
+    ++compared;
+  }
+  return compared;
+}
+
+}  // namespace
+
+TEST_CASE("knitsim knit: a scene naming a chart and a key writes what --chart and --set write") {
+  TempDir tmp("knit-scene");
+  const std::string chart_text = "KKKKK\nKKTKK\nKKKKK\n";
+  fs::create_directories(tmp.path / "charts");
+  std::ofstream(tmp.path / "charts" / "small.chart") << chart_text;
+  std::ofstream(tmp.path / "small.toml")
+      << "# a knit scene\n# the small chart, its stabiliser raised\n[knit]\n"
+         "chart = \"charts/small.chart\"\nstabiliser = 0.2\ncontact = 0\n"
+         "[run]\nequilibrium_tol = 1e-8\n";
+  const std::string common = " --frames 2 --no-pictures --quiet --out '";
+  std::string err;
+  REQUIRE(run_knit("--chart '" + (tmp.path / "charts" / "small.chart").string() +
+                       "' --set knit.stabiliser=0.2 --set knit.contact=0" + common +
+                       (tmp.path / "by_chart").string() + "'",
+                   err) == 0);
+  INFO(err);
+  REQUIRE(run_knit("--scene '" + (tmp.path / "small.toml").string() + "'" + common +
+                       (tmp.path / "by_scene").string() + "'",
+                   err) == 0);
+  CHECK(compare_outputs(tmp.path / "by_chart", tmp.path / "by_scene") >= 8);
+  const auto summary = nlohmann::json::parse(slurp(tmp.path / "by_scene" / "summary.json"));
+  CHECK(summary["params"]["stabiliser_ratio"] == 0.2);  // the scene's key reached the model
+  CHECK(summary["chart"] == "small");
+
+  // The same chart inline: the same points.
+  std::ofstream(tmp.path / "inline.toml")
+      << "[knit]\nchart_text = \"\"\"\n" << chart_text
+      << "\"\"\"\nstabiliser = 0.2\ncontact = 0\n";
+  REQUIRE(run_knit("--scene '" + (tmp.path / "inline.toml").string() + "'" + common +
+                       (tmp.path / "inline").string() + "'",
+                   err) == 0);
+  CHECK(slurp(tmp.path / "inline" / "points.csv") == slurp(tmp.path / "by_chart" / "points.csv"));
+  CHECK(nlohmann::json::parse(slurp(tmp.path / "inline" / "summary.json"))["chart"] == "inline");
+}
+
+TEST_CASE("knitsim knit: a scene whose chart cannot be read exits 2 with one line naming it") {
+  TempDir tmp("knit-scene-bad");
+  std::ofstream(tmp.path / "lost.toml") << "[knit]\nchart = \"missing.chart\"\n";
+  std::ofstream(tmp.path / "both.toml")
+      << "[knit]\nchart = \"a.chart\"\nchart_text = \"KK\"\n";
+  const fs::path out = tmp.path / "should-not-exist";
+  struct Case {
+    std::string args, names;
+  };
+  const std::vector<Case> cases = {
+      {"--scene '" + (tmp.path / "lost.toml").string() + "'",
+       "knit.chart = 'missing.chart' (" + (tmp.path / "lost.toml").string() +
+           "): cannot read the file"},
+      {"--scene '" + (tmp.path / "both.toml").string() + "'", "give one of knit.chart"},
+      {"--scene '" + (tmp.path / "nope.toml").string() + "'", "cannot read"},
+      {"--scene '" + (tmp.path / "lost.toml").string() + "' --chart x.chart",
+       "--chart and --scene: give one of them"},
+      {"", "--chart or --scene is required"},
+  };
+  for (const Case& c : cases) {
+    CAPTURE(c.args);
+    std::string err;
+    CHECK(run_knit(c.args + " --out '" + out.string() + "'", err) == 2);
+    CHECK(count_lines(err) == 1);
+    CHECK(err.find(c.names) != std::string::npos);
+    CHECK(!fs::exists(out));
+  }
 }

@@ -78,12 +78,11 @@ TEST_CASE("built-in scenes load with the paper's sample-1 parameters") {
 }
 
 TEST_CASE("--set overrides change the parameters, in order, parsed by the key's type") {
-  const Scene s =
-      load_scene("four_corner",
-                 {"model.stiffness=900", "model.topology=b", "fabric.areal_density = 58.26",
-                  "model.seed=7", "pins.layout=\"two_corner\"", "pins.span=0.5", "run.t_max=5e3",
-                  "run.equilibrium_tol=1e-6", "scene.name=mine", "model.stiffness=1000"});
-  CHECK(s.params.stiffness == 1000.0);  // the later --set wins
+  const Scene s = load_scene(
+      "four_corner", {"model.stiffness=900", "model.topology=b", "fabric.areal_density = 58.26",
+                      "model.seed=7", "pins.layout=\"two_corner\"", "pins.span=0.5",
+                      "run.t_max=5e3", "run.equilibrium_tol=1e-6", "scene.name=mine"});
+  CHECK(s.params.stiffness == 900.0);  // a key given twice by --set is refused (below)
   CHECK(s.params.topology == 'b');
   CHECK(s.params.areal_density == 58.26);
   CHECK(s.params.seed == 7u);
@@ -141,7 +140,7 @@ TEST_CASE("bad values give one line naming the field and the accepted range") {
       {"model.seed=-1", "model.seed = -1: must be an integer in 0..4294967295"},
       {"model.seed=1.5", "model.seed = 1.5: must be an integer in 0..4294967295"},
       {"run.t_max=0", "run.t_max = 0: must be in [1e-9, 1e15] s"},
-      {"run.t_max=1e22", "run.t_max = 1e+22: must be in [1e-9, 1e15] s"},
+      {"run.t_max=1e22", "run.t_max = 1e22: must be in [1e-9, 1e15] s"},  // as typed
       {"model.natural_length=0.34",
        "model.natural_length = 0.34: must be <= fabric.width / 1.5 = 0.333333 m (2 cells per "
        "side at least)"},
@@ -180,7 +179,8 @@ TEST_CASE("scene files: partial files, types, missing files and TOML syntax erro
   TempScene big("big.toml", "[model]\nstiffness = 9007199254740993\n");
   CHECK(load_scene(big.path.string()).params.stiffness == 9007199254740992.0);
   TempScene big_t("big_t.toml", "[run]\nt_max = 9007199254740993\n");
-  CHECK(load_error(big_t.path.string()) == "run.t_max = 9.0072e+15: must be in [1e-9, 1e15] s");
+  CHECK(load_error(big_t.path.string()) ==
+        "run.t_max = 9007199254740993: must be in [1e-9, 1e15] s");  // as written
   TempScene topo("topo.toml", "[model]\ntopology = 1\n");
   CHECK(load_error(topo.path.string()).rfind("model.topology = 1: must be one of a, b, c", 0) == 0);
 
@@ -197,6 +197,77 @@ TEST_CASE("scene files: partial files, types, missing files and TOML syntax erro
         "two_corner two_corner_slack)");
   CHECK(load_error(fs::temp_directory_path().string()) ==
         "scene: cannot read " + fs::temp_directory_path().string() + ": is a directory");
+}
+
+// knitsim knit --set, through the same table: the knit's keys and the run's, not the drape's.
+std::string knit_error(const std::vector<std::string>& sets) {
+  return error_of([&] { knit_scene("c.chart", sets).validate(); });
+}
+
+TEST_CASE("knit keys are rows of the table: set, validated and refused like the drape's") {
+  const Scene s = knit_scene("dir/tucks.chart", {"knit.contact=0", "knit.network=paper",
+                                                 "run.t_max=50", "knit.damping=1e-3"});
+  CHECK(s.name == "tucks");
+  CHECK(s.chart == "dir/tucks.chart");
+  CHECK(s.knit.contact_ratio == 0.0);
+  CHECK(s.knit.network == KnitNetwork::Paper);
+  CHECK(s.knit.damping == 1e-3);
+  CHECK(s.options.t_max == 50.0);
+  CHECK(scene_keys(KeyModel::Knit).front() == "knit.loop_radius");
+  // Each model refuses the other's keys as unknown, with its own keys as the suggestions.
+  CHECK(knit_error({"model.stiffness=900"})
+            .rfind("model.stiffness: unknown key; valid keys: knit.", 0) == 0);
+  CHECK(load_error("four_corner", {"knit.contact=0"}).rfind("knit.contact: unknown key", 0) == 0);
+  CHECK(load_error("four_corner", {"knit.contact=0"}).find("knit.loop_radius") ==
+        std::string::npos);
+  CHECK(knit_error({"knit.stabiliser=2"}) == "knit.stabiliser = 2: must be in [0, 1]");
+  CHECK(knit_error({"knit.network=bare"}) ==
+        "knit.network = bare: must be stabilised (the default) or paper (paper 2's network)");
+  CHECK(knit_error({"knit.damping=abc"}) == "knit.damping = abc: must be a number >= 0 N s/m");
+  CHECK(knit_error({"knit.contact=1", "knit.bending=1"})
+            .rfind("knit.bending = 1: must be 0 with knit.contact > 0", 0) == 0);
+  CHECK(knit_error({"knit.network=paper", "knit.contact=1"}) ==
+        "--set knit.stabiliser, knit.bending or knit.contact with knit.network = paper: paper 2's "
+        "network has no stabiliser, bending or contact (drop one of them)");
+  CHECK(knit_error({"knit.network=paper"}).empty());  // the paper network ignores the defaults
+  CHECK(knit_error({"run.position_tol=1"}) == "run.position_tol = 1: must be in (0, 1e-2] m");
+}
+
+TEST_CASE("messages say what was typed: values as given, long text cut, one value per key") {
+  // The value as typed, not as a double prints (100.0000001 printed at 6 digits is 100, which
+  // looks in range).
+  CHECK(knit_error({"knit.contact=100.0000001"}) ==
+        "knit.contact = 100.0000001: must be in [0, 100]");
+  CHECK(load_error("four_corner", {"model.stiffness=-0.0000123456789"}) ==
+        "model.stiffness = -0.0000123456789: must be > 0 N/m");
+  // A value changed after it was typed is shown as it is now.
+  Scene s = load_scene("four_corner", {"model.stiffness=900"});
+  s.params.stiffness = -1.0;
+  CHECK(error_of([&] { s.validate(); }) == "model.stiffness = -1: must be > 0 N/m");
+  // Long keys and values: the first 60 characters, "...", the length.
+  const std::string long_key(500000, 'k');
+  const std::string unknown = load_error("four_corner", {long_key + "=1"});
+  CHECK(unknown.rfind(std::string(60, 'k') + "... (500000 characters): unknown key; valid keys: ",
+                      0) == 0);
+  CHECK(unknown.size() < 1000);
+  const std::string long_value = "-" + std::string(200, '1');
+  CHECK(load_error("four_corner", {"model.stiffness=" + long_value}) ==
+        "model.stiffness = " + long_value.substr(0, 60) + "... (201 characters): must be > 0 N/m");
+  CHECK(load_error("four_corner", {"pins.layout=" + std::string(100, 'x')}) ==
+        "pins.layout = " + std::string(60, 'x') +
+            "... (100 characters): must be one of four_corner, two_corner");
+  // The same key twice among the --set is refused (the first value would vanish unchecked);
+  // a --set over the scene file's value is what --set is for.
+  CHECK(load_error("four_corner", {"model.stiffness=-1", "model.stiffness=900"}) ==
+        "--set model.stiffness: given twice (-1, then 900); give each key once");
+  CHECK(knit_error({"knit.contact=0", "knit.damping=1", "knit.contact=5"}) ==
+        "--set knit.contact: given twice (0, then 5); give each key once");
+  CHECK(load_scene("four_corner", {"model.stiffness=900"}).params.stiffness == 900.0);
+  // An empty key says so, with the form expected.
+  CHECK(load_error("four_corner", {"=5"}) ==
+        "--set =5: the key is empty; expected key=value, e.g. model.stiffness=900");
+  CHECK(knit_error({" =5"}) ==
+        "--set  =5: the key is empty; expected key=value, e.g. knit.contact=0");
 }
 
 TEST_CASE("the target scene follows the pins, not the scene's name") {

@@ -89,17 +89,26 @@ TEST_CASE("knit --set: messages name the keys the user types, nearest key sugges
   expect_bad_input(base + "--set knit.dampng=1",
                    "knit.dampng: unknown key; did you mean knit.damping?", tmp);
   // Before: "model.loop_radius = nan: ..." although the user typed knit.loop_radius.
-  expect_bad_input(base + "--set knit.loop_radius=nan", "knit.loop_radius = nan: must be > 0 m",
-                   tmp);
-  expect_bad_input(base + "--set knit.stabiliser=inf", "knit.stabiliser = inf: must be in [0, 1]",
-                   tmp);
+  expect_bad_input(base + "--set knit.loop_radius=nan",
+                   "knit.loop_radius = nan: must be a number > 0 m", tmp);
+  expect_bad_input(base + "--set knit.stabiliser=inf",
+                   "knit.stabiliser = inf: must be a number in [0, 1]", tmp);
   expect_bad_input(base + "--set knit.areal_density=-1",
                    "knit.areal_density = -1: must be > 0 g/m^2", tmp);
   // Before: "t_max = inf: must be > 0 s" and "rtol = nan: ..." (struct field names).
-  expect_bad_input(base + "--set run.t_max=inf", "run.t_max = inf: must be in [1e-9, 1e15] s", tmp);
+  expect_bad_input(base + "--set run.t_max=inf",
+                   "run.t_max = inf: must be a number in [1e-9, 1e15] s", tmp);
   expect_bad_input(base + "--set run.position_tol=1",
                    "run.position_tol = 1: must be in (0, 1e-2] m", tmp);
   expect_bad_input(base + "--rtol nan", "--rtol = nan: must be in (0, 1)", tmp);
+  // Values as typed (printed as a double, 100.0000001 was "100", which looks in range); a key
+  // given twice by --set is refused; an empty key says so.
+  expect_bad_input(base + "--set knit.contact=100.0000001",
+                   "knit.contact = 100.0000001: must be in [0, 100]", tmp);
+  expect_bad_input(base + "--set knit.contact=-1 --set knit.contact=5",
+                   "--set knit.contact: given twice (-1, then 5); give each key once", tmp);
+  expect_bad_input(base + "--set =5",
+                   "--set =5: the key is empty; expected key=value, e.g. knit.contact=0", tmp);
   CHECK(!fs::exists(tmp.path / "out"));
 }
 
@@ -111,6 +120,8 @@ TEST_CASE("drape: NaN and inf in --set, scene files and flags name the key and t
   expect_bad_input("drape --set pins.span=nan" + out, "pins.span = nan: must be a number in (0, 1]",
                    tmp);
   expect_bad_input("drape --rtol inf" + out, "--rtol = inf: must be in (0, 1)", tmp);
+  expect_bad_input("drape --set model.stiffness=-1 --set model.stiffness=900" + out,
+                   "--set model.stiffness: given twice (-1, then 900); give each key once", tmp);
   // An infinite wall-clock cap would be no cap at all (0 is the way to say so).
   expect_bad_input("drape --max-wall inf" + out,
                    "--max-wall = inf: must be >= 0 s and finite (0 = no cap)", tmp);
@@ -121,7 +132,7 @@ TEST_CASE("drape: NaN and inf in --set, scene files and flags name the key and t
   // Masses would overflow (a sheet of 2 L0 per side): refused by the grid rule, not later by
   // the spring network's "particle masses must be > 0 kg".
   expect_bad_input("drape --set model.natural_length=1e300" + out,
-                   "model.natural_length = 1e+300: must be <= fabric.width / 1.5", tmp);
+                   "model.natural_length = 1e300: must be <= fabric.width / 1.5", tmp);
   // The block-Jacobi preconditioner needs x, y, z of every particle: refused on reductions
   // (the quarter's 93 unknowns are a multiple of 3 and used to pass, misaligned).
   expect_bad_input(

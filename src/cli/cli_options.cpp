@@ -11,6 +11,7 @@
 #include <iostream>
 #include <limits>
 #include <type_traits>
+#include <variant>
 
 #include "src/base/command_line.hpp"
 #include "src/base/files.hpp"
@@ -125,94 +126,45 @@ void add_ica_options(CLI::App* cmd, IcaOptions& o) {
       ->group(kIcaOptionGroup);
 }
 
-CLI::Option* add_atol_options(CLI::App* cmd, double& atol, double& velocity_atol) {
-  cmd->add_option("--atol", atol,
-                  "Absolute tolerance, m (positions) and m/s (velocities, unless --velocity-atol)")
-      ->capture_default_str();
-  return cmd
-      ->add_option("--velocity-atol", velocity_atol,
-                   "Absolute tolerance of the velocities, m/s (0 = --atol); ~ atol x the rate "
-                   "(rad/s) of the motion to resolve")
-      ->capture_default_str();
-}
-
 namespace {
 
-// --flag NAME for an enum option: NAME is one of to_string(value) over `all`.
-template <typename E, size_t N>
-void add_named_option(CLI::App* cmd, const std::string& flag, E& which, const E (&all)[N],
-                      const std::string& help) {
-  std::vector<std::string> names;
-  for (const E e : all) names.emplace_back(to_string(e));
-  cmd->add_option_function<std::string>(
-         flag,
-         [&which, &all](const std::string& name) {
-           for (const E e : all)
-             if (name == to_string(e)) which = e;
-         },
-         help)
-      ->check(CLI::IsMember(names))
-      ->default_str(to_string(which));
+// The flag of `key` (a row of key_table() with a flag), bound to `field`: CLI11 parses it as
+// the field's type (INT for the integers: require_well_formed_values), help shows the default.
+template <typename T>
+CLI::Option* add_flag_of(CLI::App* cmd, const Key& key, T& field) {
+  return cmd->add_option(key.flag, field, key.meaning)->capture_default_str();
+}
+
+// The flag of an IntegratorOptions row, bound to its field in `o`: a number, or one of the
+// row's choices.
+CLI::Option* add_option_flag(CLI::App* cmd, const Key& key, IntegratorOptions& o) {
+  if (const auto* d = std::get_if<double IntegratorOptions::*>(&key.option))
+    return add_flag_of(cmd, key, o.*(*d));
+  if (const auto* i = std::get_if<int IntegratorOptions::*>(&key.option))
+    return add_flag_of(cmd, key, o.*(*i));
+  if (const auto* l = std::get_if<long IntegratorOptions::*>(&key.option))
+    return add_flag_of(cmd, key, o.*(*l));
+  return cmd
+      ->add_option_function<std::string>(
+          key.flag, [&o, &key](const std::string& name) { key.set_option(o, name); }, key.meaning)
+      ->check(CLI::IsMember(key.choices))
+      ->default_str(key.get_option(o));
 }
 
 }  // namespace
 
-void add_newton_solver_option(CLI::App* cmd, IntegratorOptions::NewtonSolver& which) {
-  using NS = IntegratorOptions::NewtonSolver;
-  static const NS all[] = {NS::Klu, NS::SchurLdl, NS::SchurCgLdl};
-  add_named_option(cmd, "--newton-solver", which, all,
-                   "Newton linear solver of cvode-bdf, arkode-dirk, arkode-imex: klu (2n LU), ldl "
-                   "(velocity block eliminated, 3n symmetric LDL^T) or cg-ldl (the same, with "
-                   "Jacobi-CG instead of the factorisation at small steps)");
-}
-
-void add_factorization_option(CLI::App* cmd, IntegratorOptions::Factorization& which) {
-  using F = IntegratorOptions::Factorization;
-  static const F all[] = {F::Automatic, F::Simplicial, F::Block, F::Supernodal};
-  add_named_option(
-      cmd, "--factorization", which, all,
-      "sparse factorisation of the 3n symmetric matrix (implicit-euler, ldl, cg-ldl, "
-      "schur-ldl): simplicial (Eigen LDL^T), block (LDL^T in 3 x 3 particle blocks, 2 x 2 "
-      "where z couples to nothing; simplicial where the matrix has none), supernodal (CHOLMOD "
-      "LL^T, LDL^T where not positive definite) or auto (block, supernodal from 33000 "
-      "unknowns)");
-}
-
-void add_gmres_options(CLI::App* cmd, IntegratorOptions& o) {
-  using GP = IntegratorOptions::GmresPreconditioner;
-  static const GP all[] = {GP::None, GP::BlockJacobi, GP::SchurIc, GP::SchurLdl};
-  add_named_option(cmd, "--gmres-preconditioner", o.gmres_preconditioner, all,
-                   "cvode-bdf-gmres: none, block-jacobi (6 x 6 per particle), schur-ic "
-                   "(incomplete Cholesky of the 3n Schur matrix) or schur-ldl (its LDL^T, lagged "
-                   "between set-ups)");
-  cmd->add_option("--krylov-dim", o.krylov_dim,
-                  "cvode-bdf-gmres: Krylov dimension (0 = SUNDIALS' 5)")
-      ->capture_default_str();
-  cmd->add_option(
-         "--eps-lin", o.krylov_eps_lin,
-         "cvode-bdf-gmres: linear tolerance factor (CVodeSetEpsLin); with block-jacobi the "
-         "residual a run can reach is proportional to it")
-      ->capture_default_str();
+CLI::Option* add_atol_options(CLI::App* cmd, double& atol, double& velocity_atol) {
+  add_flag_of(cmd, key_of_flag("--atol"), atol);
+  return add_flag_of(cmd, key_of_flag("--velocity-atol"), velocity_atol);
 }
 
 CLI::Option* add_run_options(CLI::App* cmd, IntegratorOptions& o) {
-  cmd->add_option("--rtol", o.rtol, "Relative tolerance (adaptive methods)")->capture_default_str();
-  CLI::Option* velocity_atol = add_atol_options(cmd, o.atol, o.velocity_atol);
-  cmd->add_option("--dt", o.dt, "Fixed step, s (fixed-step methods; 0 = automatic)")
-      ->capture_default_str();
-  cmd->add_option("--max-order", o.max_order, "Cap on the method order (0 = default)")
-      ->capture_default_str();
-  cmd->add_option("--max-steps", o.max_steps, "Step cap")->capture_default_str();
-  cmd->add_option("--max-wall", o.max_wall_seconds,
-                  "Wall-clock cap, s (0 = none); the run then ends with status wall_limit")
-      ->capture_default_str();
-  cmd->add_option("--max-restarts", o.max_restarts,
-                  "Restarts from the last accepted state after CVODE's or ARKODE's repeated "
-                  "error-test or corrector failures (0 = the run ends with solver_failure)")
-      ->capture_default_str();
-  add_newton_solver_option(cmd, o.newton_solver);
-  add_factorization_option(cmd, o.factorization);
-  add_gmres_options(cmd, o);
+  CLI::Option* velocity_atol = nullptr;
+  for (const Key& key : key_table()) {
+    if (key.flag.empty() || (key.option.index() == 0 && !key.set_option)) continue;
+    CLI::Option* opt = add_option_flag(cmd, key, o);
+    if (key.flag == "--velocity-atol") velocity_atol = opt;
+  }
   return velocity_atol;
 }
 
@@ -228,19 +180,16 @@ void add_history_and_continue_options(CLI::App* cmd, bool& step_history, std::st
 }
 
 void copy_run_flags(const IntegratorOptions& flags, IntegratorOptions& into) {
-  into.rtol = flags.rtol;
-  into.atol = flags.atol;
-  into.velocity_atol = flags.velocity_atol;
-  into.dt = flags.dt;
-  into.max_order = flags.max_order;
-  into.max_steps = flags.max_steps;
-  into.max_wall_seconds = flags.max_wall_seconds;
-  into.max_restarts = flags.max_restarts;
-  into.newton_solver = flags.newton_solver;
-  into.factorization = flags.factorization;
-  into.gmres_preconditioner = flags.gmres_preconditioner;
-  into.krylov_dim = flags.krylov_dim;
-  into.krylov_eps_lin = flags.krylov_eps_lin;
+  for (const Key& key : key_table()) {
+    if (key.flag.empty()) continue;
+    std::visit(
+        [&](auto member) {
+          if constexpr (!std::is_same_v<decltype(member), std::monostate>)
+            into.*member = flags.*member;
+        },
+        key.option);
+    if (key.set_option) key.set_option(into, key.get_option(flags));
+  }
 }
 
 void rethrow_with_flag_names(const std::invalid_argument& e,
@@ -299,7 +248,7 @@ void warn_about_run(const std::string& damping_key, double damping, const Integr
 void refuse_at_run_start(const std::invalid_argument& e, const std::filesystem::path& dir,
                          bool created) {
   remove_if_unused(dir, created);
-  rethrow_with_flag_names(e, run_option_names());
+  rethrow_as_typed(e);
 }
 
 void exit_with_run_status(const char* command, const RunStats& stats,

@@ -43,32 +43,24 @@ void add_ica_options(CLI::App* cmd, IcaOptions& o);
 template <typename T>
 CLI::Option* add_seed_option(CLI::App* cmd, T& seed, const std::string& help);
 
-// The absolute-tolerance flags of drape, knit and fit (IntegratorOptions::atol, velocity_atol):
-// --atol (m, and m/s for the velocities unless --velocity-atol is given) and --velocity-atol
-// (m/s; 0 = --atol), bound to `atol` and `velocity_atol`; help shows their current values.
-// Returns the --velocity-atol option (knit appends its own default rule to the description).
+// The absolute-tolerance flags of fit (their rows of key_table(), src/scene/scene.hpp): --atol
+// and --velocity-atol, bound to `atol` and `velocity_atol`; help shows their current values.
+// Returns the --velocity-atol option.
 CLI::Option* add_atol_options(CLI::App* cmd, double& atol, double& velocity_atol);
 
-// --newton-solver {klu, ldl, cg-ldl} of drape and knit, bound to `which`
-// (IntegratorOptions::newton_solver).
-void add_newton_solver_option(CLI::App* cmd, IntegratorOptions::NewtonSolver& which);
-// --factorization {auto, simplicial, block, supernodal} of drape and knit, bound to `which`
-// (IntegratorOptions::factorization).
-void add_factorization_option(CLI::App* cmd, IntegratorOptions::Factorization& which);
-// --gmres-preconditioner, --krylov-dim and --eps-lin (cvode-bdf-gmres) into `o`.
-void add_gmres_options(CLI::App* cmd, IntegratorOptions& o);
-
-// The run flags of drape and knit, bound to the IntegratorOptions fields they set: --rtol,
-// --atol, --velocity-atol, --dt, --max-order, --max-steps, --max-wall, --max-restarts,
-// --newton-solver, --factorization and the cvode-bdf-gmres flags. Returns the --velocity-atol
-// option (knit appends its own default rule to the description).
+// The run flags of drape and knit: one per row of key_table() with a flag, in the table's order
+// (--rtol, --atol, --velocity-atol, --dt, --max-order, --max-steps, --max-wall, --max-restarts,
+// --newton-solver, --factorization, the cvode-bdf-gmres flags), bound to the IntegratorOptions
+// field of the row. Returns the --velocity-atol option (knit appends its own default rule to
+// the description).
 CLI::Option* add_run_options(CLI::App* cmd, IntegratorOptions& o);
 // --step-history (bound to `step_history`) and --continue DIR (to `continue_from`) of drape and
 // knit; `inputs` names what a continuation must repeat ("--scene and --set").
 void add_history_and_continue_options(CLI::App* cmd, bool& step_history, std::string& continue_from,
                                       const std::string& inputs);
-// Copies into `into` exactly the fields add_run_options binds (not t_max, equilibrium_tol:
-// scene keys), so a scene's run settings and the command line combine in one place.
+// Copies into `into` exactly the fields add_run_options binds (the rows with a flag; not t_max,
+// equilibrium_tol: scene keys), so a scene's run settings and the command line combine in one
+// place.
 void copy_run_flags(const IntegratorOptions& flags, IntegratorOptions& into);
 
 // Validation messages name struct fields ("revolution_rate = 2: ..."); the user typed flags.
@@ -99,7 +91,8 @@ void warn_about_run(const std::string& damping_key, double damping, const Integr
 
 // Bad input found only once a run has started (an option the integrator refuses for this
 // model, e.g. --max-order 9 with cvode-bdf): removes the run's --out folder `dir` if the run
-// `created` it and it is still empty, then rethrows `e` with the run options' flag names.
+// `created` it and it is still empty, then rethrows `e` with the run options' flag names
+// (rethrow_as_typed).
 [[noreturn]] void refuse_at_run_start(const std::invalid_argument& e,
                                       const std::filesystem::path& dir, bool created);
 

@@ -2,9 +2,9 @@
 // (src/scene/knit_run.hpp), its outputs written by src/io/knit_outputs.hpp. What the outputs,
 // the frames, the networks and the velocity tolerance mean: docs/knit.md.
 //
-// Order of work, as drape's: parse the flags, read and parse the chart, apply --set, check the
-// parameters, the run options and the integrator name, build the model, read --continue; only
-// then create --out, run and write. Bad input (a bad chart: one line naming row and column)
+// Order of work, as drape's: parse the flags, read the chart and the keys (--chart and --set, or
+// the knit scene --scene and --set), check the parameters, the run options and the integrator
+// name, build the model, read --continue; only then create --out, run and write. Bad input (a bad chart: one line naming row and column)
 // therefore writes nothing and exits 2; a run that ends in any status but equilibrium still
 // writes everything and exits 3 -- or 128 + the signal (130, 143) when Ctrl-C or SIGTERM stopped
 // it (status interrupted, src/cli/interrupt.hpp).
@@ -12,11 +12,8 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
-#include <nlohmann/json.hpp>
-#include <optional>
 #include <stdexcept>
 
-#include "models/knit_loops.hpp"
 #include "src/base/files.hpp"
 #include "src/base/table.hpp"
 #include "src/base/text.hpp"
@@ -28,6 +25,7 @@
 #include "src/io/run_state.hpp"
 #include "src/io/step_log.hpp"
 #include "src/scene/knit_run.hpp"
+#include "src/scene/knit_scene.hpp"
 
 namespace knitsim {
 
@@ -37,6 +35,7 @@ namespace fs = std::filesystem;
 
 struct KnitArgs {
   std::string chart;
+  std::string scene;  // --scene FILE, a knit scene (or --chart)
   std::vector<std::string> sets;
   std::string integrator;            // empty: default_knit_integrator()
   IntegratorOptions options;         // only the fields add_run_options binds are taken from here
@@ -49,131 +48,12 @@ struct KnitArgs {
   std::string continue_from;  // --continue DIR
 };
 
-// The --set keys, each bound to one field.
-struct SetKey {
-  const char* name;
-  double* field;
-};
-
-std::vector<SetKey> set_keys(KnitParams& p, IntegratorOptions& o) {
-  return {{"knit.loop_radius", &p.loop_radius},
-          {"knit.wale_stiffness", &p.wale_stiffness},
-          {"knit.course_stiffness", &p.course_stiffness},
-          {"knit.damping", &p.damping},
-          {"knit.areal_density", &p.areal_density},
-          {"knit.stabiliser", &p.stabiliser_ratio},
-          {"knit.bending", &p.bending_ratio},
-          {"knit.contact", &p.contact_ratio},
-          {"run.t_max", &o.t_max},
-          {"run.equilibrium_tol", &o.equilibrium_tol},
-          {"run.position_tol", &o.position_tol}};
-}
-
-// The one --set key whose value is a name: knit.network = stabilised | paper.
-constexpr const char* kNetworkKey = "knit.network";
-
-// Applies "key=value" overrides; throws std::invalid_argument naming the bad --set.
-// knit.network = paper with an explicit knit.stabiliser, knit.bending or knit.contact > 0 is
-// refused (the paper's network has none of them).
-void apply_sets(const std::vector<std::string>& sets, KnitParams& p, IntegratorOptions& o) {
-  const std::vector<SetKey> keys = set_keys(p, o);
-  bool stabiliser_given = false;
-  for (const std::string& s : sets) {
-    const size_t eq = s.find('=');
-    const std::string key = s.substr(0, eq);
-    if (key == kNetworkKey) {
-      p.network = parse_knit_network(eq == std::string::npos ? "" : s.substr(eq + 1));
-      continue;
-    }
-    stabiliser_given = stabiliser_given || key == "knit.stabiliser" || key == "knit.bending" ||
-                       key == "knit.contact";
-    const SetKey* found = nullptr;
-    for (const SetKey& k : keys)
-      if (key == k.name) found = &k;
-    if (found == nullptr) {
-      std::vector<std::string> names;
-      for (const SetKey& k : keys) names.push_back(k.name);
-      names.push_back(kNetworkKey);
-      throw std::invalid_argument(unknown_key_message(key, names));
-    }
-    const std::string value = eq == std::string::npos ? "" : s.substr(eq + 1);
-    size_t used = 0;
-    double v = 0.0;
-    try {
-      v = std::stod(value, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (value.empty() || used != value.size())
-      throw std::invalid_argument("--set " + s + ": expected " + key + "=<number>");
-    *found->field = v;
-  }
-  if (p.network == KnitNetwork::Paper && stabiliser_given &&
-      (p.stabiliser_ratio > 0.0 || p.bending_ratio > 0.0 || p.contact_ratio > 0.0))
-    throw std::invalid_argument(
-        "--set knit.stabiliser, knit.bending or knit.contact with knit.network = paper: paper 2's "
-        "network has no stabiliser, bending or contact (drop one of them)");
-}
-
-// What a knit run integrates, as SavedRun::model (--continue): the chart, one string of stitch
-// letters per course from the bottom, and the knit.* parameters under their --set names.
-nlohmann::json knit_model_keys(const KnitChart& chart, KnitParams params) {
-  nlohmann::json keys = nlohmann::json::object();
-  std::vector<std::string> courses;
-  for (int c = 0; c < chart.courses; ++c) {
-    std::string row;
-    for (int w = 0; w < chart.wales; ++w) row += static_cast<char>(chart.at(w, c));
-    courses.push_back(row);
-  }
-  keys["chart"] = courses;
-  keys[kNetworkKey] = to_string(params.network);
-  IntegratorOptions unused;
-  for (const SetKey& k : set_keys(params, unused))
-    if (std::string(k.name).rfind("knit.", 0) == 0) keys[k.name] = *k.field;
-  return keys;
-}
-
-KnitChart read_chart(const std::string& path) {
-  // 4 million points (KnitParams::max_points) are ~4 MB of letters: a larger file is refused.
-  constexpr std::size_t kMaxChartFileBytes = std::size_t{16} << 20;
-  std::string text, why;
-  if (!read_input_file(path, kMaxChartFileBytes, text, why))
-    throw std::invalid_argument("--chart " + path + ": cannot read the file: " + why);
-  try {
-    return parse_knit_chart(text);
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(path + ": " + e.what());
-  }
-}
-
-// The warnings before a run: no damping, --dt to an adaptive method, an explicit method with yarn
-// contact (docs/knit.md, "What is not met, and why"), paper 2's bare network.
+// The warnings before a run: no damping, --dt to an adaptive method (as drape's), and the knit's
+// own (knit_run_warnings).
 void warn_before_run(const KnitScene& scene, const std::string& integrator,
                      const IntegratorInfo& info, const IntegratorOptions& flags) {
-  const KnitParams& params = scene.params;
-  warn_about_run("knit.damping", params.damping, info, flags, scene.options.t_max);
-  if (params.yarn_contact() && info.explicit_method)
-    warn("yarn contact with " + integrator +
-         ": the chart's first impacts (~10 us in) carry more energy than the barrier holds above "
-         "its core in double precision, so it fails there whatever its step (docs/knit.md, \"What "
-         "is not met, and why\"); equilibrium (the default) and implicit-euler keep every pair "
-         "off its core");
-  if (params.mechanism())
-    warn(std::string(params.network == KnitNetwork::Paper ? "knit.network = paper"
-                                                          : "knit.stabiliser = 0") +
-         ": paper 2's bare network is a mechanism (blocks of fabric shear and swing at no "
-         "energy); its steady state depends on the path (integrator, step, tolerances)");
-}
-
-// One `warning:` line where the yarns came closer than kClearanceWarning r or crossed.
-void warn_about_overlap(const KnitMeasures& m) {
-  if (m.crossings.changed > 0 || m.min_clearance.over_r < kClearanceWarning)
-    warn("yarns overlap: clearance down to " + format_number(m.min_clearance.over_r, 3) +
-         " r (courses " + std::to_string(m.min_clearance.a.course) + " and " +
-         std::to_string(m.min_clearance.b.course) + ", at check " +
-         std::to_string(m.check_min_clearance) + ", t = " + format_number(m.t_min_clearance, 3) +
-         " s), " + std::to_string(m.crossings.changed) + " of " +
-         std::to_string(m.crossings.designed) + " designed crossings changed over/under order");
+  warn_about_run("knit.damping", scene.params.damping, info, flags, scene.options.t_max);
+  for (const std::string& w : knit_run_warnings(scene.params, integrator, info)) warn(w);
 }
 
 std::string human_summary(const KnitScene& scene, const KnitResult& r, const std::string& dir) {
@@ -212,15 +92,22 @@ std::string human_summary(const KnitScene& scene, const KnitResult& r, const std
 }
 
 void run(const KnitArgs& args) {
-  KnitScene scene;
-  scene.chart = read_chart(args.chart);
-  scene.chart_file = args.chart;
-  scene.name = fs::path(args.chart).stem().string();
-  scene.frames = args.frames;
-  apply_sets(args.sets, scene.params, scene.options);
-  copy_run_flags(args.options, scene.options);
+  if (args.chart.empty() == args.scene.empty())
+    throw std::invalid_argument(args.chart.empty() ? "--chart or --scene is required"
+                                                   : "--chart and --scene: give one of them");
+  Scene input;  // the keys as given: the knit's, the run's
+  KnitChart chart;
+  if (args.scene.empty()) {  // --chart: the chart is read before the --set keys apply
+    chart = read_knit_chart(knit_scene(args.chart, {}));
+    input = knit_scene(args.chart, args.sets);
+  } else {
+    input = load_knit_scene(args.scene, args.sets);
+    chart = read_knit_chart(input);
+  }
+  const std::string inputs = args.scene.empty() ? "--chart and --set" : "--scene and --set";
+  copy_run_flags(args.options, input.options);
   const std::string integrator = args.integrator.empty()
-                                     ? default_knit_integrator(scene.params.yarn_contact())
+                                     ? default_knit_integrator(input.knit.yarn_contact())
                                      : args.integrator;
   std::unique_ptr<Integrator> integ;
   try {
@@ -229,19 +116,16 @@ void run(const KnitArgs& args) {
     throw std::invalid_argument(std::string("--") + e.what());  // "--integrator = X: ..."
   }
   if (!args.velocity_atol_given)
-    set_default_knit_velocity_atol(scene.options, scene.params, integ->info());
-  try {
-    scene.options.validate();
-  } catch (const std::invalid_argument& e) {
-    rethrow_with_flag_names(e, run_option_names());  // run.t_max, --rtol, ...
-  }
-  if (scene.frames < 1)
-    throw std::invalid_argument("--frames = " + std::to_string(scene.frames) + ": must be >= 1");
+    set_default_knit_velocity_atol(input.options, input.knit, integ->info());
+  input.validate();  // run.t_max, --rtol, knit.* ...
+  if (args.frames < 1)
+    throw std::invalid_argument("--frames = " + std::to_string(args.frames) + ": must be >= 1");
+  KnitScene scene = make_knit_scene(input, std::move(chart), args.frames);
   KnitStart start = start_knit(scene);  // validates the parameters
   if (!args.continue_from.empty()) {
-    const RunState from =
-        continue_state(args.continue_from, "knit", knit_model_keys(scene.chart, scene.params),
-                       "--chart and --set", integrator, scene.options);
+    const RunState from = continue_state(args.continue_from, "knit",
+                                         knit_model_keys(scene.chart, input), inputs, integrator,
+                                         scene.options);
     try {
       continue_knit(start, from);
     } catch (const std::invalid_argument& e) {
@@ -273,15 +157,14 @@ void run(const KnitArgs& args) {
     write_file_atomic(dir / "steps.csv", steps_csv);
   else
     remove_stale_output(dir / "steps.csv");
-  write_knit_outputs(dir, scene, result, knit_model_keys(scene.chart, scene.params),
+  write_knit_outputs(dir, scene, result, knit_model_keys(scene.chart, input),
                      !args.no_pictures);
-  warn_about_overlap(result.measures);
+  if (const std::string w = knit_overlap_warning(result.measures); !w.empty()) warn(w);
   if (!args.quiet) std::cout << human_summary(scene, result, dir.string()) << std::flush;
   exit_with_run_status("knit", result.stats, interrupt, dir.string());
 }
 
 }  // namespace
-
 
 void register_knit_command(CLI::App& app) {
   auto args = std::make_shared<KnitArgs>();
@@ -290,12 +173,19 @@ void register_knit_command(CLI::App& app) {
       "Run a stitch chart's interlacing-point network (paper 2) to its steady state; writes "
       "points.csv, typevalue.csv, centerlines.csv/.vtk, before/after.png, frames/, summary.json, "
       "state.json and manifest.json into --out");
-  cmd->add_option("--chart", args->chart, "Stitch chart file (K knit, T tuck, M miss)")->required();
+  cmd->add_option("--chart", args->chart, "Stitch chart file (K knit, T tuck, M miss)");
+  cmd->add_option("--scene", args->scene,
+                  "Knit scene file (TOML: the chart by path or inline, knit and run keys; "
+                  "docs/knit.md), instead of --chart");
+  std::string keys;  // the knit's and the run's keys (key_table), a text key with its values
+  for (const Key& k : key_table()) {
+    if (k.name.empty() || k.model == KeyModel::Drape) continue;
+    std::string values;
+    for (const std::string& c : k.choices) values += (values.empty() ? " (" : " | ") + c;
+    keys += (keys.empty() ? "" : ", ") + k.name + values + (values.empty() ? "" : ")");
+  }
   cmd->add_option("--set", args->sets,
-                  "Override a parameter, e.g. knit.network=paper (repeatable); keys "
-                  "knit.network (stabilised | paper), knit.loop_radius, knit.wale_stiffness, "
-                  "knit.course_stiffness, knit.damping, knit.areal_density, knit.stabiliser, "
-                  "knit.bending, knit.contact, run.t_max, run.equilibrium_tol, run.position_tol")
+                  "Override a parameter, e.g. knit.network=paper (repeatable); keys " + keys)
       ->allow_extra_args(false)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_option("--integrator", args->integrator,

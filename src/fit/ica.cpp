@@ -13,18 +13,13 @@
 #include <stdexcept>
 #include <thread>
 
+#include "src/core/invalid_field.hpp"
+
 namespace knitsim {
 
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-template <class T>
-[[noreturn]] void bad(const std::string& field, T value, const std::string& range) {
-  std::ostringstream os;
-  os << field << " = " << value << ": " << range;
-  throw std::invalid_argument(os.str());
-}
 
 }  // namespace
 
@@ -32,20 +27,21 @@ template <class T>
 // Options, Table 1, problem
 
 void IcaOptions::validate() const {
-  if (imperialists < 1) bad("imperialists", imperialists, "must be >= 1");
+  if (imperialists < 1) bad_field("imperialists", imperialists, "must be >= 1");
   if (countries <= imperialists)
-    bad("countries", countries, "must be > imperialists (" + std::to_string(imperialists) + ")");
+    bad_field("countries", countries,
+              "must be > imperialists (" + std::to_string(imperialists) + ")");
   if (countries > max_countries)
-    bad("countries", countries, "must be <= " + std::to_string(max_countries));
-  if (decades < 1) bad("decades", decades, "must be >= 1");
-  if (!(beta > 0.0) || !std::isfinite(beta)) bad("beta", beta, "must be > 0");
-  if (!(gamma >= 0.0 && gamma <= kPi)) bad("gamma", gamma, "must be in [0, pi] rad");
+    bad_field("countries", countries, "must be <= " + std::to_string(max_countries));
+  if (decades < 1) bad_field("decades", decades, "must be >= 1");
+  if (!(beta > 0.0) || !std::isfinite(beta)) bad_field("beta", beta, "must be > 0");
+  if (!(gamma >= 0.0 && gamma <= kPi)) bad_field("gamma", gamma, "must be in [0, pi] rad");
   if (!(revolution_rate >= 0.0 && revolution_rate <= 1.0))
-    bad("revolution_rate", revolution_rate, "must be in [0, 1]");
-  if (!(xi >= 0.0) || !std::isfinite(xi)) bad("xi", xi, "must be >= 0");
-  if (jobs < 1) bad("jobs", jobs, "must be >= 1");
+    bad_field("revolution_rate", revolution_rate, "must be in [0, 1]");
+  if (!(xi >= 0.0) || !std::isfinite(xi)) bad_field("xi", xi, "must be >= 0");
+  if (jobs < 1) bad_field("jobs", jobs, "must be >= 1");
   if (!(failure_cost > 0.0) || !std::isfinite(failure_cost))
-    bad("failure_cost", failure_cost, "must be finite and > 0");
+    bad_field("failure_cost", failure_cost, "must be finite and > 0");
 }
 
 const std::array<std::array<double, 3>, 7>& ica_table1_levels() {
@@ -64,8 +60,8 @@ const std::array<std::array<double, 3>, 7>& ica_table1_levels() {
 IcaOptions ica_table1_options(const std::array<int, 7>& levels) {
   for (int f = 0; f < 7; ++f)
     if (levels[f] < 1 || levels[f] > 3)
-      bad(std::string("level of factor ") + static_cast<char>('A' + f), levels[f],
-          "must be 1, 2 or 3");
+      bad_field(std::string("level of factor ") + static_cast<char>('A' + f), levels[f],
+                "must be 1, 2 or 3");
   const auto& t = ica_table1_levels();
   auto value = [&](int f) { return t[f][levels[f] - 1]; };
   IcaOptions o;
@@ -82,15 +78,15 @@ IcaOptions ica_table1_options(const std::array<int, 7>& levels) {
 void Problem::validate() const {
   if (lower.empty()) throw std::invalid_argument("problem dimension = 0: must be >= 1");
   if (upper.size() != lower.size())
-    bad("problem upper bounds", upper.size(),
-        "must have one entry per dimension (" + std::to_string(lower.size()) + ")");
+    bad_field("problem upper bounds", upper.size(),
+              "must have one entry per dimension (" + std::to_string(lower.size()) + ")");
   for (std::size_t i = 0; i < lower.size(); ++i)
     if (!(std::isfinite(lower[i]) && std::isfinite(upper[i]) && upper[i] > lower[i]))
-      bad("problem bounds [" + std::to_string(i) + "]", upper[i] - lower[i],
-          "upper - lower must be finite and > 0");
+      bad_field("problem bounds [" + std::to_string(i) + "]", upper[i] - lower[i],
+                "upper - lower must be finite and > 0");
   if (!categorical.empty() && categorical.size() != lower.size())
-    bad("problem categorical flags", categorical.size(),
-        "must be empty or one per dimension (" + std::to_string(lower.size()) + ")");
+    bad_field("problem categorical flags", categorical.size(),
+              "must be empty or one per dimension (" + std::to_string(lower.size()) + ")");
   if (static_cast<bool>(cost) == static_cast<bool>(batch_cost))
     throw std::invalid_argument("problem cost: set exactly one of cost and batch_cost");
 }
@@ -145,7 +141,7 @@ void IcaRandom::set_state(const std::string& state) {
 
 std::vector<int> allocate_colonies(const std::vector<double>& imperialist_costs, int colonies) {
   const int k = static_cast<int>(imperialist_costs.size());
-  if (k < 1 || colonies < 1) bad("colonies", colonies, "must be >= 1, with >= 1 imperialist");
+  if (k < 1 || colonies < 1) bad_field("colonies", colonies, "must be >= 1, with >= 1 imperialist");
   const double worst = *std::max_element(imperialist_costs.begin(), imperialist_costs.end());
   double sum = 0.0;
   for (double c : imperialist_costs) sum += c - worst;

@@ -1,17 +1,18 @@
 #include "src/fit/lm_fit.hpp"
-#include "src/measure/measurement.hpp"
-#include "src/scene/scene.hpp"
-
-#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <ctime>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <random>
 #include <sstream>
 #include <stdexcept>
+
+#include "src/core/invalid_field.hpp"
+#include "src/measure/measurement.hpp"
+#include "src/scene/scene.hpp"
 
 namespace knitsim {
 
@@ -19,12 +20,6 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kNullEigenvalue = 1e-10;  // relative to the largest: a numerically null direction
-
-[[noreturn]] void bad(const std::string& field, double value, const std::string& range) {
-  std::ostringstream os;
-  os << field << " = " << value << ": " << range;
-  throw std::invalid_argument(os.str());
-}
 
 double cpu_now() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
 
@@ -35,11 +30,11 @@ const std::array<DrapeParameter, kDrapeContinuous> kParameters = {
 }  // namespace
 
 void LmOptions::validate() const {
-  if (max_evaluations < 1) bad("lm.max_evaluations", max_evaluations, "must be >= 1");
+  if (max_evaluations < 1) bad_field("lm.max_evaluations", max_evaluations, "must be >= 1");
   if (!(initial_lambda > 0.0) || !std::isfinite(initial_lambda))
-    bad("lm.initial_lambda", initial_lambda, "must be > 0");
-  if (!(step_tol >= 0.0)) bad("lm.step_tol", step_tol, "must be >= 0");
-  if (!(cost_tol >= 0.0)) bad("lm.cost_tol", cost_tol, "must be >= 0");
+    bad_field("lm.initial_lambda", initial_lambda, "must be > 0");
+  if (!(step_tol >= 0.0)) bad_field("lm.step_tol", step_tol, "must be >= 0");
+  if (!(cost_tol >= 0.0)) bad_field("lm.cost_tol", cost_tol, "must be >= 0");
 }
 
 const char* to_string(LmStatus s) {
@@ -63,7 +58,8 @@ LmResult run_lm(const LmProblem& problem, std::vector<double> x0, const LmOption
     throw std::invalid_argument("run_lm: lower, upper and x0 must have the same non-zero size");
   for (int i = 0; i < p; ++i)
     if (!(problem.lower[i] <= problem.upper[i]))
-      bad("run_lm: bounds[" + std::to_string(i) + "].lower", problem.lower[i], "must be <= upper");
+      bad_field("run_lm: bounds[" + std::to_string(i) + "].lower", problem.lower[i],
+                "must be <= upper");
   Eigen::VectorXd scale(p);
   for (int i = 0; i < p; ++i) {
     scale(i) = problem.upper[i] - problem.lower[i];
@@ -276,8 +272,9 @@ DrapeIdentifiability identifiability(const DrapeResiduals& at, const std::vector
 
 void DrapeLmOptions::validate() const {
   lm.validate();
-  if (starts_per_bracket < 1) bad("lm.starts_per_bracket", starts_per_bracket, "must be >= 1");
-  if (refine < 1) bad("lm.refine", refine, "must be >= 1");
+  if (starts_per_bracket < 1)
+    bad_field("lm.starts_per_bracket", starts_per_bracket, "must be >= 1");
+  if (refine < 1) bad_field("lm.refine", refine, "must be >= 1");
   polish.validate();
 }
 

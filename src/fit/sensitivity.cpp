@@ -1,6 +1,4 @@
 #include "src/fit/sensitivity.hpp"
-#include "solvers/symmetric_factor.hpp"
-#include "src/measure/measurement.hpp"
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -8,17 +6,15 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "solvers/symmetric_factor.hpp"
+#include "src/core/invalid_field.hpp"
+#include "src/measure/measurement.hpp"
+
 namespace knitsim {
 
 namespace {
 
 using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
-
-[[noreturn]] void bad(const std::string& field, double value, const std::string& range) {
-  std::ostringstream os;
-  os << field << " = " << value << ": " << range;
-  throw std::invalid_argument(os.str());
-}
 
 double max_abs(const std::vector<double>& v) {
   double m = 0.0;
@@ -153,9 +149,9 @@ void StiffnessFactor::solve(const double* b, double* y) const {
 // --- Newton polish ------------------------------------------------------------------------
 
 void PolishOptions::validate() const {
-  if (!(tol > 0.0)) bad("polish.tol", tol, "must be > 0");
-  if (max_iterations < 1) bad("polish.max_iterations", max_iterations, "must be >= 1");
-  if (!(max_correction > 0.0)) bad("polish.max_correction", max_correction, "must be > 0 m");
+  if (!(tol > 0.0)) bad_field("polish.tol", tol, "must be > 0");
+  if (max_iterations < 1) bad_field("polish.max_iterations", max_iterations, "must be >= 1");
+  if (!(max_correction > 0.0)) bad_field("polish.max_correction", max_correction, "must be > 0 m");
 }
 
 const char* to_string(PolishStatus s) {

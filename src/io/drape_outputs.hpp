@@ -1,5 +1,6 @@
-// What a drape run writes (docs/commands.md): summary.json, nodes.csv, drape.vtk, drape.png,
-// edges.csv, state.json, manifest.json; and the parts of a run's summary that the knit run shares.
+// What a drape run writes (docs/commands.md, docs/reference/outputs.md): summary.json, nodes.csv,
+// drape.vtk, drape.png, edges.csv, state.json, manifest.json; and the parts of a run's summary
+// that the knit run shares.
 #pragma once
 
 #include <filesystem>
@@ -43,13 +44,13 @@ nlohmann::json drape_summary(const Scene& scene, const DrapeResult& result);
 // particles at t_final, m), drape.vtk (the grid's quads, point data `pinned` and
 // `displacement` = position - rest position, m), state.json (write_run_state: the integrated
 // unknowns at t_final; omitted if not finite), manifest.json (options: scene, integrator,
-// params, run options), edges.csv (the measured edges, src/measure/measurement.hpp) when the final
-// state is finite and measurable (else summary.json's `edges_error` says why), and drape.png
-// (render_mesh_png, oblique view) unless picture = false (`--no-pictures`, for sweeps:
-// docs/performance.md). With `target` (the measured edges of the matching target scene, e.g.
-// fit_target_scene(...)), summary.json also gets `objective` (Eq. 5, %) and the per-edge
-// coefficients of both, and target_edges.csv is written. edges.csv, target_edges.csv and drape.png,
-// when not written, are removed from a reused folder (remove_stale_output).
+// params, run options), edges.csv (the measured edges, docs/fitting.md) when the final state is finite
+// and measurable (else summary.json's `edges_error` says why), and drape.png (render_mesh_png,
+// oblique view) unless picture = false (`--no-pictures`, for sweeps: docs/performance.md).
+// With `target` (the measured edges of the matching target scene, e.g. fit_target_scene(...)),
+// summary.json also gets `objective` (Eq. 5, %) and the per-edge coefficients of both, and
+// target_edges.csv is written. edges.csv, target_edges.csv and drape.png, when not written, are
+// removed from a reused folder (remove_stale_output).
 void write_drape_outputs(const std::filesystem::path& dir, const Scene& scene,
                          const DrapeResult& result, const std::vector<EdgeFit>* target = nullptr,
                          bool picture = true);

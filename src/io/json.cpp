@@ -1,5 +1,10 @@
 #include "src/io/json.hpp"
 
+#include <type_traits>
+#include <variant>
+
+#include "src/scene/scene.hpp"
+
 namespace knitsim {
 
 nlohmann::json to_json(const DrapeParams& p) {
@@ -19,25 +24,16 @@ nlohmann::json to_json(const DrapeParams& p) {
 }
 
 nlohmann::json to_json(const IntegratorOptions& o) {
-  return {{"rtol", o.rtol},
-          {"atol", o.atol},
-          {"velocity_atol", o.velocity_atol},
-          {"dt", o.dt},
-          {"dt_safety", o.dt_safety},
-          {"max_order", o.max_order},
-          {"max_steps", o.max_steps},
-          {"t_max", o.t_max},
-          {"equilibrium_tol", o.equilibrium_tol},
-          {"max_wall_seconds", o.max_wall_seconds},
-          {"check_every", o.check_every},
-          {"runaway_position", o.runaway_position},
-          {"position_tol", o.position_tol},
-          {"max_restarts", o.max_restarts},
-          {"newton_solver", to_string(o.newton_solver)},
-          {"krylov_dim", o.krylov_dim},
-          {"krylov_eps_lin", o.krylov_eps_lin},
-          {"gmres_preconditioner", to_string(o.gmres_preconditioner)},
-          {"factorization", to_string(o.factorization)}};
+  nlohmann::json j = nlohmann::json::object();
+  for (const Key& key : key_table()) {  // its IntegratorOptions rows, under their field names
+    std::visit(
+        [&](auto member) {
+          if constexpr (!std::is_same_v<decltype(member), std::monostate>) j[key.field] = o.*member;
+        },
+        key.option);
+    if (key.get_option) j[key.field] = key.get_option(o);
+  }
+  return j;
 }
 
 nlohmann::json to_json(const RunStats& s) {

@@ -10,17 +10,13 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "src/core/invalid_field.hpp"
+
 namespace knitsim {
 
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-[[noreturn]] void bad(const std::string& field, double value, const std::string& range) {
-  std::ostringstream os;
-  os << field << " = " << value << ": " << range;
-  throw std::invalid_argument(os.str());
-}
 
 Vec3 unit(Vec3 v) {
   const double n = norm(v);
@@ -560,11 +556,11 @@ void draw_tubes(const Canvas& c, const std::vector<Stroke>& strokes, const Pixel
 }  // namespace
 
 void RenderView::validate() const {
-  if (width < 16 || width > 16384) bad("width", width, "must be in [16, 16384] px");
-  if (height < 16 || height > 16384) bad("height", height, "must be in [16, 16384] px");
+  if (width < 16 || width > 16384) bad_field("width", width, "must be in [16, 16384] px");
+  if (height < 16 || height > 16384) bad_field("height", height, "must be in [16, 16384] px");
   if (!(elevation_deg >= -90.0 && elevation_deg <= 90.0))
-    bad("elevation_deg", elevation_deg, "must be in [-90, 90] degrees");
-  if (!std::isfinite(azimuth_deg)) bad("azimuth_deg", azimuth_deg, "must be finite");
+    bad_field("elevation_deg", elevation_deg, "must be in [-90, 90] degrees");
+  if (!std::isfinite(azimuth_deg)) bad_field("azimuth_deg", azimuth_deg, "must be finite");
 }
 
 ScreenPoint PixelProjection::operator()(Vec3 p) const {

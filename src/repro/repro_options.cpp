@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "src/base/text.hpp"
+#include "src/core/invalid_field.hpp"
 #include "src/repro/repro.hpp"
 #include "src/scene/scene.hpp"
 
@@ -51,48 +52,45 @@ DrapeSymmetry four_corner_symmetry_from_name(const std::string& name) {
 
 namespace {
 
-[[noreturn]] void bad(const std::string& field, const std::string& value,
-                      const std::string& accepted) {
-  throw std::invalid_argument(field + " = " + value + ": " + accepted);
-}
-
 void check_sample(const std::string& field, int s) {
   if (s < 1 || s > static_cast<int>(paper_samples().size()))
-    bad(field, std::to_string(s), "accepted 1.." + std::to_string(paper_samples().size()));
+    bad_field(field, std::to_string(s), "accepted 1.." + std::to_string(paper_samples().size()));
 }
 
 }  // namespace
 
 void ReproOptions::validate() const {
-  if (samples.empty()) bad("samples", "(none)", "accepted a non-empty list of samples 1..9");
+  if (samples.empty()) bad_field("samples", "(none)", "accepted a non-empty list of samples 1..9");
   std::set<int> seen;
   for (int s : samples) {
     check_sample("samples", s);
-    if (!seen.insert(s).second) bad("samples", std::to_string(s), "each sample at most once");
+    if (!seen.insert(s).second) bad_field("samples", std::to_string(s), "each sample at most once");
   }
   if (sets.empty() || (sets.size() == 2 && sets[0] == sets[1]) || sets.size() > 2)
-    bad("sets", std::to_string(sets.size()) + " sets", "accepted twin, cross or both, once each");
+    bad_field("sets", std::to_string(sets.size()) + " sets",
+              "accepted twin, cross or both, once each");
   if (optimizers.empty() || optimizers.size() > 2 ||
       (optimizers.size() == 2 && optimizers[0] == optimizers[1]))
-    bad("optimizers", std::to_string(optimizers.size()) + " optimizers",
-        "accepted ica, lm or both, once each");
+    bad_field("optimizers", std::to_string(optimizers.size()) + " optimizers",
+              "accepted ica, lm or both, once each");
   const bool lm_used =
       std::find(optimizers.begin(), optimizers.end(), ReproOptimizer::Lm) != optimizers.end();
   if (lm_used && (task == ReproTask::Taguchi || task == ReproTask::Fig13))
-    bad("optimizers", "lm",
-        std::string("accepted for the tasks table4|table6|all only (") + to_string(task) +
-            " studies the ICA)");
-  if (runs < 1) bad("runs", std::to_string(runs), "accepted >= 1");
-  if (jobs < 1) bad("jobs", std::to_string(jobs), "accepted >= 1");
+    bad_field("optimizers", "lm",
+              std::string("accepted for the tasks table4|table6|all only (") + to_string(task) +
+                  " studies the ICA)");
+  if (runs < 1) bad_field("runs", std::to_string(runs), "accepted >= 1");
+  if (jobs < 1) bad_field("jobs", std::to_string(jobs), "accepted >= 1");
   check_sample("fig13_sample", fig13_sample);
   check_sample("taguchi_sample", taguchi_sample);
   if (taguchi_replicates < 1)
-    bad("taguchi_replicates", std::to_string(taguchi_replicates), "accepted >= 1");
+    bad_field("taguchi_replicates", std::to_string(taguchi_replicates), "accepted >= 1");
   for (int d : taguchi_decades)
-    if (d < 1) bad("taguchi_decades", std::to_string(d), "accepted >= 1 each");
-  if (!(rtol > 0.0 && rtol <= 0.1)) bad("rtol", format_number(rtol), "accepted (0, 0.1]");
+    if (d < 1) bad_field("taguchi_decades", std::to_string(d), "accepted >= 1 each");
+  if (!(rtol > 0.0 && rtol <= 0.1)) bad_field("rtol", format_number(rtol), "accepted (0, 0.1]");
   if (four_corner_symmetry == DrapeSymmetry::Half)
-    bad("four_corner_symmetry", to_string(four_corner_symmetry), "accepted none|quarter|eighth");
+    bad_field("four_corner_symmetry", to_string(four_corner_symmetry),
+              "accepted none|quarter|eighth");
   DrapeFitOptions fit;  // the ICA options and the integrator name
   fit.ica = ica;
   fit.integrator = repro_integrator(*this);
@@ -111,7 +109,7 @@ ReproOptions repro_preset(const std::string& name) {
   ReproOptions o;
   o.preset = name;
   if (name == "paper") return o;
-  if (name != "quick") bad("preset", name, "accepted quick|paper");
+  if (name != "quick") bad_field("preset", name, "accepted quick|paper");
   o.runs = 2;
   o.ica.countries = 10;
   o.ica.decades = 6;

@@ -15,19 +15,10 @@
 #include "src/core/vec3.hpp"
 #include "src/measure/yarn_measures.hpp"
 #include "src/scene/frame_recorder.hpp"
+#include "src/scene/knit_scene.hpp"
 #include "src/scene/scene.hpp"
 
 namespace knitsim {
-
-// What a knit run integrates and how.
-struct KnitScene {
-  std::string name = "knit";  // labels the outputs (the chart file's stem)
-  std::string chart_file;     // where the chart was read, as given (summary.json chart_file)
-  KnitChart chart;
-  KnitParams params;
-  IntegratorOptions options;
-  int frames = 4;  // captured states, >= 1 (FrameRecorder)
-};
 
 // The knit model's integrator: cvode-bdf, which keeps a flat chart in its plane; on paper 2's
 // network (a mechanism, its stiffness singular) the overdamped flow of `equilibrium` crawls along
@@ -64,6 +55,15 @@ struct KnitMeasures {
   double min_resolution = 0.0;  // 2 A tau: a deeper dip between measured states would be seen
   CrossingCheck crossings;      // at the end against the rest state (changed -1: not finite)
 };
+
+// The warnings of a knit run before it starts, one line each: an explicit method with yarn
+// contact (it fails at the first impacts: docs/knit.md, "What is not met, and why"), and paper 2's
+// bare network (a mechanism: its steady state depends on the path).
+std::vector<std::string> knit_run_warnings(const KnitParams& params, const std::string& integrator,
+                                           const IntegratorInfo& info);
+// After it: the yarns came closer than kClearanceWarning r or a designed crossing changed its
+// over/under order ("" if neither).
+std::string knit_overlap_warning(const KnitMeasures& measures);
 
 // A knit run's model and start: the chart built, and the state the run starts from.
 struct KnitStart {

@@ -24,7 +24,9 @@
 #include <optional>
 #include <sstream>
 #include <stdexcept>
+#include <type_traits>
 #include <utility>
+#include <variant>
 
 #include "models/mirror_reduced.hpp"
 #include "solvers/equilibrium_check.hpp"
@@ -35,22 +37,7 @@ namespace knitsim {
 
 namespace {
 
-enum class Kind { Number, Integer, Text };
-
-// One scene key: where its value goes, its unit and what it means (`knitsim list keys`).
-// Number keys expose the field (its accepted range is stated once, by the validators); Integer
-// and Text keys parse and check their own value and throw `accepted` (e.g. "one of a, b, c")
-// when it does not fit.
-struct Key {
-  std::string name;
-  Kind kind;
-  std::function<double&(Scene&)> number;                // Kind::Number
-  std::function<bool(Scene&, const std::string&)> set;  // Integer, Text: false = bad
-  std::string accepted;                                 // Integer, Text
-  std::function<std::string(const Scene&)> get;         // Integer, Text: the value as text
-  std::string unit;                                     // "" for text keys and pure numbers
-  std::string meaning;                                  // one sentence
-};
+using Kind = Key::Kind;
 
 bool is_name(const std::string& s) {
   return !s.empty() && std::all_of(s.begin(), s.end(), [](unsigned char c) {
@@ -58,145 +45,369 @@ bool is_name(const std::string& s) {
   });
 }
 
-const std::vector<Key>& keys() {
-  static const std::vector<Key> table = [] {
-    std::vector<Key> k;
-    auto number = [&k](const char* name, std::function<double&(Scene&)> field, const char* unit,
-                       const char* meaning) {
-      k.push_back({name, Kind::Number, std::move(field), nullptr, "", nullptr, unit, meaning});
-    };
-    auto other = [&k](const char* name, Kind kind,
-                      std::function<bool(Scene&, const std::string&)> set, const char* accepted,
-                      std::function<std::string(const Scene&)> get, const char* meaning) {
-      k.push_back({name, kind, nullptr, std::move(set), accepted, std::move(get), "", meaning});
-    };
-    // A text key naming one of a few values of the DrapeParams member `field`: (name, value).
-    auto choice = [&other](const char* name, auto field, auto values, const char* meaning) {
-      std::string accepted = "one of ";
-      for (std::size_t i = 0; i < values.size(); ++i)
-        accepted += (i > 0 ? ", " : "") + values[i].first;
-      other(
-          name, Kind::Text,
-          [field, values](Scene& s, const std::string& v) {
-            for (const auto& [text, value] : values)
-              if (v == text) return (s.params.*field = value, true);
-            return false;
-          },
-          accepted.c_str(),
-          [field, values](const Scene& s) {
-            for (const auto& [text, value] : values)
-              if (s.params.*field == value) return text;
-            return std::string("?");
-          },
-          meaning);
-    };
+// The rows of the table, in `knitsim list keys` order: the drape's scene keys, the run's, then
+// the run options that only a flag sets.
+std::vector<Key> make_table() {
+  std::vector<Key> k;
+  auto number = [&k](const char* name, std::function<double&(Scene&)> field, const char* unit,
+                     const char* meaning, KeyModel model = KeyModel::Drape) {
+    Key key;
+    key.name = key.field = name;
+    key.model = model;
+    key.number = std::move(field);
+    key.unit = unit;
+    key.meaning = meaning;
+    k.push_back(std::move(key));
+  };
+  auto other = [&k](const char* name, Kind kind,
+                    std::function<bool(Scene&, const std::string&)> set, const char* accepted,
+                    std::function<std::string(const Scene&)> get, const char* meaning,
+                    KeyModel model = KeyModel::Drape) {
+    Key key;
+    key.name = key.field = name;
+    key.model = model;
+    key.kind = kind;
+    key.set = std::move(set);
+    key.get = std::move(get);
+    key.accepted = accepted;
+    key.meaning = meaning;
+    k.push_back(std::move(key));
+  };
+  // A text key naming one of a few values of the DrapeParams member `field`: (name, value).
+  auto choice = [&other](const char* name, auto field, auto values, const char* meaning) {
+    std::string accepted = "one of ";
+    for (std::size_t i = 0; i < values.size(); ++i)
+      accepted += (i > 0 ? ", " : "") + values[i].first;
     other(
-        "scene.name", Kind::Text,
-        [](Scene& s, const std::string& v) { return is_name(v) ? (s.name = v, true) : false; },
-        "a non-empty name of letters, digits, _ and -", [](const Scene& s) { return s.name; },
-        "the label in outputs (default: the built-in name or the file's stem)");
-    number("fabric.width", [](Scene& s) -> double& { return s.params.width; }, "m",
-           "side W of the square sample; the model's side is n L0 with n = round(W / L0)");
-    number("fabric.areal_density", [](Scene& s) -> double& { return s.params.areal_density; },
-           "g/m^2", "mass per area, spread over the particles");
-    number("model.stiffness", [](Scene& s) -> double& { return s.params.stiffness; }, "N/m",
-           "spring constant k of every spring (Table 3 box of the fits: 500..1200)");
-    number("model.damping", [](Scene& s) -> double& { return s.params.damping; }, "N s/m",
-           "damping c, absolute and per particle (not scaled with the mesh); does not change "
-           "the equilibrium, only the path to it (fit box 10..20)");
-    number("model.elongation_limit",
-           [](Scene& s) -> double& { return s.params.elongation_limit; }, "%",
-           "largest spring strain before the limit acts (0 = off; fit box 5..20); inactive when "
-           "the drape's max strain stays below it");
-    number("model.natural_length", [](Scene& s) -> double& { return s.params.natural_length; },
-           "m", "rest length L0 of a structural spring; sets the mesh, n = round(W / L0) cells "
-           "per side (fit box 0.04..0.06)");
-    choice("model.topology", &DrapeParams::topology,
-           std::vector<std::pair<std::string, char>>{{"a", 'a'}, {"b", 'b'}, {"c", 'c'}},
-           "springs per particle: a = structural + shear + bending, b = structural + shear, "
-           "c = structural + bending (structural: to the 4 neighbours at L0; shear: the 2 "
-           "diagonals at 1.41 L0; bending: to the second neighbours at 2 L0)");
-    number("model.perturbation", [](Scene& s) -> double& { return s.params.perturbation; }, "m",
-           "amplitude of a seeded out-of-plane perturbation of the flat start (breaks symmetry)");
-    other(
-        "model.seed", Kind::Integer,
-        [](Scene& s, const std::string& v) {
-          auto digit = [](unsigned char c) { return std::isdigit(c) != 0; };
-          if (v.empty() || !std::all_of(v.begin(), v.end(), digit)) return false;
-          errno = 0;
-          const unsigned long long u = std::strtoull(v.c_str(), nullptr, 10);
-          if (errno == ERANGE || u > UINT_MAX) return false;
-          s.params.seed = static_cast<unsigned>(u);
-          return true;
+        name, Kind::Text,
+        [field, values](Scene& s, const std::string& v) {
+          for (const auto& [text, value] : values)
+            if (v == text) return (s.params.*field = value, true);
+          return false;
         },
-        "an integer in 0..4294967295", [](const Scene& s) { return std::to_string(s.params.seed); },
-        "seed of the perturbation");
-    choice("model.symmetry", &DrapeParams::symmetry,
-           std::vector<std::pair<std::string, DrapeSymmetry>>{{"auto", DrapeSymmetry::Auto},
-                                                              {"none", DrapeSymmetry::None},
-                                                              {"half", DrapeSymmetry::Half},
-                                                              {"quarter", DrapeSymmetry::Quarter},
-                                                              {"eighth", DrapeSymmetry::Eighth}},
-           "integrate one mirror part of the sheet and unfold it (half: mirror x = W/2; quarter, "
-           "eighth: four_corner only); auto = the largest the scene allows, certified on the "
-           "whole sheet");
-    choice("pins.layout", &DrapeParams::layout,
-           std::vector<std::pair<std::string, PinLayout>>{{"four_corner", PinLayout::FourCorner},
-                                                          {"two_corner", PinLayout::TwoCorner}},
-           "four_corner: hung from its 4 corners (paper 1, Fig. 12); two_corner: from the 2 "
-           "corners of one edge (Fig. 11)");
-    number("pins.span", [](Scene& s) -> double& { return s.params.pin_span; }, "1",
-           "two_corner: final pin distance / model width; below 1 the pins move inward");
-    number("pins.move_time", [](Scene& s) -> double& { return s.params.pin_move_time; }, "s",
-           "duration of that pin move");
-    number("run.t_max", [](Scene& s) -> double& { return s.options.t_max; }, "s",
-           "end time if no equilibrium is reached (status time_limit, exit 3)");
+        accepted.c_str(),
+        [field, values](const Scene& s) {
+          for (const auto& [text, value] : values)
+            if (s.params.*field == value) return text;
+          return std::string("?");
+        },
+        meaning);
+  };
+  // An IntegratorOptions field: a run.* key (`key`, its flag none) or a flag (`key` empty).
+  auto option = [&k](const char* key, const char* flag, const char* field, auto member,
+                     const char* unit, const char* meaning) {
+    Key row;
+    row.name = key;
+    row.flag = flag;
+    row.field = field;
+    row.model = KeyModel::Both;
+    row.option = member;
+    if constexpr (std::is_same_v<decltype(member), double IntegratorOptions::*>)
+      row.number = [member](Scene& s) -> double& { return s.options.*member; };
+    else
+      row.kind = Kind::Integer;
+    row.unit = unit;
+    row.meaning = meaning;
+    k.push_back(std::move(row));
+  };
+  // A flag naming one of the values of an IntegratorOptions enum member (to_string's names).
+  auto named_option = [&k](const char* flag, const char* field, auto member, auto all,
+                           const char* meaning) {
+    Key row;
+    row.flag = flag;
+    row.field = field;
+    row.model = KeyModel::Both;
+    row.kind = Kind::Text;
+    for (const auto e : all) row.choices.emplace_back(to_string(e));
+    row.accepted = "one of ";
+    for (std::size_t i = 0; i < row.choices.size(); ++i)
+      row.accepted += (i > 0 ? ", " : "") + row.choices[i];
+    row.set_option = [member, all](IntegratorOptions& o, const std::string& name) {
+      for (const auto e : all)
+        if (name == to_string(e)) return (o.*member = e, true);
+      return false;
+    };
+    row.get_option = [member](const IntegratorOptions& o) {
+      return std::string(to_string(o.*member));
+    };
+    row.meaning = meaning;
+    k.push_back(std::move(row));
+  };
+  other(
+      "scene.name", Kind::Text,
+      [](Scene& s, const std::string& v) { return is_name(v) ? (s.name = v, true) : false; },
+      "a non-empty name of letters, digits, _ and -", [](const Scene& s) { return s.name; },
+      "the label in outputs (default: the built-in name or the file's stem)");
+  number(
+      "fabric.width", [](Scene& s) -> double& { return s.params.width; }, "m",
+      "side W of the square sample; the model's side is n L0 with n = round(W / L0)");
+  number(
+      "fabric.areal_density", [](Scene& s) -> double& { return s.params.areal_density; }, "g/m^2",
+      "mass per area, spread over the particles");
+  number(
+      "model.stiffness", [](Scene& s) -> double& { return s.params.stiffness; }, "N/m",
+      "spring constant k of every spring (Table 3 box of the fits: 500..1200)");
+  number(
+      "model.damping", [](Scene& s) -> double& { return s.params.damping; }, "N s/m",
+      "damping c, absolute and per particle (not scaled with the mesh); does not change "
+      "the equilibrium, only the path to it (fit box 10..20)");
+  number(
+      "model.elongation_limit", [](Scene& s) -> double& { return s.params.elongation_limit; }, "%",
+      "largest spring strain before the limit acts (0 = off; fit box 5..20); inactive when "
+      "the drape's max strain stays below it");
+  number(
+      "model.natural_length", [](Scene& s) -> double& { return s.params.natural_length; }, "m",
+      "rest length L0 of a structural spring; sets the mesh, n = round(W / L0) cells "
+      "per side (fit box 0.04..0.06)");
+  choice("model.topology", &DrapeParams::topology,
+         std::vector<std::pair<std::string, char>>{{"a", 'a'}, {"b", 'b'}, {"c", 'c'}},
+         "springs per particle: a = structural + shear + bending, b = structural + shear, "
+         "c = structural + bending (structural: to the 4 neighbours at L0; shear: the 2 "
+         "diagonals at 1.41 L0; bending: to the second neighbours at 2 L0)");
+  number(
+      "model.perturbation", [](Scene& s) -> double& { return s.params.perturbation; }, "m",
+      "amplitude of a seeded out-of-plane perturbation of the flat start (breaks symmetry)");
+  other(
+      "model.seed", Kind::Integer,
+      [](Scene& s, const std::string& v) {
+        auto digit = [](unsigned char c) { return std::isdigit(c) != 0; };
+        if (v.empty() || !std::all_of(v.begin(), v.end(), digit)) return false;
+        errno = 0;
+        const unsigned long long u = std::strtoull(v.c_str(), nullptr, 10);
+        if (errno == ERANGE || u > UINT_MAX) return false;
+        s.params.seed = static_cast<unsigned>(u);
+        return true;
+      },
+      "an integer in 0..4294967295", [](const Scene& s) { return std::to_string(s.params.seed); },
+      "seed of the perturbation");
+  choice("model.symmetry", &DrapeParams::symmetry,
+         std::vector<std::pair<std::string, DrapeSymmetry>>{{"auto", DrapeSymmetry::Auto},
+                                                            {"none", DrapeSymmetry::None},
+                                                            {"half", DrapeSymmetry::Half},
+                                                            {"quarter", DrapeSymmetry::Quarter},
+                                                            {"eighth", DrapeSymmetry::Eighth}},
+         "integrate one mirror part of the sheet and unfold it (half: mirror x = W/2; quarter, "
+         "eighth: four_corner only); auto = the largest the scene allows, certified on the "
+         "whole sheet");
+  choice("pins.layout", &DrapeParams::layout,
+         std::vector<std::pair<std::string, PinLayout>>{{"four_corner", PinLayout::FourCorner},
+                                                        {"two_corner", PinLayout::TwoCorner}},
+         "four_corner: hung from its 4 corners (paper 1, Fig. 12); two_corner: from the 2 "
+         "corners of one edge (Fig. 11)");
+  number(
+      "pins.span", [](Scene& s) -> double& { return s.params.pin_span; }, "1",
+      "two_corner: final pin distance / model width; below 1 the pins move inward");
+  number(
+      "pins.move_time", [](Scene& s) -> double& { return s.params.pin_move_time; }, "s",
+      "duration of that pin move");
+  // The knit's keys (models/knit_loops.hpp, docs/knit.md).
+  auto knit = [&number](const char* name, double KnitParams::*field, const char* unit,
+                        const char* meaning) {
     number(
-        "run.equilibrium_tol", [](Scene& s) -> double& { return s.options.equilibrium_tol; }, "1",
-        "static residual (force / mean particle weight) that stops a run where K is singular; "
-        "the stop in positions is tested once the residual is below max(1e-4, this)");
-    number("run.position_tol", [](Scene& s) -> double& { return s.options.position_tol; }, "m",
-           "the stop: Newton correction |K^-1 F| below this (docs/numerics.md)");
-    return k;
-  }();
-  return table;
+        name, [field](Scene& s) -> double& { return s.knit.*field; }, unit, meaning,
+        KeyModel::Knit);
+  };
+  knit("knit.loop_radius", &KnitParams::loop_radius, "m",
+       "loop radius r; wale spacing w = 8 r, course spacing h = 7 r (14 wales/cm)");
+  knit("knit.wale_stiffness", &KnitParams::wale_stiffness, "N/m",
+       "spring constant k_w along the wales");
+  knit("knit.course_stiffness", &KnitParams::course_stiffness, "N/m",
+       "spring constant k_c along the courses");
+  knit("knit.damping", &KnitParams::damping, "N s/m", "damping c per point");
+  knit("knit.areal_density", &KnitParams::areal_density, "g/m^2",
+       "mass per area, spread over the points");
+  knit("knit.stabiliser", &KnitParams::stabiliser_ratio, "1",
+       "stabiliser's shear and bending springs relative to k_w, k_c (0 = off: paper 2's "
+       "network)");
+  knit("knit.bending", &KnitParams::bending_ratio, "1",
+       "out-of-plane bending rigidity as a multiple of the yarn's (0 = off: the chart stays in "
+       "its plane; needs knit.contact = 0)");
+  knit("knit.contact", &KnitParams::contact_ratio, "1",
+       "yarn contact's barrier stiffness relative to k_w (0 = off: yarns may pass through each "
+       "other)");
+  // A knit key naming one of a few values of the KnitParams member `field`: (name, value) pairs;
+  // `accepted` says what it takes in messages ("" = "one of" the names).
+  auto knit_choice = [&k](const char* name, auto field, auto values, std::string accepted,
+                          const char* meaning) {
+    Key key;
+    key.name = key.field = name;
+    key.model = KeyModel::Knit;
+    key.kind = Kind::Text;
+    for (const auto& value : values) key.choices.push_back(value.first);
+    if (accepted.empty()) {
+      accepted = "one of ";
+      for (std::size_t i = 0; i < key.choices.size(); ++i)
+        accepted += (i > 0 ? ", " : "") + key.choices[i];
+    }
+    key.accepted = accepted;
+    key.set = [field, values](Scene& s, const std::string& v) {
+      for (const auto& [text, value] : values)
+        if (v == text) return (s.knit.*field = value, true);
+      return false;
+    };
+    key.get = [field, values](const Scene& s) {
+      for (const auto& [text, value] : values)
+        if (s.knit.*field == value) return text;
+      return std::string("?");
+    };
+    key.meaning = meaning;
+    k.push_back(std::move(key));
+  };
+  knit_choice("knit.network", &KnitParams::network,
+              std::vector<std::pair<std::string, KnitNetwork>>{
+                  {"stabilised", KnitNetwork::Stabilised}, {"paper", KnitNetwork::Paper}},
+              "stabilised (the default) or paper (paper 2's network)",
+              "stabilised, or paper: paper 2's bare network, no stabiliser, bending or contact "
+              "(a mechanism)");
+  knit_choice("knit.pins", &KnitParams::pins,
+              std::vector<std::pair<std::string, KnitPins>>{{"none", KnitPins::None},
+                                                            {"bottom", KnitPins::Bottom},
+                                                            {"top", KnitPins::Top},
+                                                            {"both", KnitPins::BottomAndTop}},
+              "", "edge levels held fixed: none, the bottom edge, the top edge, or both");
+  knit_choice("knit.gravity", &KnitParams::gravity,
+              std::vector<std::pair<std::string, bool>>{
+                  {"off", false}, {"on", true}, {"0", false}, {"1", true}},
+              "", "gravity, g = 9.81 m/s^2 along -y (off: paper 2 has no external force)");
+  other(
+      "knit.chart", Kind::Text,
+      [](Scene& s, const std::string& v) { return v.empty() ? false : (s.chart = v, true); },
+      "a chart file's path", [](const Scene& s) { return s.chart; },
+      "the stitch chart file (K knit, T tuck, M miss), relative to the scene file; or "
+      "knit.chart_text",
+      KeyModel::Knit);
+  other(
+      "knit.chart_text", Kind::Text,
+      [](Scene& s, const std::string& v) { return v.empty() ? false : (s.chart_text = v, true); },
+      "the lines of a chart file", [](const Scene& s) { return s.chart_text; },
+      "the stitch chart inline, as the lines of a chart file (chart_text = \"\"\"...\"\"\")",
+      KeyModel::Knit);
+  option("run.t_max", "", "t_max", &IntegratorOptions::t_max, "s",
+         "end time if no equilibrium is reached (status time_limit, exit 3)");
+  option("run.equilibrium_tol", "", "equilibrium_tol", &IntegratorOptions::equilibrium_tol, "1",
+         "static residual (force / mean particle weight) that stops a run where K is singular; "
+         "the stop in positions is tested once the residual is below max(1e-4, this)");
+  option("run.position_tol", "", "position_tol", &IntegratorOptions::position_tol, "m",
+         "the stop: Newton correction |K^-1 F| below this (docs/numerics.md)");
+  // The run options only a flag sets, in --help order (drape, knit; fit has --atol and
+  // --velocity-atol). Their meaning is the flag's --help text.
+  using IO = IntegratorOptions;
+  option("", "--rtol", "rtol", &IO::rtol, "1", "Relative tolerance (adaptive methods)");
+  option("", "--atol", "atol", &IO::atol, "m",
+         "Absolute tolerance, m (positions) and m/s (velocities, unless --velocity-atol)");
+  option("", "--velocity-atol", "velocity_atol", &IO::velocity_atol, "m/s",
+         "Absolute tolerance of the velocities, m/s (0 = --atol); ~ atol x the rate (rad/s) of "
+         "the motion to resolve");
+  option("", "--dt", "dt", &IO::dt, "s", "Fixed step, s (fixed-step methods; 0 = automatic)");
+  option("", "--max-order", "max_order", &IO::max_order, "1",
+         "Cap on the method order (0 = default)");
+  option("", "--max-steps", "max_steps", &IO::max_steps, "1", "Step cap");
+  option("", "--max-wall", "max_wall_seconds", &IO::max_wall_seconds, "s",
+         "Wall-clock cap, s (0 = none); the run then ends with status wall_limit");
+  option("", "--max-restarts", "max_restarts", &IO::max_restarts, "1",
+         "Restarts from the last accepted state after CVODE's or ARKODE's repeated error-test or "
+         "corrector failures (0 = the run ends with solver_failure)");
+  using NS = IO::NewtonSolver;
+  named_option("--newton-solver", "newton_solver", &IO::newton_solver,
+               std::vector<NS>{NS::Klu, NS::SchurLdl, NS::SchurCgLdl},
+               "Newton linear solver of cvode-bdf, arkode-dirk, arkode-imex: klu (2n LU), ldl "
+               "(velocity block eliminated, 3n symmetric LDL^T) or cg-ldl (the same, with "
+               "Jacobi-CG instead of the factorisation at small steps)");
+  using F = IO::Factorization;
+  named_option("--factorization", "factorization", &IO::factorization,
+               std::vector<F>{F::Automatic, F::Simplicial, F::Block, F::Supernodal},
+               "sparse factorisation of the 3n symmetric matrix (implicit-euler, ldl, cg-ldl, "
+               "schur-ldl): simplicial (Eigen LDL^T), block (LDL^T in 3 x 3 particle blocks, 2 x 2 "
+               "where z couples to nothing; simplicial where the matrix has none), supernodal "
+               "(CHOLMOD LL^T, LDL^T where not positive definite) or auto (block, supernodal "
+               "from 33000 unknowns)");
+  using GP = IO::GmresPreconditioner;
+  named_option("--gmres-preconditioner", "gmres_preconditioner", &IO::gmres_preconditioner,
+               std::vector<GP>{GP::None, GP::BlockJacobi, GP::SchurIc, GP::SchurLdl},
+               "cvode-bdf-gmres: none, block-jacobi (6 x 6 per particle), schur-ic (incomplete "
+               "Cholesky of the 3n Schur matrix) or schur-ldl (its LDL^T, lagged between "
+               "set-ups)");
+  option("", "--krylov-dim", "krylov_dim", &IO::krylov_dim, "1",
+         "cvode-bdf-gmres: Krylov dimension (0 = SUNDIALS' 5)");
+  option("", "--eps-lin", "krylov_eps_lin", &IO::krylov_eps_lin, "1",
+         "cvode-bdf-gmres: linear tolerance factor (CVodeSetEpsLin); with block-jacobi the "
+         "residual a run can reach is proportional to it");
+  // Fields no user sets, for summary.json (IntegratorOptions documents them).
+  option("", "", "dt_safety", &IO::dt_safety, "1", "");
+  option("", "", "check_every", &IO::check_every, "1", "");
+  option("", "", "runaway_position", &IO::runaway_position, "m", "");
+  return k;
 }
 
-[[noreturn]] void unknown_key(const std::string& key, const std::string& where) {
-  throw std::invalid_argument(unknown_key_message(key, scene_keys()) + where);
+// Text the user typed, for a one-line message: past kShownMax bytes, its first kShownHead
+// (to a whole UTF-8 character) and "... (N characters)"; then printable().
+constexpr std::size_t kShownMax = 80, kShownHead = 60;
+std::string shown_cut(const std::string& text) {
+  if (text.size() <= kShownMax) return printable(text);
+  std::size_t head = kShownHead;
+  while (head > 0 && (static_cast<unsigned char>(text[head]) & 0xC0) == 0x80) --head;
+  return printable(text.substr(0, head)) + "... (" + std::to_string(text.size()) + " characters)";
 }
 
-const Key& find_key(const std::string& name, const std::string& where) {
-  for (const Key& k : keys())
-    if (k.name == name) return k;
-  unknown_key(name, where);
+// Whether `key` is one of `model`'s (Both: of any model).
+bool applies(const Key& key, KeyModel model) {
+  return key.model == model || key.model == KeyModel::Both || model == KeyModel::Both;
 }
 
-// The accepted values of a key, for type errors. For numbers the range is asked from the
-// validators (with the field set to NaN), so it is stated in one place.
+[[noreturn]] void unknown_key(const std::string& key, KeyModel model, const std::string& where) {
+  // A long key is cut first: its message stays one short line, and no key is that long.
+  const std::string shown =
+      key.size() <= kShownMax
+          ? key
+          : key.substr(0, kShownHead) + "... (" + std::to_string(key.size()) + " characters)";
+  throw std::invalid_argument(unknown_key_message(shown, scene_keys(model)) + where);
+}
+
+// The key `name` of `model`'s scenes.
+const Key& find_key(const std::string& name, KeyModel model, const std::string& where) {
+  for (const Key& k : key_table())
+    if (!k.name.empty() && k.name == name && applies(k, model)) return k;
+  unknown_key(name, model, where);
+}
+
+// What the validators accept for a number or integer row, "must be" dropped: asked from them
+// with the field set to NaN (integers: -1, below every range), so it is stated in one place.
+std::string validated_range(const Key& key) {
+  Scene probe;
+  if (key.number)
+    key.number(probe) = std::numeric_limits<double>::quiet_NaN();
+  else if (const auto* i = std::get_if<int IntegratorOptions::*>(&key.option))
+    probe.options.*(*i) = -1;
+  else if (const auto* l = std::get_if<long IntegratorOptions::*>(&key.option))
+    probe.options.*(*l) = -1;
+  try {
+    probe.params.validate();
+    probe.options.validate();
+    probe.knit.validate();
+  } catch (const InvalidField& e) {
+    const std::string must = "must be ";
+    if (e.field() == key.field && e.accepted().rfind(must, 0) == 0)
+      return e.accepted().substr(must.size());
+  }
+  return "";
+}
+
+// The accepted values of a key, for type errors.
 std::string accepted(const Key& key) {
   if (key.kind != Kind::Number) return key.accepted;
-  Scene probe;
-  key.number(probe) = std::numeric_limits<double>::quiet_NaN();
-  try {
-    probe.validate();
-  } catch (const std::invalid_argument& e) {
-    const std::string msg = e.what();
-    const std::string marker = ": must be ";
-    const size_t at = msg.find(marker);
-    if (at != std::string::npos) return "a number " + msg.substr(at + marker.size());
-  }
-  return "a finite number";
+  const std::string range = validated_range(key);
+  return range.empty() ? "a finite number" : "a number " + range;
 }
 
 [[noreturn]] void bad_value(const Key& key, const std::string& shown, const std::string& where) {
-  throw std::invalid_argument(key.name + " = " + printable(shown) + ": must be " + accepted(key) +
+  throw std::invalid_argument(key.name + " = " + shown_cut(shown) + ": must be " + accepted(key) +
                               where);
 }
 
 // Sets a Number key; NaN and inf are type errors.
 void set_number(Scene& scene, const Key& key, double value, const std::string& shown,
                 const std::string& where) {
+  scene.typed[key.name] = shown;
   if (!std::isfinite(value)) bad_value(key, shown, where);
   key.number(scene) = value;
 }
@@ -204,6 +415,7 @@ void set_number(Scene& scene, const Key& key, double value, const std::string& s
 // Sets `key` from text (a --set value, or a TOML string or integer).
 void set_from_text(Scene& scene, const Key& key, const std::string& text, const std::string& shown,
                    const std::string& where) {
+  scene.typed[key.name] = shown;
   if (key.kind == Kind::Number) {
     char* end = nullptr;
     const double value = std::strtod(text.c_str(), &end);
@@ -220,18 +432,40 @@ std::string trim(const std::string& s) {
   return s.substr(b, s.find_last_not_of(" \t") - b + 1);
 }
 
-void apply_override(Scene& scene, const std::string& assignment) {
+// Applies one "key=value"; returns its key.
+const Key& apply_override(Scene& scene, KeyModel model, const std::string& assignment) {
   const size_t eq = assignment.find('=');
+  const std::string example = model == KeyModel::Knit ? "knit.contact=0" : "model.stiffness=900";
   if (eq == std::string::npos)
-    throw std::invalid_argument("--set " + printable(assignment) + ": expected key=value, e.g. " +
-                                "model.stiffness=900");
+    throw std::invalid_argument("--set " + shown_cut(assignment) + ": expected key=value, e.g. " +
+                                example);
   const std::string name = trim(assignment.substr(0, eq));
+  if (name.empty())
+    throw std::invalid_argument("--set " + shown_cut(assignment) +
+                                ": the key is empty; expected key=value, e.g. " + example);
   std::string value = trim(assignment.substr(eq + 1));
-  const Key& key = find_key(name, "");
+  const Key& key = find_key(name, model, "");
   if (key.kind == Kind::Text && value.size() >= 2 && value.front() == '"' && value.back() == '"')
     value = value.substr(1, value.size() - 2);
   set_from_text(scene, key, value, value, "");
   scene.keys_given.push_back(key.name);
+  return key;
+}
+
+// Applies the --set overrides in order. A key may come from the scene file and again from a
+// --set (the --set wins: that is what it is for), but not twice from --set: the first value
+// would vanish unchecked (docs/scenes.md, "Overrides").
+void apply_overrides(Scene& scene, KeyModel model, const std::vector<std::string>& overrides) {
+  std::map<std::string, std::string> given;  // key -> its value as the --set typed it
+  for (const std::string& o : overrides) {
+    const Key& key = apply_override(scene, model, o);
+    const std::string value = scene.typed[key.name];
+    const auto [first, fresh] = given.emplace(key.name, value);
+    if (!fresh)
+      throw std::invalid_argument("--set " + key.name + ": given twice (" +
+                                  shown_cut(first->second) + ", then " + shown_cut(value) +
+                                  "); give each key once");
+  }
 }
 
 // A TOML value as it appears in the file, for messages.
@@ -241,7 +475,7 @@ std::string shown(const toml::node& node) {
   return os.str();
 }
 
-void apply_toml(Scene& scene, const std::string& text, const std::string& source) {
+void apply_toml(Scene& scene, KeyModel model, const std::string& text, const std::string& source) {
   toml::table root;
   try {
     root = toml::parse(text, source);
@@ -257,10 +491,10 @@ void apply_toml(Scene& scene, const std::string& text, const std::string& source
   for (const auto& [section, section_node] : root) {
     const std::string section_name(section.str());
     const toml::table* table = section_node.as_table();
-    if (!table) unknown_key(section_name, where(section_node));
+    if (!table) unknown_key(section_name, model, where(section_node));
     for (const auto& [name, node] : *table) {
       const std::string full = section_name + "." + std::string(name.str());
-      const Key& key = find_key(full, where(node));
+      const Key& key = find_key(full, model, where(node));
       if (key.kind == Kind::Number && node.is_number()) {
         // An integer beyond 2^53 has no exact double, so toml++'s value<double>() is empty:
         // take the nearest double, and let the key's range check judge it.
@@ -291,13 +525,58 @@ void apply_toml(Scene& scene, const std::string& text, const std::string& source
 
 }  // namespace
 
+const char* to_string(KeyModel model) {
+  return model == KeyModel::Drape ? "drape" : model == KeyModel::Knit ? "knit" : "both";
+}
+
+const std::vector<Key>& key_table() {
+  static const std::vector<Key> table = make_table();
+  return table;
+}
+
+const Key& key_of_flag(const std::string& flag) {
+  for (const Key& k : key_table())
+    if (k.flag == flag) return k;
+  throw std::logic_error("no parameter has the flag " + flag);
+}
+
+void rethrow_as_typed(const std::invalid_argument& e, const Scene* scene) {
+  const auto* bad = dynamic_cast<const InvalidField*>(&e);
+  if (bad == nullptr) throw e;
+  for (const Key& k : key_table()) {
+    if (k.field != bad->field() || k.label().empty()) continue;
+    std::string value = bad->value();
+    if (scene != nullptr && k.number) {
+      // The text typed, if it still reads back as the value refused (not changed since).
+      const auto typed = scene->typed.find(k.name);
+      if (typed != scene->typed.end()) {
+        char* end = nullptr;
+        const double v = std::strtod(typed->second.c_str(), &end);
+        if (v == k.number(const_cast<Scene&>(*scene)) && *end == '\0') value = typed->second;
+      }
+    }
+    throw InvalidField(k.label(), shown_cut(value), bad->accepted());
+  }
+  throw e;
+}
+
 void Scene::validate() const {
-  params.validate();
+  const auto given = [this](const char* key) {
+    return std::find(keys_given.begin(), keys_given.end(), key) != keys_given.end();
+  };
+  if (knit.network == KnitNetwork::Paper &&
+      (given("knit.stabiliser") || given("knit.bending") || given("knit.contact")) &&
+      (knit.stabiliser_ratio > 0.0 || knit.bending_ratio > 0.0 || knit.contact_ratio > 0.0))
+    throw std::invalid_argument(
+        "--set knit.stabiliser, knit.bending or knit.contact with knit.network = paper: paper 2's "
+        "network has no stabiliser, bending or contact (drop one of them)");
   try {
+    params.validate();
     options.validate();
+    knit.validate();
   } catch (const std::invalid_argument& e) {
-    // IntegratorOptions names its fields; the user wrote a scene key or a command-line flag.
-    rethrow_renamed(e, run_option_names());
+    // The validators name struct fields; the user wrote a scene key or a command-line flag.
+    rethrow_as_typed(e, this);
   }
 }
 
@@ -306,9 +585,38 @@ Scene load_scene_text(const std::string& text, const std::string& name, const st
   Scene scene;
   scene.name = name;
   scene.source = source;
-  apply_toml(scene, text, source == "built-in" ? "built-in " + name : source);
-  for (const std::string& o : overrides) apply_override(scene, o);
+  apply_toml(scene, KeyModel::Drape, text, source == "built-in" ? "built-in " + name : source);
+  apply_overrides(scene, KeyModel::Drape, overrides);
   scene.validate();
+  return scene;
+}
+
+Scene knit_scene(const std::string& chart, const std::vector<std::string>& overrides) {
+  Scene scene;
+  scene.name = std::filesystem::path(chart).stem().string();
+  scene.source = "command line";
+  scene.chart = chart;
+  apply_overrides(scene, KeyModel::Knit, overrides);
+  return scene;
+}
+
+Scene load_knit_scene(const std::string& path, const std::vector<std::string>& overrides) {
+  std::string text, why;
+  if (!read_input_file(path, kMaxSceneFileBytes, text, why)) unreadable(path, why);
+  Scene scene;
+  scene.source = path;
+  apply_toml(scene, KeyModel::Knit, text, path);
+  if (!scene.chart.empty())  // relative to the scene file, as "models/charts/x.chart"
+    scene.chart =
+        (std::filesystem::path(path).parent_path() / scene.chart).lexically_normal().string();
+  const std::string stem =
+      std::filesystem::path(scene.chart.empty() ? path : scene.chart).stem().string();
+  scene.name = is_name(stem) ? stem : "knit";
+  apply_overrides(scene, KeyModel::Knit, overrides);
+  if (scene.chart.empty() == scene.chart_text.empty())
+    throw std::invalid_argument("scene " + path +
+                                ": give one of knit.chart (a chart file, relative to the scene "
+                                "file) and knit.chart_text (the chart inline)");
   return scene;
 }
 
@@ -325,7 +633,7 @@ Scene load_scene(const std::string& name_or_path, const std::vector<std::string>
 }
 
 std::string scene_key_value(const Scene& scene, const std::string& name) {
-  const Key& key = find_key(name, "");
+  const Key& key = find_key(name, KeyModel::Both, "");
   if (key.kind != Kind::Number) return key.get(scene);
   const double v = key.number(const_cast<Scene&>(scene));  // read only
   return format_number(v, 6) + (key.unit.empty() || key.unit == "1" ? "" : " " + key.unit);
@@ -342,23 +650,35 @@ std::vector<std::string> keys_not_given(const Scene& scene,
 }
 
 Table scene_key_table() {
-  const Scene defaults;
+  Scene defaults;
   Table t;
-  t.columns = {"key", "unit", "default", "accepted", "meaning"};
-  for (const Key& k : keys()) {
-    const std::string value =
-        k.kind == Kind::Number ? format_number(k.number(const_cast<Scene&>(defaults)), 6)
-                               : k.get(defaults);
-    std::string range = accepted(k);
-    if (k.kind == Kind::Number && range.rfind("a number ", 0) == 0) range.erase(0, 9);
-    t.rows.push_back({k.name, k.unit.empty() ? "-" : k.unit, value, range, k.meaning});
+  t.columns = {"key", "model", "unit", "default", "accepted", "meaning"};
+  for (const Key& k : key_table()) {
+    if (k.label().empty()) continue;  // no user sets it
+    std::string value, range;
+    if (k.number) {
+      value = format_number(k.number(defaults), 6);
+      range = validated_range(k);
+    } else if (const auto* i = std::get_if<int IntegratorOptions::*>(&k.option)) {
+      value = std::to_string(defaults.options.*(*i));
+      range = validated_range(k);
+    } else if (const auto* l = std::get_if<long IntegratorOptions::*>(&k.option)) {
+      value = std::to_string(defaults.options.*(*l));
+      range = validated_range(k);
+    } else {
+      value = k.get_option ? k.get_option(defaults.options) : k.get(defaults);
+      range = k.accepted;
+    }
+    t.rows.push_back({k.label(), to_string(k.model), k.unit.empty() ? "-" : k.unit, value,
+                      range.empty() ? "a finite number" : range, k.meaning});
   }
   return t;
 }
 
-std::vector<std::string> scene_keys() {
+std::vector<std::string> scene_keys(KeyModel model) {
   std::vector<std::string> names;
-  for (const Key& k : keys()) names.push_back(k.name);
+  for (const Key& k : key_table())
+    if (!k.name.empty() && applies(k, model)) names.push_back(k.name);
   return names;
 }
 
@@ -509,24 +829,6 @@ DrapeResult run_drape(const Scene& scene, const std::string& integrator, RunObse
 std::string target_scene_name(const Scene& scene) {
   if (scene.params.layout == PinLayout::FourCorner) return "four_corner";
   return scene.params.pin_span < 1.0 ? "two_corner_slack" : "two_corner";
-}
-
-const std::vector<std::pair<std::string, std::string>>& run_option_names() {
-  static const std::vector<std::pair<std::string, std::string>> names = {
-      {"t_max", "run.t_max"},
-      {"equilibrium_tol", "run.equilibrium_tol"},
-      {"position_tol", "run.position_tol"},
-      {"rtol", "--rtol"},
-      {"atol", "--atol"},
-      {"velocity_atol", "--velocity-atol"},
-      {"dt", "--dt"},
-      {"max_order", "--max-order"},
-      {"max_steps", "--max-steps"},
-      {"max_wall_seconds", "--max-wall"},
-      {"max_restarts", "--max-restarts"},
-      {"krylov_dim", "--krylov-dim"},
-      {"krylov_eps_lin", "--eps-lin"}};
-  return names;
 }
 
 }  // namespace knitsim

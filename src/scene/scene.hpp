@@ -16,6 +16,12 @@
 //            definite; both solvers/integrator.hpp)
 // Line 2 of a scene file is a comment that describes it in one line (`knitsim list scenes`).
 //
+// Every parameter a user can set is one row of one table (key_table() below): its scene key
+// and/or command-line flag, unit, default, accepted values, meaning and the model it applies to.
+// Validation messages, the run options' flags (src/cli/cli_options.cpp), `knitsim list keys`,
+// summary.json's options and docs/reference/scene_keys.md all come from it (docs/architecture.md,
+// "Adding a parameter").
+//
 // Failure modes: every bad input throws std::invalid_argument with one line naming the key as
 // the user wrote it (scene key, or the command-line flag for the run options):
 //   "model.stifness: unknown key; did you mean model.stiffness?"
@@ -25,13 +31,18 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
+#include <map>
 #include <string>
 #include <utility>
+#include <variant>
 #include <vector>
 
 #include "models/drape_grid.hpp"
-#include "src/base/table.hpp"
+#include "models/knit_loops.hpp"
 #include "solvers/integrator.hpp"
+#include "src/base/table.hpp"
+#include "src/core/invalid_field.hpp"
 #include "src/core/vec3.hpp"
 
 namespace knitsim {
@@ -48,14 +59,65 @@ struct Scene {
   // Run options: the scene sets t_max and equilibrium_tol ([run]); the command line may set
   // the integrator's tolerances, step and caps. Everything else keeps its default.
   IntegratorOptions options;
+  // The knit model (knitsim knit): its parameters (knit.* keys) and stitch chart file.
+  KnitParams knit;
+  std::string chart;
+  std::string chart_text;  // the chart inline (knit.chart_text); a knit scene has one of the two
   // The keys the scene file or a --set gave, in that order (a key may repeat): every other
   // key has its default, sample 1's value (`knitsim list keys`).
   std::vector<std::string> keys_given;
+  // Each given key's value as the user typed it (the last one given), for messages.
+  std::map<std::string, std::string> typed;
 
-  // DrapeParams::validate and IntegratorOptions::validate, with the offending field renamed to
-  // what the user writes (run.t_max, --rtol, --max-wall, ...).
+  // DrapeParams::validate, IntegratorOptions::validate and KnitParams::validate, each bad field
+  // named as the user writes it (run.t_max, --rtol, --max-wall, ...) with its value as typed;
+  // and knit.network = paper refused beside an explicit knit.stabiliser, knit.bending or
+  // knit.contact > 0 (paper 2's network has none of them).
   void validate() const;
 };
+
+// Which model a key applies to: the drape (paper 1), the knit (paper 2), or both (the run).
+enum class KeyModel { Drape, Knit, Both };
+const char* to_string(KeyModel model);  // "drape", "knit", "both"
+
+// One row of the parameter table: everything the program says or does about one parameter.
+struct Key {
+  enum class Kind { Number, Integer, Text };
+  std::string name;   // scene file / --set key, "model.stiffness"; "" for a flag-only option
+  std::string flag;   // command-line flag, "--rtol"; "" for none
+  std::string field;  // the name its validate() throws under (InvalidField::field()), and
+                      // summary.json's name of an IntegratorOptions field
+  KeyModel model = KeyModel::Drape;
+  Kind kind = Kind::Number;
+  std::string unit;     // "" for text keys and pure numbers ("1" shown for ratios)
+  std::string meaning;  // one sentence (`knitsim list keys`); a flag's --help text
+  // Number keys: the field in a Scene (its accepted range is stated once, by the validators).
+  std::function<double&(Scene&)> number;
+  // Integer and Text keys: parse and store (false = not accepted), read back, what is accepted.
+  std::function<bool(Scene&, const std::string&)> set;
+  std::function<std::string(const Scene&)> get;
+  std::string accepted;
+  // IntegratorOptions rows: the field, for the flags, copy_run_flags and summary.json.
+  std::variant<std::monostate, double IntegratorOptions::*, int IntegratorOptions::*,
+               long IntegratorOptions::*>
+      option;
+  std::vector<std::string> choices;  // named IntegratorOptions values (--factorization ...)
+  std::function<bool(IntegratorOptions&, const std::string&)> set_option;
+  std::function<std::string(const IntegratorOptions&)> get_option;
+
+  const std::string& label() const { return name.empty() ? flag : name; }  // as messages name it
+};
+
+// The table, in `knitsim list keys` order. Rows with neither key nor flag are IntegratorOptions
+// fields no user sets (dt_safety, check_every, runaway_position): summary.json still shows them.
+const std::vector<Key>& key_table();
+// The row with this flag (std::logic_error if none: a programming error).
+const Key& key_of_flag(const std::string& flag);
+
+// Rethrows a validation error in the user's words: the field renamed to its key or flag, and the
+// value as `scene` records it typed (when it still reads back as the value refused). Anything
+// that is not an InvalidField of a row is rethrown unchanged.
+[[noreturn]] void rethrow_as_typed(const std::invalid_argument& e, const Scene* scene = nullptr);
 
 // Loads a built-in scene (by name) or a scene file (any other argument is a path), applies the
 // "key=value" overrides in order, and validates the result. A file longer than
@@ -68,18 +130,26 @@ constexpr std::size_t kMaxSceneFileBytes = std::size_t{1} << 20;  // scene files
 Scene load_scene_text(const std::string& text, const std::string& name, const std::string& source,
                       const std::vector<std::string>& overrides = {});
 
-// The IntegratorOptions fields as the user writes them, for rethrow_renamed: the keys run.t_max
-// and run.equilibrium_tol (scene files, drape/knit --set) and the flags --rtol, --atol,
-// --velocity-atol, --dt, --max-order, --max-steps, --max-wall, --max-restarts, --krylov-dim,
-// --eps-lin.
-const std::vector<std::pair<std::string, std::string>>& run_option_names();
+// The knit's scene from `knitsim knit --chart CHART --set ...`: the knit's defaults (KnitParams,
+// IntegratorOptions) with the overrides, keys of the knit and the run only, applied in order.
+// Not validated (the command validates once it has its flags: Scene::validate).
+Scene knit_scene(const std::string& chart, const std::vector<std::string>& overrides);
 
-// All scene keys, dotted ("model.stiffness"), in file order.
-std::vector<std::string> scene_keys();
+// A knit scene file (knitsim knit --scene; docs/knit.md, "Running a chart"): the knit's
+// defaults with the file's knit and run keys, then the overrides. knit.chart is taken relative
+// to the file's folder; the scene's name is the chart file's stem (the scene file's for an
+// inline chart). Exactly one of knit.chart and knit.chart_text (std::invalid_argument
+// otherwise). Not validated, as knit_scene.
+Scene load_knit_scene(const std::string& path, const std::vector<std::string>& overrides = {});
 
-// Every scene key with its unit ("-" for text keys, "1" for ratios), default (sample 1, four
-// corners), accepted values (from the same validators that refuse bad input) and meaning:
-// what `knitsim list keys` prints and docs/reference/scene_keys.md is generated from.
+// The scene keys of `model`'s scenes (its own and the run's), dotted ("model.stiffness"), in
+// file order.
+std::vector<std::string> scene_keys(KeyModel model = KeyModel::Drape);
+
+// Every row with a key or a flag: the key (or flag), the model it applies to, its unit ("-" for
+// text keys, "1" for ratios), default (sample 1, four corners; the knit's defaults), accepted
+// values (from the same validators that refuse bad input) and meaning: what `knitsim list keys`
+// prints and docs/reference/scene_keys.md is generated from.
 Table scene_key_table();
 // The value of scene key `name` in `scene` as text, with its unit ("852 N/m", "a").
 std::string scene_key_value(const Scene& scene, const std::string& name);
