@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "models/knit_loops.hpp"
+#include "src/scene/knit_run.hpp"
 #include "tests/cli_runner.hpp"
 
 using namespace knitsim;
@@ -468,4 +469,42 @@ TEST_CASE("knitsim knit: a scene whose chart cannot be read exits 2 with one lin
     CHECK(err.find(c.names) != std::string::npos);
     CHECK(!fs::exists(out));
   }
+}
+
+TEST_CASE("run_knit, called without the command line, ends where knitsim knit --chart ends") {
+  TempDir tmp("knit-library");
+  const fs::path chart = tmp.path / "small.chart";
+  std::ofstream(chart) << "KKKKK\nKKTKK\nKKKKK\n";
+  const Scene input = knit_scene(chart.string(), {"knit.contact=0"});
+  KnitScene scene = make_knit_scene(input, read_knit_chart(input), 2);
+  const std::string integrator = default_knit_integrator(scene.params.yarn_contact());
+  set_default_knit_velocity_atol(scene.options, scene.params,
+                                 make_integrator(integrator)->info());
+  const KnitResult r = run_knit(scene, integrator);
+  CHECK(r.stats.status == RunStatus::Equilibrium);
+  CHECK(r.frames.size() == 2);
+  CHECK(r.frames.front().check == 0);
+  CHECK(r.measures.crossings.designed > 0);
+
+  std::string err;
+  REQUIRE(run_knit("--chart '" + chart.string() + "' --set knit.contact=0 --frames 2 " +
+                       "--no-pictures --quiet --out '" + (tmp.path / "out").string() + "'",
+                   err) == 0);
+  // points.csv: id,wale,level,x,y,z,x0,y0,z0 in shortest round-trip text: the same doubles.
+  std::istringstream csv(slurp(tmp.path / "out" / "points.csv"));
+  std::string line;
+  std::getline(csv, line);
+  size_t rows = 0;
+  while (std::getline(csv, line)) {
+    std::vector<double> f;
+    std::istringstream fields(line);
+    for (std::string v; std::getline(fields, v, ',');) f.push_back(std::stod(v));
+    REQUIRE(f.size() == 9);
+    const Vec3& p = r.positions.at(static_cast<size_t>(f[0]));
+    CHECK(f[3] == p.x);
+    CHECK(f[4] == p.y);
+    CHECK(f[5] == p.z);
+    ++rows;
+  }
+  CHECK(rows == r.positions.size());
 }

@@ -18,7 +18,7 @@ namespace {
 // docs/knit.md, "Yarn measures").
 constexpr double kClearanceResample = 0.05;
 
-// The clearance and crossings at the end of the run; `rest_lines` are the rest state's.
+// The clearance and crossings at the end of the run, against the rest state's `crossings`.
 void measure_end(const KnitModel& model, const std::vector<Vec3>& end,
                  const std::vector<YarnCrossing>& crossings, KnitMeasures& measures) {
   if (std::all_of(end.begin(), end.end(), is_finite)) {
