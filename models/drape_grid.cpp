@@ -5,6 +5,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "src/core/stop_request.hpp"
+
 namespace knitsim {
 
 namespace {
@@ -98,8 +100,11 @@ DrapeGrid build_drape_grid(const DrapeParams& p) {
   const double total_mass = p.areal_density * 1e-3 * model_width * model_width;  // kg
   const double unit = total_mass / (static_cast<double>(n) * n);
   std::mt19937 rng(p.seed);
+  // A grid near max_particles takes seconds to build: a stop request (Ctrl-C) is read every
+  // 64 rows and ends the set-up (StopRequested).
   for (int i = 0; i < side; ++i)
     for (int j = 0; j < side; ++j) {
+      if (j == 0 && i % 64 == 0) throw_if_stop_requested();
       double z = 0.0;
       if (p.perturbation > 0.0)  // uniform in [-1, 1), generator-defined (portable) bits
         z = p.perturbation * (2.0 * (rng() / 4294967296.0) - 1.0);
@@ -114,6 +119,7 @@ DrapeGrid build_drape_grid(const DrapeParams& p) {
   const bool bending = p.topology == 'a' || p.topology == 'c';
   for (int i = 0; i < side; ++i)
     for (int j = 0; j < side; ++j) {
+      if (j == 0 && i % 64 == 0) throw_if_stop_requested();
       if (j + 1 < side) add(index(i, j), index(i, j + 1), L0);
       if (i + 1 < side) add(index(i, j), index(i + 1, j), L0);
       if (shear && i + 1 < side && j + 1 < side) {

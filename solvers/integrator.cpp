@@ -13,6 +13,7 @@
 
 #include "solvers/equilibrium_check.hpp"
 #include "solvers/factories.hpp"
+#include "src/core/stop_request.hpp"
 
 namespace knitsim {
 
@@ -259,6 +260,11 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
     stats.cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
     return stats;
   };
+  // The caller's flag, or the process-wide request (src/core/stop_request.hpp) that the loops
+  // inside a step read: a step they cut short must end the run, not count as a failure.
+  auto interrupted = [&] {
+    return (opt.interrupt && opt.interrupt->load(std::memory_order_relaxed)) || stop_requested();
+  };
   auto state_ok = [&]() -> bool {
     const double* xs = integ.positions();
     const double* vs = integ.velocities();
@@ -363,6 +369,10 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
   double t_prev = integ.time();
   while (true) {
     const Integrator::Step st = integ.step(opt.t_max);
+    // After every step, not only at the residual checks: one check can be minutes away (a
+    // large grid's factorisations). A step cut short by the request (the SUNDIALS callbacks
+    // and the block factorisation read it too) fails: the state is the last accepted one.
+    if (interrupted()) return finish(RunStatus::Interrupted, "interrupted before equilibrium");
     if (!st.ok) {  // a failed step is not counted: the cap is on steps taken
       const bool diverged = !state_ok();
       if (!diverged && st.recoverable && restarts < opt.max_restarts && integ.restart()) {
@@ -398,8 +408,6 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
       }
       if (opt.max_wall_seconds > 0.0 && wall() > opt.max_wall_seconds)
         return finish(RunStatus::WallLimit, "wall-clock cap reached");
-      if (opt.interrupt && opt.interrupt->load(std::memory_order_relaxed))
-        return finish(RunStatus::Interrupted, "interrupted before equilibrium");
     }
     if (t >= opt.t_max) return finish(RunStatus::TimeLimit, "t_max reached before equilibrium");
     if (steps >= opt.max_steps)

@@ -42,8 +42,9 @@ struct IntegratorOptions {
   double equilibrium_tol = 1e-8;  // static residual, dimensionless: the stop where K is singular
   double position_tol = 1e-10;    // m, the stop in positions where K is positive definite
   double max_wall_seconds = 0.0;  // s, wall-clock cap per run; 0 = none
-  // Set from outside (the CLI's signal handler) to end the run as Interrupted; read at each
-  // residual check. nullptr = none.
+  // Set from outside (the CLI's signal handler) to end the run as Interrupted; read after every
+  // step, with the process-wide stop request (src/core/stop_request.hpp) that also cuts a step's
+  // factorisations and SUNDIALS iterations short. nullptr = none.
   const std::atomic<bool>* interrupt = nullptr;
   long check_every = 0;           // steps between residual checks; 0 = 1000 (euler, verlet), else 1
   double runaway_position = 1e3;  // m: |x_i| above it counts as a blow-up (Diverged)

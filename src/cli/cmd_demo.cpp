@@ -154,13 +154,13 @@ void run(const DemoArgs& args) {
 
   nlohmann::json integrators = nlohmann::json::array();
   for (const RunStats& s : stats) integrators.push_back(s.integrator);
-  write_json_atomic(dir / "manifest.json", manifest({{"command", "demo"},
-                                                     {"scenes", kScenes},
-                                                     {"scene_integrator", integrator},
-                                                     {"comparison_scene", kComparisonScene},
-                                                     {"comparison_integrators", integrators},
-                                                     {"comparison_wall_cap_s", wall_cap},
-                                                     {"options", to_json(scene.options)}}));
+  finish_output_folder(dir, manifest({{"command", "demo"},
+                                      {"scenes", kScenes},
+                                      {"scene_integrator", integrator},
+                                      {"comparison_scene", kComparisonScene},
+                                      {"comparison_integrators", integrators},
+                                      {"comparison_wall_cap_s", wall_cap},
+                                      {"options", to_json(scene.options)}}));
 
   std::cout << "\n" << md.text() << "\nreport: " << (dir / "report.md").string() << std::endl;
   if (stopped()) {

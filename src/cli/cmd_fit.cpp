@@ -345,7 +345,7 @@ void run_lm_fit(const FitArgs& args, const Scene& base, const DrapeFitProblem& p
   summary["starts"] = starts_json;
   summary["units"] = fit_units(true);
   write_json_atomic(dir / "summary.json", summary);
-  write_json_atomic(dir / "manifest.json", manifest(settings));
+  finish_output_folder(dir, manifest(settings));
   if (!args.quiet) {
     std::cout << starts.text() << "\nstatus: " << fit.message << "\n";
     // What the edges determine first: k / L0 (with the topology and n, chosen by the
@@ -444,7 +444,7 @@ void run(const FitArgs& args) {
     }
     std::cout << std::flush;
   }
-  interrupt = std::make_unique<InterruptScope>();
+  interrupt = std::make_unique<InterruptScope>(InterruptScope::Reach::BetweenUnits);
   const DrapeFitResult fit = fit_drape(*problem);
   const bool interrupted = fit.status == IcaStatus::Interrupted;
 
@@ -503,7 +503,7 @@ void run(const FitArgs& args) {
   if (options.ica.resume_from) summary["resumed_from_decade"] = options.ica.resume_from->decade;
   summary["units"] = fit_units(false);
   write_json_atomic(dir / "summary.json", summary);
-  write_json_atomic(dir / "manifest.json", manifest(settings));
+  finish_output_folder(dir, manifest(settings));
 
   if (!args.quiet) {
     std::cout << history.text() << "\nstatus: " << fit.message << "\n";

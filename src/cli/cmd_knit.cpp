@@ -70,6 +70,7 @@
 #include "src/base/text.hpp"
 #include "src/cli/cli_options.hpp"
 #include "src/cli/commands.hpp"
+#include "src/core/stop_request.hpp"
 #include "src/io/drape_outputs.hpp"
 #include "src/io/json.hpp"
 #include "src/io/manifest.hpp"
@@ -561,11 +562,11 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
                        "course_stiffness N/m; damping N s/m; "
                        "areal_density g/m^2; stabiliser_ratio 1"}})}};
   write_json_atomic(dir / "summary.json", summary);
-  write_json_atomic(dir / "manifest.json", manifest({{"chart", args.chart},
-                                                     {"integrator", stats.integrator},
-                                                     {"frames", args.frames},
-                                                     {"params", params_json(m.params)},
-                                                     {"options", options}}));
+  finish_output_folder(dir, manifest({{"chart", args.chart},
+                                      {"integrator", stats.integrator},
+                                      {"frames", args.frames},
+                                      {"params", params_json(m.params)},
+                                      {"options", options}}));
 }
 
 void run(const KnitArgs& args) {
@@ -655,6 +656,8 @@ void run(const KnitArgs& args) {
       stats = run_to_equilibrium(model.system(), *integ, opt, x, v, &clearance, t0);
     } catch (const std::invalid_argument& e) {  // an option the model refuses at the start
       refuse_at_run_start(e, dir, created);
+    } catch (const StopRequested&) {  // a signal during the integrator's set-up
+      interrupt.end_during_setup("knit", dir, created);
     }
     measures.measure_cpu_seconds = clearance.cpu_seconds() - measure_cpu_before;
     clearance.observe(stats.t_final, x.data(), true);
@@ -679,6 +682,10 @@ void run(const KnitArgs& args) {
     else
       remove_stale_output(dir / "steps.csv");
   }
+  // state.json before write_outputs' manifest.json, the last file of the set (src/base/files.hpp).
+  write_run_state(
+      dir,
+      {"knit", {stats.t_final, x, v}, stats.integrator, stats.dt, knit_model_keys(chart, params)});
   write_outputs(dir, args, model, opt, stats, x, frames, t0, measures);
   if (measures.crossings.changed > 0 || measures.min_clearance.over_r < kClearanceWarning)
     warn("yarns overlap: clearance down to " + format_number(measures.min_clearance.over_r, 3) +
@@ -689,9 +696,6 @@ void run(const KnitArgs& args) {
          std::to_string(measures.crossings.changed) + " of " +
          std::to_string(measures.crossings.designed) +
          " designed crossings changed over/under order");
-  write_run_state(
-      dir,
-      {"knit", {stats.t_final, x, v}, stats.integrator, stats.dt, knit_model_keys(chart, params)});
   if (!args.quiet) {
     Table t;
     t.columns = {"knit", name + " (" + args.chart + ")"};

@@ -210,11 +210,11 @@ void write_drape_outputs(const fs::path& dir, const Scene& scene, const DrapeRes
     write_drape_picture(dir / "drape.png", scene, r, quads);
   else
     remove_stale_output(dir / "drape.png");
-  write_json_atomic(dir / "manifest.json", manifest({{"scene", scene.name},
-                                                     {"source", scene.source},
-                                                     {"integrator", r.stats.integrator},
-                                                     {"params", to_json(scene.params)},
-                                                     {"options", to_json(scene.options)}}));
+  finish_output_folder(dir, manifest({{"scene", scene.name},
+                                      {"source", scene.source},
+                                      {"integrator", r.stats.integrator},
+                                      {"params", to_json(scene.params)},
+                                      {"options", to_json(scene.options)}}));
 }
 
 }  // namespace knitsim

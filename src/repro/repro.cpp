@@ -469,7 +469,7 @@ ReproSummary run_repro(const ReproOptions& o, ReproTargets& targets, const fs::p
                {"paper_euler_cpu_seconds_estimate", summary.paper_euler_cpu_estimate}};
   json m = manifest(config);
   m["cost"] = cost;
-  write_json_atomic(dir / "manifest.json", m);
+  finish_output_folder(dir, m);
   keep("manifest.json");
   return summary;
 }
