@@ -166,6 +166,24 @@ DrapeGrid build_drape_grid(const DrapeParams& p) {
   return DrapeGrid{p, n, SpringNetwork(std::move(spec)), std::move(edges)};
 }
 
+std::string drape_limit_violation(const DrapeParams& p, double max_strain, double centre_sag) {
+  std::ostringstream os;
+  os.precision(4);
+  const double width = p.cells() * p.natural_length;
+  if (!std::isfinite(max_strain) || !std::isfinite(centre_sag)) {
+    os << "the end state's max strain (" << max_strain << ") or centre sag (" << centre_sag
+       << " m) is not finite";
+  } else if (p.elongation_limit > 0.0 &&
+             max_strain > (1.0 + kStrainLimitTolerance) * p.elongation_limit / 100.0) {
+    os << "max strain " << 100.0 * max_strain << " % is past the elongation limit "
+       << p.elongation_limit << " % (tolerance " << 100.0 * kStrainLimitTolerance
+       << " % of it): the springs are far softer than the load";
+  } else if (std::abs(centre_sag) > width) {
+    os << "centre sag " << centre_sag << " m is larger than the sheet (" << width << " m wide)";
+  }
+  return os.str();
+}
+
 const char* to_string(DrapeParameter p) {
   switch (p) {
     case DrapeParameter::Stiffness:

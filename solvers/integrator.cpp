@@ -30,6 +30,13 @@ constexpr double kFloorCheckFactor = 1e3;
 constexpr double kProbeStart = 1e-4;
 constexpr double kProbeDrop = 10.0;
 constexpr long kProbeEvery = 50;
+// Above kProbeStart the stop is still tested where the residual stands on its round-off floor
+// (within kFloorProbe of it): a very light fabric's spring forces round off to a large part of
+// a particle's weight, its residual cannot fall to kProbeStart, and without this only t_max
+// ended its run (fabric.areal_density = 1e-6: time_limit). The floor is evaluated only where
+// the residual is below 1, every kFloorEvery checks.
+constexpr double kFloorProbe = 2.0;
+constexpr long kFloorEvery = 16;
 // The energy check's allowance for round-off, relative to the energies compared.
 constexpr double kEnergyRoundoff = 1e-9;
 // Fewer steps than this across the pins' motion: the energy check is inconclusive (below).
@@ -151,6 +158,8 @@ const char* to_string(RunStatus s) {
       return "equilibrium";
     case RunStatus::SpuriousEquilibrium:
       return "spurious_equilibrium";
+    case RunStatus::OutsideModelLimits:
+      return "outside_model_limits";
     case RunStatus::TimeLimit:
       return "time_limit";
     case RunStatus::StepLimit:
@@ -292,9 +301,15 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
   long checks_since_probe = 0;
   double t_probe = std::numeric_limits<double>::infinity();  // t of the latest test
   // Returns the status message if (t, xs) passes the stop, with the certificate in stats.
+  double floor_seen = 0.0;  // the residual's round-off floor at a recent check
+  long floor_age = kFloorEvery;
   auto stop_test = [&](double t, const double* xs, double r, bool force) -> std::string {
     ++checks_since_probe;
-    if (!(r <= std::max(kProbeStart, opt.equilibrium_tol))) return "";
+    if (!(r <= std::max(kProbeStart, opt.equilibrium_tol))) {
+      if (!(r <= 1.0)) return "";
+      if (++floor_age >= kFloorEvery) floor_seen = sys.residual_roundoff(t, xs), floor_age = 0;
+      if (!(r <= kFloorProbe * floor_seen)) return "";
+    }
     if (!force && r > next_probe && checks_since_probe < kProbeEvery &&
         !(t > 0.0 && t >= 2.0 * t_probe))
       return "";

@@ -76,6 +76,10 @@ enum class RunStatus {
   // above the total energy the run had once the pins stopped (e.g. implicit-euler at a very
   // large dt landing on a crumpled equilibrium).
   SpuriousEquilibrium,
+  // The stop passed, but the state breaks the model's own limits (a drape strained far past its
+  // elongation limit, a sag larger than the sheet: docs/reliability.md, "Results against the
+  // model's limits"). Set by the command that checks them, never by run_to_equilibrium.
+  OutsideModelLimits,
   TimeLimit,      // reached t_max first
   StepLimit,      // reached max_steps first
   WallLimit,      // reached max_wall_seconds first

@@ -128,6 +128,15 @@ void run(const DrapeArgs& args) {
       interrupt.end_during_setup("drape", dir, created);
     }
   }();
+  // An equilibrium that breaks the model's own limits is not reported as one (exit 3).
+  const std::string limits =
+      drape_limit_violation(scene.params, result.max_strain, result.centre_sag);
+  if (result.stats.status == RunStatus::Equilibrium && !limits.empty()) {
+    result.stats.status = RunStatus::OutsideModelLimits;
+    result.stats.message = limits + " (the solver's stop passed: " + result.stats.message + ")";
+    warn("the equilibrium is outside the model's limits: " + limits +
+         "; status outside_model_limits (docs/reliability.md)");
+  }
   if (args.step_history)  // before the outputs' manifest.json, the last file (files.hpp)
     write_file_atomic(dir / "steps.csv", steps_csv);
   else
