@@ -61,6 +61,7 @@
 #include <list>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <stdexcept>
 #include <utility>
 
@@ -569,6 +570,29 @@ void write_outputs(const fs::path& dir, const KnitArgs& args, const KnitModel& m
                                       {"options", options}}));
 }
 
+// With yarn contact, a chart whose yarns lie inside the contact's core already at rest (tucks
+// stacked 8 high or more in one wale, a block of tucks) cannot start: its first force is
+// infinite. Refused before anything is made, naming the row (top course first) and column.
+void refuse_overlap_at_rest(const KnitModel& m) {
+  if (!m.contact) return;
+  const YarnClearance c = yarn_clearance(m, yarn_polylines(m, m.rest_positions()));
+  if (!(c.over_r < kContactCore)) return;
+  const double w =
+      m.chart.wales > 1 ? m.points[m.point(1, 0)].rest.x - m.points[m.point(0, 0)].rest.x : 1.0;
+  const long wale = std::clamp(std::lround(c.where.x / w), 0L, long{m.chart.wales - 1});
+  std::ostringstream os;
+  os << "chart row " << m.chart.courses - c.b.course << ", column " << wale + 1
+     << (c.a.course == c.b.course
+             ? ": two stretches of the yarn of course " + std::to_string(c.a.course + 1)
+             : ": the yarns of courses " + std::to_string(c.a.course + 1) + " and " +
+                   std::to_string(c.b.course + 1))
+     << " (from the bottom) lie " << format_number(c.over_r, 3)
+     << " r apart at rest, inside the yarn contact's core (" << kContactCore
+     << " r): the model cannot hold this stitch arrangement (tucks stacked 8 or more high in "
+        "one wale); knit.contact = 0 runs it without contact";
+  throw std::invalid_argument(os.str());
+}
+
 void run(const KnitArgs& args) {
   const KnitChart chart = read_chart(args.chart);
   KnitParams params;
@@ -596,6 +620,7 @@ void run(const KnitArgs& args) {
   if (args.frames < 1)
     throw std::invalid_argument("--frames = " + std::to_string(args.frames) + ": must be >= 1");
   const KnitModel model = build_knit(chart, params);  // validates params
+  refuse_overlap_at_rest(model);
   std::vector<double> x(model.network.dof()), v(model.network.dof());
   model.network.initial_state(x.data(), v.data());
   double t0 = 0.0;
