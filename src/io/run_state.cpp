@@ -127,9 +127,6 @@ SavedRun read_run_state(const fs::path& dir, const std::string& command) {
         (fs::exists(dir / "summary.json")
              ? " (that run's final state was not finite, or it predates state.json)"
              : " (not the output folder of a knitsim " + command + " run)"));
-  // The files of one run only: a rerun stopped while writing may have left its summary beside
-  // the earlier run's state (src/base/files.hpp, finish_output_folder).
-  if (!output_folder_complete(dir, why)) throw std::invalid_argument(why + "; run it again");
   try {
     return parse_run_state(text, command);
   } catch (const std::invalid_argument& e) {
@@ -159,6 +156,10 @@ RunState continue_state(const std::string& dir, const std::string& command,
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument("--continue: " + std::string(e.what()));
   }
+  // The files of one run only: a rerun stopped while writing may have left its summary beside
+  // the earlier run's state (src/base/files.hpp, finish_output_folder).
+  if (std::string why; !output_folder_complete(dir, why))
+    throw std::invalid_argument("--continue: " + why + "; run it again");
   for (const auto& [key, value] : model.items())
     if (!saved.model.contains(key) || saved.model.at(key) != value) {
       const std::string here = value.dump(),
