@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "src/core/invalid_field.hpp"
+#include "src/core/stop_request.hpp"
 
 namespace knitsim {
 
@@ -90,8 +91,11 @@ DrapeGrid build_drape_grid(const DrapeParams& p) {
   const double total_mass = p.areal_density * 1e-3 * model_width * model_width;  // kg
   const double unit = total_mass / (static_cast<double>(n) * n);
   std::mt19937 rng(p.seed);
+  // A grid near max_particles takes seconds to build: a stop request (Ctrl-C) is read every
+  // 64 rows and ends the set-up (StopRequested).
   for (int i = 0; i < side; ++i)
     for (int j = 0; j < side; ++j) {
+      if (j == 0 && i % 64 == 0) throw_if_stop_requested();
       double z = 0.0;
       if (p.perturbation > 0.0)  // uniform in [-1, 1), generator-defined (portable) bits
         z = p.perturbation * (2.0 * (rng() / 4294967296.0) - 1.0);
@@ -106,6 +110,7 @@ DrapeGrid build_drape_grid(const DrapeParams& p) {
   const bool bending = p.topology == 'a' || p.topology == 'c';
   for (int i = 0; i < side; ++i)
     for (int j = 0; j < side; ++j) {
+      if (j == 0 && i % 64 == 0) throw_if_stop_requested();
       if (j + 1 < side) add(index(i, j), index(i, j + 1), L0);
       if (i + 1 < side) add(index(i, j), index(i + 1, j), L0);
       if (shear && i + 1 < side && j + 1 < side) {
@@ -150,6 +155,24 @@ DrapeGrid build_drape_grid(const DrapeParams& p) {
     edges[3].particles.push_back(index(k, n));
   }
   return DrapeGrid{p, n, SpringNetwork(std::move(spec)), std::move(edges)};
+}
+
+std::string drape_limit_violation(const DrapeParams& p, double max_strain, double centre_sag) {
+  std::ostringstream os;
+  os.precision(4);
+  const double width = p.cells() * p.natural_length;
+  if (!std::isfinite(max_strain) || !std::isfinite(centre_sag)) {
+    os << "the end state's max strain (" << max_strain << ") or centre sag (" << centre_sag
+       << " m) is not finite";
+  } else if (p.elongation_limit > 0.0 &&
+             max_strain > (1.0 + kStrainLimitTolerance) * p.elongation_limit / 100.0) {
+    os << "max strain " << 100.0 * max_strain << " % is past the elongation limit "
+       << p.elongation_limit << " % (tolerance " << 100.0 * kStrainLimitTolerance
+       << " % of it): the springs are far softer than the load";
+  } else if (std::abs(centre_sag) > width) {
+    os << "centre sag " << centre_sag << " m is larger than the sheet (" << width << " m wide)";
+  }
+  return os.str();
 }
 
 const char* to_string(DrapeParameter p) {

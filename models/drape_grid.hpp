@@ -72,6 +72,17 @@ struct DrapeGrid {
 
 DrapeGrid build_drape_grid(const DrapeParams& params);
 
+// The model's own limits at an end state: "" where they hold, else why not (one line).
+//   max_strain (a fraction) above the elongation limit by more than kStrainLimitTolerance of
+//     it: the limiting spring (100 k) lets a spring past L_max by 1/101 of the strain the
+//     linear spring alone would take, so 10 % past it means a linear strain ~11 times the
+//     limit -- a fabric the model no longer describes (e.g. model.stiffness = 1e-6);
+//   a centre sag (m) larger than the model sheet's width n L0 (a sheet hung by its corners
+//     cannot sag further than it is wide while its springs keep near their limit);
+//   either figure not finite.
+inline constexpr double kStrainLimitTolerance = 0.10;
+std::string drape_limit_violation(const DrapeParams& params, double max_strain, double centre_sag);
+
 // The continuous drape parameters (DrapeParams fields, same units: N/m, N s/m, percent, m).
 enum class DrapeParameter { Stiffness, Damping, ElongationLimit, NaturalLength };
 const char* to_string(DrapeParameter p);  // stiffness | damping | elongation_limit | natural_length

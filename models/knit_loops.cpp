@@ -339,6 +339,18 @@ std::vector<Vec3> KnitModel::rest_positions() const {
 KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
   p.validate();
   chart.validate();
+  if (p.yarn_contact())  // floats longer than the contact can hold: refused up front
+    for (int j = 0; j < chart.courses; ++j)
+      for (int i = 0, run = 0; i < chart.wales; ++i) {
+        run = chart.at(i, j) == Stitch::Miss ? run + 1 : 0;
+        if (run > kMaxContactFloat)
+          bad_stitch(chart, i - run + 1, j,
+                     "a float of more than " + std::to_string(kMaxContactFloat) +
+                         " misses from here on, with yarn contact",
+                     "the model holds floats of at most 7 wales with contact; longer ones end "
+                     "in solver_failure; knit.contact = 0 runs them without contact",
+                     nullptr);
+      }
   const int W = chart.wales, C = chart.courses;
   if (static_cast<double>(W) * (C + 1) > static_cast<double>(p.max_points)) {
     std::ostringstream os;

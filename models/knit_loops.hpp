@@ -283,6 +283,10 @@ struct KnitModel {
   std::vector<Vec3> rest_positions() const;
 };
 
+// With yarn contact (params.yarn_contact()) build_knit refuses a chart with a float (misses in a
+// row of one course) longer than this, naming its row and first column: a single course's float
+// of 8 wales or more ended in solver_failure (7 settled), whereas without contact 16 settle.
+inline constexpr int kMaxContactFloat = 7;
 KnitModel build_knit(const KnitChart& chart, const KnitParams& params);
 
 // Type-value points of one loop in yarn order: k lists which T_k the loop has (0..8 for a knit,

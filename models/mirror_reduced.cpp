@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "src/core/memo.hpp"
+#include "src/core/stop_request.hpp"
 
 namespace knitsim {
 
@@ -129,6 +130,7 @@ void check_particles(const SpringNetwork& full, const MirrorPlanes& planes) {
   const int generators[] = {1, 2, 4};
   const int generator_count = diagonal ? 3 : has_y ? 2 : 1;
   for (int p = 0; p < np; ++p) {
+    if ((p & 0xffff) == 0) throw_if_stop_requested();            // seconds near max_particles
     auto who = [p] { return "particle " + std::to_string(p); };  // built only to throw
     auto valid = [np](int q) { return q >= 0 && q < np; };
     if (!valid(ix[p]) || ix[ix[p]] != p)
@@ -239,6 +241,7 @@ Fold fold_into_domain(const MirrorReduced::Structure& s) {
   const int np = static_cast<int>(s.sides.size());
   Fold fold{std::vector<int>(np), std::vector<int>(np)};
   for (int p = 0; p < np; ++p) {
+    if ((p & 0xffff) == 0) throw_if_stop_requested();  // each loop: seconds near max_particles
     int g = 0;
     if (ix[p] != p && (s.sides[p] & 1)) g |= 1;
     if (has_y && iy[p] != p && (s.sides[p] & 2)) g |= 2;
@@ -268,6 +271,7 @@ std::vector<int> choose_unknowns(MirrorReduced::Structure& s, const SpringNetwor
   std::vector<int> q_of(3 * np, -1);
   s.source_base.assign(3 * np, Structure::kZero);
   for (int p = 0; p < np; ++p) {
+    if ((p & 0xffff) == 0) throw_if_stop_requested();
     if (fold.domain_of[p] != p || full.free_index(p) < 0) continue;
     int orbit = 0;
     for (int g = 0; g < order; ++g) {
@@ -312,6 +316,7 @@ void tie_full_dofs(MirrorReduced::Structure& s, const SpringNetwork& full, const
   s.tie_source.assign(full_dofs, 0);
   s.tie_element.assign(full_dofs, 0);
   for (int p = 0; p < full.particle_count(); ++p) {
+    if ((p & 0xffff) == 0) throw_if_stop_requested();
     if (full.free_index(p) < 0) continue;
     const int d = fold.domain_of[p], g = fold.element[p];
     for (int c = 0; c < 3; ++c) {
@@ -334,7 +339,9 @@ class SpringsByEnds {
   SpringsByEnds(const SpringNetworkSpec& spec, int np) : np_(np), by_key_(spec.springs.size()) {
     for (size_t k = 0; k < spec.springs.size(); ++k)
       by_key_[k] = {key(spec.springs[k].a, spec.springs[k].b), static_cast<int>(k)};
+    throw_if_stop_requested();
     std::sort(by_key_.begin(), by_key_.end());
+    throw_if_stop_requested();
     for (size_t k = 1; k < by_key_.size(); ++k)
       if (by_key_[k].first == by_key_[k - 1].first) {
         const Spring& dup = spec.springs[by_key_[k].second];
@@ -378,6 +385,7 @@ void reduce_springs(MirrorReduced::Structure& s, const SpringNetworkSpec& spec, 
     if (fold.domain_of[p] == p) add_particle(p);
   std::vector<char> done(spec.springs.size(), 0);
   for (size_t k = 0; k < spec.springs.size(); ++k) {
+    if ((k & 0xffff) == 0) throw_if_stop_requested();
     if (done[k]) continue;
     const Spring& sp = spec.springs[k];
     int members[8], count = 0, best = 0, best_inside = -1;
@@ -413,6 +421,7 @@ void map_jacobian(MirrorReduced::Structure& s, const SpringNetwork& full) {
   }
   const CscPattern& kp = net.stiffness_pattern();
   std::vector<std::pair<int, int>> entries;
+  throw_if_stop_requested();
   for (int col = 0; col < kp.cols; ++col)
     for (int e = kp.colptr[col]; e < kp.colptr[col + 1]; ++e) {
       const int r = s.tie_dof[s.net_full_dof[kp.rowind[e]]], c = s.tie_dof[s.net_full_dof[col]];
@@ -423,6 +432,7 @@ void map_jacobian(MirrorReduced::Structure& s, const SpringNetwork& full) {
   s.pattern =
       make_csc_pattern(dof, dof, std::move(entries), /*with_diagonal=*/true, &entry_position);
   s.jac_target.assign(kp.nnz(), -1);
+  throw_if_stop_requested();
   int next_entry = 0;  // the entries in the order listed above
   for (int col = 0; col < kp.cols; ++col)
     for (int e = kp.colptr[col]; e < kp.colptr[col + 1]; ++e) {

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "src/core/memo.hpp"
+#include "src/core/stop_request.hpp"
 
 namespace knitsim {
 
@@ -91,6 +92,7 @@ SpringNetwork::SpringNetwork(SpringNetworkSpec spec) : spec_(std::move(spec)) {
   }
 
   // Springs: validate; their stiffness pattern is built on first use (stiffness_layout).
+  throw_if_stop_requested();  // a grid near its cap: each pass takes about a second
   for (const Spring& s : spec_.springs) {
     if (s.a < 0 || s.a >= np || s.b < 0 || s.b >= np || s.a == s.b)
       throw std::invalid_argument("spring network: spring end out of range or self-loop");
@@ -99,6 +101,7 @@ SpringNetwork::SpringNetwork(SpringNetworkSpec spec) : spec_(std::move(spec)) {
     if (!(s.stiffness > 0.0) || !std::isfinite(s.stiffness))
       throw std::invalid_argument("spring network: spring stiffness must be > 0 N/m");
   }
+  throw_if_stop_requested();
   for (const Stencil& st : spec_.stencils) {
     int count = 0;
     while (count < 4 && st.particles[count] >= 0) ++count;

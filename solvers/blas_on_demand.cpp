@@ -14,6 +14,7 @@ extern "C" {
 }
 
 #include "src/core/on_demand.hpp"
+#include "src/core/stop_request.hpp"
 
 #define KNITSIM_FORWARD(LIBRARY, NAME, PARAMS, ARGS)                              \
   KNITSIM_FORWARD_ON_DEMAND(LIBRARY,                                              \
@@ -63,9 +64,22 @@ KNITSIM_FORWARD("libblas.so.3", zherk_,
                 (char* uplo, char* trans, BLAS_INT* n, BLAS_INT* k, double* alpha, double* A,
                  BLAS_INT* lda, double* beta, double* C, BLAS_INT* ldc),
                 (uplo, trans, n, k, alpha, A, lda, beta, C, ldc))
-KNITSIM_FORWARD("liblapack.so.3", dpotrf_,
-                (char* uplo, BLAS_INT* n, double* A, BLAS_INT* lda, BLAS_INT* info),
-                (uplo, n, A, lda, info))
+// dpotrf_ factors each supernode's diagonal block. Once a stop is requested
+// (src/core/stop_request.hpp) it reports that block's first pivot not positive (info = 1)
+// without factoring it: CHOLMOD then returns at once, not positive definite, and
+// SymmetricFactor::factorize reports the factorisation failed -- a factorisation of minutes
+// ends at its next supernode instead of running on.
+extern "C" void dpotrf_(char* uplo, BLAS_INT* n, double* A, BLAS_INT* lda, BLAS_INT* info) {
+  using Real = void (*)(char*, BLAS_INT*, double*, BLAS_INT*, BLAS_INT*);
+  static const auto real = reinterpret_cast<Real>(::knitsim::function_on_demand(
+      "liblapack.so.3", "dpotrf_",
+      "CHOLMOD's supernodal factorisation; Debian package libopenblas0-serial"));
+  if (::knitsim::stop_requested()) {
+    *info = 1;
+    return;
+  }
+  real(uplo, n, A, lda, info);
+}
 KNITSIM_FORWARD("liblapack.so.3", zpotrf_,
                 (char* uplo, BLAS_INT* n, double* A, BLAS_INT* lda, BLAS_INT* info),
                 (uplo, n, A, lda, info))

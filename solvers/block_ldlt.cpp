@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "src/core/memo.hpp"
+#include "src/core/stop_request.hpp"
 
 namespace knitsim::detail {
 
@@ -347,6 +348,9 @@ bool BlockLdlt::factorize_blocks(const double* s) {
   std::fill(flag_.begin(), flag_.end(), -1);
   std::fill(work_.begin(), work_.end(), 0.0);  // clean even after a failed factorisation
   for (int k = 0; k < nb_; ++k) {
+    // A stop request (src/core/stop_request.hpp) ends a factorisation that may take minutes as
+    // a failed one; every 1024 nodes, a load per ~1e5 flops at the least.
+    if ((k & 1023) == 0 && stop_requested()) return false;
     // Scatter column k of P S P^T into work_ and find row k's pattern: the tree paths from
     // each entry's row up to k, in topological order at stack_[top..nb_).
     int top = nb_;

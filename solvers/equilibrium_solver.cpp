@@ -49,6 +49,7 @@
 #include "solvers/factories.hpp"
 #include "solvers/schur_matrix.hpp"
 #include "solvers/symmetric_factor.hpp"
+#include "src/core/stop_request.hpp"
 
 namespace knitsim::detail {
 
@@ -115,6 +116,9 @@ class EquilibriumSolver final : public Integrator {
     ++steps_;
     if (++flow_steps_ > kMaxFlowSteps) return fall_back();
     for (int rejected = 0; rejected < kMaxRejected; ++rejected) {
+      // A factorisation cut short by a stop request reads as a rejected try: end the step at
+      // once (the driver reports interrupted) rather than shrink h and fall back.
+      if (stop_requested()) return {false, "stopped on request", false};
       const Trial trial = try_step();
       if (trial.accepted) {
         rejected_ += rejected;

@@ -42,8 +42,9 @@ struct IntegratorOptions {
   double equilibrium_tol = 1e-8;  // static residual, dimensionless: the stop where K is singular
   double position_tol = 1e-10;    // m, the stop in positions where K is positive definite
   double max_wall_seconds = 0.0;  // s, wall-clock cap per run; 0 = none
-  // Set from outside (the CLI's signal handler) to end the run as Interrupted; read at each
-  // residual check. nullptr = none.
+  // Set from outside (the CLI's signal handler) to end the run as Interrupted; read after every
+  // step, with the process-wide stop request (src/core/stop_request.hpp) that also cuts a step's
+  // factorisations and SUNDIALS iterations short. nullptr = none.
   const std::atomic<bool>* interrupt = nullptr;
   long check_every = 0;           // steps between residual checks; 0 = 1000 (euler, verlet), else 1
   double runaway_position = 1e3;  // m: |x_i| above it counts as a blow-up (Diverged)
@@ -75,6 +76,10 @@ enum class RunStatus {
   // above the total energy the run had once the pins stopped (e.g. implicit-euler at a very
   // large dt landing on a crumpled equilibrium).
   SpuriousEquilibrium,
+  // The stop passed, but the state breaks the model's own limits (a drape strained far past its
+  // elongation limit, a sag larger than the sheet: docs/reliability.md, "Results against the
+  // model's limits"). Set by the command that checks them, never by run_to_equilibrium.
+  OutsideModelLimits,
   TimeLimit,      // reached t_max first
   StepLimit,      // reached max_steps first
   WallLimit,      // reached max_wall_seconds first

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "solvers/schur_ldl_solver.hpp"
+#include "src/core/stop_request.hpp"
 
 namespace knitsim::sun {
 
@@ -58,6 +59,7 @@ std::string step_failure(const char* call, int flag, FlagNameFn name, double t,
 }
 
 int finite_or_recoverable(const double* values, long n) {
+  if (stop_requested()) return -1;
   for (long i = 0; i < n; ++i)
     if (!std::isfinite(values[i])) return 1;
   return 0;

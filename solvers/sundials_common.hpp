@@ -108,7 +108,10 @@ int guarded(Body&& body) noexcept {
   }
 }
 
-// 0 if all n values are finite, 1 (SUNDIALS "recoverable") otherwise.
+// 0 if all n values are finite, 1 (SUNDIALS "recoverable") otherwise; -1 (unrecoverable: the
+// step fails at once, the state stays the last accepted one) once a stop was requested
+// (src/core/stop_request.hpp), so that a Newton iteration of a large system does not run on.
+// Every right-hand side and Jacobian callback ends with it.
 int finite_or_recoverable(const double* values, long n);
 
 // ---- RAII owners ----------------------------------------------------------------------

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "solvers/block_ldlt.hpp"
+#include "src/core/stop_request.hpp"
 
 namespace knitsim::detail {
 
@@ -133,6 +134,7 @@ bool SymmetricFactor::factorize(const Eigen::SparseMatrix<double>& S) {
     c.latest_is_ldlt = false;
     return true;
   }
+  if (stop_requested()) return false;  // cut short (dpotrf_, blas_on_demand.cpp): no fallback
   ++c.fallbacks;  // not positive definite (CHOLMOD_NOT_POSDEF): LDL^T handles indefinite S
   return c.factorize_ldlt(S);
 }

@@ -391,7 +391,8 @@ TEST_CASE(
   using namespace knitsim::test;
   TempDir tmp("interrupt");
   // Two runs that take minutes (explicit Euler to equilibrium), signalled as soon as their
-  // handler is installed: the run ends at its first residual check (Euler: 1000 steps).
+  // handler is installed: the run ends after the step it is in (not at its first residual
+  // check, 1000 Euler steps later: docs/reliability.md, "Signals").
   std::string chart;
   for (int r = 0; r < 20; ++r, chart += '\n')
     for (int c = 0; c < 20; ++c) chart += (r % 4 == 1 && c % 5 == 2) ? 'T' : 'K';
@@ -425,7 +426,7 @@ TEST_CASE(
     const nlohmann::json summary = nlohmann::json::parse(slurp(out / "summary.json"));
     CHECK(summary.at("status") == "interrupted");
     const nlohmann::json& stats = summary.contains("stats") ? summary.at("stats") : summary;
-    CHECK(stats.at("steps").get<long>() >= 1000);
+    CHECK(stats.at("steps").get<long>() >= 1);
     CHECK(stats.at("t_final").get<double>() > 0.0);
     // Nothing lost: cvode-bdf continues from the interrupted state to equilibrium.
     const std::string args = c.args.substr(0, c.args.find(" --integrator")) +
@@ -510,6 +511,7 @@ TEST_CASE("knitsim drape --continue: a run continued where it stopped is the uni
   REQUIRE(old_state.at("model").contains("model.layout"));
   fs::create_directories(tmp.path / "old");
   std::ofstream(tmp.path / "old" / "state.json") << old_state.dump();
+  fs::copy_file(tmp.path / "first" / "manifest.json", tmp.path / "old" / "manifest.json");
   REQUIRE(
       drape("--integrator euler --max-steps 2000 --continue '" + (tmp.path / "old").string() + "'",
             "second-from-old")

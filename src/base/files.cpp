@@ -6,7 +6,10 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
+#include <csignal>
+#include <cstdlib>
 #include <cstring>
 #include <ctime>
 #include <fstream>
@@ -25,6 +28,73 @@ namespace fs = std::filesystem;
 namespace {
 
 std::string tmp_name(const fs::path& path) { return path.string() + ".tmp"; }
+
+// The output folders of this process (make_output_dir) and whether this run has marked each
+// incomplete yet (its first write). Keyed by the folder's path as make_output_dir returned it,
+// which is what the writers are given (dir / "name").
+std::mutex g_folders_mutex;
+std::string folder_key(const fs::path& dir) {
+  fs::path p = dir.lexically_normal();
+  if (!p.has_filename() && p.has_parent_path() && p != p.root_path()) p = p.parent_path();
+  return p.string();
+}
+std::map<std::string, bool> g_folders;  // folder -> marked
+
+// Test hook: KNITSIM_KILL_AFTER_WRITES=k kills the process (SIGKILL, as `kill -9` would) after
+// its k-th write or removal into an output folder (the marker included), so that the tests can
+// stop a run at every point of its writing (tests/test_reliability.cpp).
+long kill_after_writes() {
+  static const long k = [] {
+    const char* v = std::getenv("KNITSIM_KILL_AFTER_WRITES");
+    return v ? std::atol(v) : -1L;
+  }();
+  return k;
+}
+
+void count_write() {
+  static std::atomic<long> done{0};
+  const long k = kill_after_writes();
+  if (k >= 0 && ++done >= k) ::kill(::getpid(), SIGKILL);
+}
+
+std::string utc_stamp() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+// Before the first write into an output folder of this process (or a folder inside one):
+// its marker. Returns whether `path` lies in such a folder.
+bool before_output_write(const fs::path& path) {
+  const std::lock_guard<std::mutex> guard(g_folders_mutex);
+  if (g_folders.empty()) return false;
+  for (fs::path dir = path.lexically_normal().parent_path(); !dir.empty();
+       dir = dir.parent_path()) {
+    const auto it = g_folders.find(dir.string());
+    if (it == g_folders.end()) {
+      if (dir == dir.parent_path()) break;
+      continue;
+    }
+    if (!it->second) {
+      const fs::path marker = dir / kIncompleteMarker;
+      std::ofstream out(marker, std::ios::binary | std::ios::trunc);
+      out << "knitsim " << command_name() << " (process " << ::getpid() << ") began writing "
+          << "this folder at " << utc_stamp() << ".\nIt removes this file once manifest.json, "
+          << "its last file, is written. If this file is still here and that run has ended, it "
+          << "was stopped while writing: the files here may mix two runs, and --continue "
+          << "refuses the folder. Run again into it to make it whole.\n";
+      out.close();
+      if (!out) throw OutputError("cannot write " + marker.string() + ": " + std::strerror(errno));
+      it->second = true;
+      count_write();
+    }
+    return true;
+  }
+  return false;
+}
 
 void commit_tmp(const fs::path& path) {
   std::error_code ec;
@@ -58,6 +128,7 @@ void write_file_atomic(const fs::path& path, const std::string& content) {
 
 void write_file_atomic_with(const fs::path& path,
                             const std::function<void(const std::string& tmp)>& write) {
+  const bool counted = before_output_write(path);
   try {
     write(tmp_name(path));
   } catch (const std::exception& e) {
@@ -66,10 +137,44 @@ void write_file_atomic_with(const fs::path& path,
     throw OutputError("cannot write " + path.string() + ": " + e.what());
   }
   commit_tmp(path);
+  if (counted) count_write();
 }
 
 void write_json_atomic(const fs::path& path, const nlohmann::json& value) {
   write_file_atomic(path, value.dump(2) + "\n");
+}
+
+void finish_output_folder(const fs::path& dir, const nlohmann::json& manifest) {
+  write_json_atomic(dir / "manifest.json", manifest);
+  finish_output_folder(dir);
+}
+
+void finish_output_folder(const fs::path& dir) {
+  const std::lock_guard<std::mutex> guard(g_folders_mutex);
+  const auto it = g_folders.find(folder_key(dir));
+  if (it == g_folders.end() || !it->second) return;
+  std::error_code ec;
+  fs::remove(dir / kIncompleteMarker, ec);
+  if (ec)
+    throw OutputError("cannot remove " + (dir / kIncompleteMarker).string() + ": " + ec.message());
+  it->second = false;  // a later write (a fit writing again) marks it anew
+  count_write();
+}
+
+bool output_folder_complete(const fs::path& dir, std::string& why) {
+  std::error_code ec;
+  if (fs::exists(dir / kIncompleteMarker, ec)) {
+    why = (dir / kIncompleteMarker).string() +
+          " is there: the run that wrote the folder was stopped while writing it, so its files "
+          "may mix two runs";
+    return false;
+  }
+  if (!fs::is_regular_file(dir / "manifest.json", ec)) {
+    why = (dir / "manifest.json").string() +
+          " is missing: the run that wrote the folder did not finish writing it";
+    return false;
+  }
+  return true;
 }
 
 namespace {
@@ -135,14 +240,17 @@ fs::path make_output_dir(const std::string& requested, const std::string& stem, 
   bool created = false;
   if (requested.empty()) {
     const fs::path parent = "out";
-    fs::create_directories(parent, ec);
+    const bool made_parent = fs::create_directories(parent, ec);
     if (ec) throw std::invalid_argument("--out (default out/): cannot create out: " + ec.message());
     const std::string base = stem + "-" + local_stamp();
     for (int k = 1; !created; ++k) {
       dir = parent / (k == 1 ? base : base + "-" + std::to_string(k));
       created = fs::create_directory(dir, ec);
-      if (ec)
-        throw std::invalid_argument("--out " + dir.string() + ": cannot create: " + ec.message());
+      if (ec) {  // e.g. a name too long: leave no empty out/ behind
+        const std::string reason = ec.message();
+        if (made_parent) fs::remove(parent, ec);
+        throw std::invalid_argument("--out " + dir.string() + ": cannot create: " + reason);
+      }
     }
   } else {
     dir = requested;
@@ -159,6 +267,10 @@ fs::path make_output_dir(const std::string& requested, const std::string& stem, 
   } catch (const std::invalid_argument&) {
     if (created) fs::remove(dir, ec);
     throw;
+  }
+  if (locked) {
+    const std::lock_guard<std::mutex> guard(g_folders_mutex);
+    g_folders.emplace(folder_key(dir), false);
   }
   if (!locked)
     throw OutputFolderBusy(
@@ -182,8 +294,11 @@ void refuse_fresh_start_over_checkpoint(const std::string& out,
 
 void remove_stale_output(const fs::path& file) {
   std::error_code ec;
+  if (fs::symlink_status(file, ec).type() == fs::file_type::not_found) return;  // no write
+  const bool counted = before_output_write(file);
   fs::remove_all(file, ec);
   if (ec) throw OutputError("cannot remove " + file.string() + ": " + ec.message());
+  if (counted) count_write();
 }
 
 void remove_if_unused(const fs::path& dir, bool created) {
@@ -198,6 +313,13 @@ bool read_input_file(const std::string& path, std::size_t max_bytes, std::string
   const std::filesystem::file_status st = std::filesystem::status(path, ec);
   if (ec) return why = ec.message(), false;
   if (std::filesystem::is_directory(st)) return why = "is a directory", false;
+  if (!std::filesystem::is_regular_file(st) && !std::filesystem::is_character_file(st)) {
+    why = std::filesystem::is_fifo(st)         ? "is a FIFO (a named pipe), not a regular file"
+          : std::filesystem::is_socket(st)     ? "is a socket, not a regular file"
+          : std::filesystem::is_block_file(st) ? "is a block device, not a regular file"
+                                               : "is not a regular file";
+    return false;
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) return why = std::strerror(errno), false;
   text.clear();

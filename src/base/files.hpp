@@ -2,6 +2,15 @@
 //
 // Every file is written atomically: to `<name>.tmp` in the same folder, then renamed over
 // `<name>` (POSIX rename: a reader sees the old file or the new one, never half of one).
+// The set of files is made whole by a marker: the first write (or removal) of a run into its
+// output folder (make_output_dir) first creates `incomplete.txt` there, and
+// finish_output_folder writes manifest.json last and only then removes it. So a folder holding
+// incomplete.txt, or no manifest.json, holds no whole run -- a rerun killed while writing may
+// have left files of two runs side by side -- and output_folder_complete says so
+// (`--continue` refuses it). A run that writes nothing (bad input found at its start, a stop
+// during set-up) leaves a reused folder exactly as it was. Why a marker and not a fresh folder
+// renamed into place: rename(2) cannot replace a non-empty folder in one step, the flock is on
+// the folder itself, and a user's --out may hold files of their own (docs/reliability.md).
 // Failure modes: bad --out folders are bad input (std::invalid_argument naming --out); a write
 // that fails later (disk full, a file size limit, ...) throws OutputError("cannot write PATH:
 // reason"), which the command line maps to exit status 4; an --out folder that another running
@@ -36,6 +45,20 @@ void write_file_atomic_with(const std::filesystem::path& path,
 // JSON pretty-printed with 2 spaces and a final newline.
 void write_json_atomic(const std::filesystem::path& path, const nlohmann::json& value);
 
+// The marker of an output folder being written (see the top of this file).
+inline constexpr const char* kIncompleteMarker = "incomplete.txt";
+// Writes `manifest` as dir/manifest.json, the last file of a run's set, then removes dir's
+// incomplete.txt: the folder holds one whole run. Every command ends its writing with it; a
+// folder that is not an output folder of this process (a demo's per-scene folder) just gets its
+// manifest.json.
+void finish_output_folder(const std::filesystem::path& dir, const nlohmann::json& manifest);
+// The same for a command whose folder has no manifest (knitsim targets: each file carries its
+// provenance): removes the marker.
+void finish_output_folder(const std::filesystem::path& dir);
+// Whether dir holds one whole run: manifest.json present and no incomplete.txt. If not, `why`
+// says which (one line, naming the file).
+bool output_folder_complete(const std::filesystem::path& dir, std::string& why);
+
 // The output folder of a command, created and checked writable (the folder's write permission,
 // effective ids) before any work starts.
 //   requested empty: a fresh folder out/<stem>-YYYYmmdd-HHMMSS (local time) under the working
@@ -67,9 +90,12 @@ void remove_stale_output(const std::filesystem::path& file);
 void remove_if_unused(const std::filesystem::path& dir, bool created);
 
 // Reads an input file named on the command line (scene, chart, target) into `text`. Returns
-// false with `why` set ("No such file or directory", "is a directory", "larger than N bytes, the
-// limit for this input", ...) if it cannot be read or holds more than max_bytes: reading stops
-// at max_bytes + 1, so /dev/zero or a runaway file is refused without filling memory.
+// false with `why` set ("No such file or directory", "is a directory", "is not a regular file (a
+// FIFO)", "larger than N bytes, the limit for this input", ...) if it cannot be read or holds
+// more than max_bytes: reading stops at max_bytes + 1, so /dev/zero or a runaway file is refused
+// without filling memory. Only regular files and character devices (/dev/null, /dev/zero, a
+// terminal) are read; a FIFO (a named pipe, or a shell's `<(...)`), socket or block device is
+// refused without opening it (opening a FIFO with no writer blocks).
 bool read_input_file(const std::string& path, std::size_t max_bytes, std::string& text,
                      std::string& why);
 

@@ -9,13 +9,14 @@
 //    particle distance from the reference run (cvode-bdf, or the first integrator registered).
 // 3. report.md (tables and picture links), comparison.csv (full precision), manifest.json.
 // Exit status 3 if a scene run of step 1 did not reach equilibrium (everything is still written).
-// Ctrl-C or SIGTERM (src/cli/interrupt.hpp) ends the current run at its next residual check, skips
+// Ctrl-C or SIGTERM (src/cli/interrupt.hpp) ends the current run within about a second, skips
 // the rest, writes the report of the runs so far and exits 128 + the signal.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -24,6 +25,7 @@
 #include "src/base/text.hpp"
 #include "src/cli/commands.hpp"
 #include "src/cli/interrupt.hpp"
+#include "src/core/stop_request.hpp"
 #include "src/io/drape_outputs.hpp"
 #include "src/io/json.hpp"
 #include "src/io/manifest.hpp"
@@ -41,9 +43,14 @@ constexpr double kComparisonWallCap = 15.0;  // s of wall time per integrator in
 const std::vector<std::string> kScenes = {"four_corner", "two_corner"};
 const std::string kComparisonScene = "four_corner";
 
-DrapeResult run_with_progress(const Scene& scene, const std::string& integrator) {
+// Empty if a signal arrived during the run's set-up (StopRequested): no state, no row.
+std::optional<DrapeResult> run_with_progress(const Scene& scene, const std::string& integrator) {
   ProgressLine progress(scene.name + " " + integrator, scene.options.equilibrium_tol);
-  return run_drape(scene, integrator, &progress);
+  try {
+    return run_drape(scene, integrator, &progress);
+  } catch (const StopRequested&) {
+    return std::nullopt;
+  }
 }
 
 std::string one_line(const std::string& scene, const RunStats& s) {
@@ -80,7 +87,9 @@ void run(const DemoArgs& args) {
     if (stopped()) break;
     Scene scene = load_scene(name);
     scene.options.interrupt = interrupt.flag();
-    const DrapeResult r = run_with_progress(scene, integrator);
+    const std::optional<DrapeResult> run = run_with_progress(scene, integrator);
+    if (!run) break;
+    const DrapeResult& r = *run;
     fs::create_directories(dir / name);
     write_drape_outputs(dir / name, scene, r);
     const RunStats& s = r.stats;
@@ -101,7 +110,9 @@ void run(const DemoArgs& args) {
   std::vector<std::vector<Vec3>> positions;
   for (const IntegratorInfo& info : integrator_catalog()) {
     if (stopped()) break;
-    DrapeResult r = run_with_progress(scene, info.name);
+    std::optional<DrapeResult> run = run_with_progress(scene, info.name);
+    if (!run) break;
+    DrapeResult& r = *run;
     std::cout << one_line(scene.name, r.stats) << std::endl;
     stats.push_back(r.stats);
     positions.push_back(std::move(r.positions));
@@ -154,13 +165,13 @@ void run(const DemoArgs& args) {
 
   nlohmann::json integrators = nlohmann::json::array();
   for (const RunStats& s : stats) integrators.push_back(s.integrator);
-  write_json_atomic(dir / "manifest.json", manifest({{"command", "demo"},
-                                                     {"scenes", kScenes},
-                                                     {"scene_integrator", integrator},
-                                                     {"comparison_scene", kComparisonScene},
-                                                     {"comparison_integrators", integrators},
-                                                     {"comparison_wall_cap_s", wall_cap},
-                                                     {"options", to_json(scene.options)}}));
+  finish_output_folder(dir, manifest({{"command", "demo"},
+                                      {"scenes", kScenes},
+                                      {"scene_integrator", integrator},
+                                      {"comparison_scene", kComparisonScene},
+                                      {"comparison_integrators", integrators},
+                                      {"comparison_wall_cap_s", wall_cap},
+                                      {"options", to_json(scene.options)}}));
 
   std::cout << "\n" << md.text() << "\nreport: " << (dir / "report.md").string() << std::endl;
   if (stopped()) {

@@ -19,6 +19,7 @@
 #include "src/cli/cli_options.hpp"
 #include "src/cli/commands.hpp"
 #include "src/cli/interrupt.hpp"
+#include "src/core/stop_request.hpp"
 #include "src/fit/targets.hpp"
 #include "src/io/drape_outputs.hpp"
 #include "src/io/progress.hpp"
@@ -123,14 +124,25 @@ void run(const DrapeArgs& args) {
       return r;
     } catch (const std::invalid_argument& e) {  // an option the model refuses at the start
       refuse_at_run_start(e, dir, created);
+    } catch (const StopRequested&) {  // a signal while the grid was built
+      interrupt.end_during_setup("drape", dir, created);
     }
   }();
-  write_drape_outputs(dir, scene, result, args.target.empty() ? nullptr : &target_edges,
-                      !args.no_pictures);
-  if (args.step_history)
+  // An equilibrium that breaks the model's own limits is not reported as one (exit 3).
+  const std::string limits =
+      drape_limit_violation(scene.params, result.max_strain, result.centre_sag);
+  if (result.stats.status == RunStatus::Equilibrium && !limits.empty()) {
+    result.stats.status = RunStatus::OutsideModelLimits;
+    result.stats.message = limits + " (the solver's stop passed: " + result.stats.message + ")";
+    warn("the equilibrium is outside the model's limits: " + limits +
+         "; status outside_model_limits (docs/reliability.md)");
+  }
+  if (args.step_history)  // before the outputs' manifest.json, the last file (files.hpp)
     write_file_atomic(dir / "steps.csv", steps_csv);
   else
     remove_stale_output(dir / "steps.csv");
+  write_drape_outputs(dir, scene, result, args.target.empty() ? nullptr : &target_edges,
+                      !args.no_pictures);
   if (!args.quiet) std::cout << human_summary(scene, result, dir.string()) << std::flush;
   exit_with_run_status("drape", result.stats, interrupt, dir.string());
 }

@@ -345,7 +345,7 @@ void run_lm_fit(const FitArgs& args, const Scene& base, const DrapeFitProblem& p
   summary["starts"] = starts_json;
   summary["units"] = fit_units(true);
   write_json_atomic(dir / "summary.json", summary);
-  write_json_atomic(dir / "manifest.json", manifest(settings));
+  finish_output_folder(dir, manifest(settings));
   if (!args.quiet) {
     std::cout << starts.text() << "\nstatus: " << fit.message << "\n";
     // What the edges determine first: k / L0 (with the topology and n, chosen by the
@@ -474,7 +474,7 @@ void write_ica_summary(const FitArgs& args, const Scene& base, const DrapeFitPro
   if (resumed_from) summary["resumed_from_decade"] = resumed_from->decade;
   summary["units"] = fit_units(false);
   write_json_atomic(dir / "summary.json", summary);
-  write_json_atomic(dir / "manifest.json", manifest(settings));
+  finish_output_folder(dir, manifest(settings));
 }
 
 // The ICA fit's console report: the history, the status and the fitted parameters.
@@ -505,7 +505,7 @@ void run_ica_fit(const FitArgs& args, const Scene& base, const DrapeFitProblem& 
                  const std::shared_ptr<const IcaState>& resumed_from,
                  const std::filesystem::path& dir, std::unique_ptr<InterruptScope>& interrupt) {
   if (!args.quiet) print_ica_start(args, base, problem, resumed_from, dir);
-  interrupt = std::make_unique<InterruptScope>();
+  interrupt = std::make_unique<InterruptScope>(InterruptScope::Reach::BetweenUnits);
   const DrapeFitResult fit = fit_drape(problem);
   const Table history = history_table(fit);
   write_file_atomic(dir / "history.csv", history.csv());

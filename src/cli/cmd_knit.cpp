@@ -19,6 +19,7 @@
 #include "src/base/text.hpp"
 #include "src/cli/cli_options.hpp"
 #include "src/cli/commands.hpp"
+#include "src/core/stop_request.hpp"
 #include "src/io/drape_outputs.hpp"
 #include "src/io/knit_outputs.hpp"
 #include "src/io/progress.hpp"
@@ -151,6 +152,8 @@ void run(const KnitArgs& args) {
       return r;
     } catch (const std::invalid_argument& e) {  // an option the model refuses at the start
       refuse_at_run_start(e, dir, created);
+    } catch (const StopRequested&) {  // a signal during the integrator's set-up
+      interrupt.end_during_setup("knit", dir, created);
     }
   }();
   if (args.step_history)

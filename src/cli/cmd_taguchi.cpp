@@ -69,10 +69,10 @@ void run(const TaguchiArgs& args) {
   write_file_atomic(dir / "sn.csv", sn.csv());
   write_file_atomic(dir / "effects.csv", effects.csv());
   write_file_atomic(dir / "anova.csv", anova.csv());
-  write_json_atomic(dir / "manifest.json", manifest({{"responses", fs::absolute(input).string()},
-                                                     {"columns", a.columns},
-                                                     {"replicates", a.replicates},
-                                                     {"optimal_levels", a.optimal_levels()}}));
+  finish_output_folder(dir, manifest({{"responses", fs::absolute(input).string()},
+                                      {"columns", a.columns},
+                                      {"replicates", a.replicates},
+                                      {"optimal_levels", a.optimal_levels()}}));
 }
 
 }  // namespace

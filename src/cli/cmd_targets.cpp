@@ -142,6 +142,7 @@ void run(const TargetsArgs& args) {
                   << format_number(wall, 3) << " s wall)" << std::endl;
       }
     }
+  finish_output_folder(dir);  // every target written (a failed one is not retried)
   if (failed) throw CLI::RuntimeError(3);
 }
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <nlohmann/json.hpp>
 
 #include "src/base/files.hpp"
@@ -76,8 +77,17 @@ nlohmann::json drape_summary(const Scene& scene, const DrapeResult& r) {
   j["t_start"] = r.t_start;
   j["symmetry"] = to_string(r.symmetry);  // the reduction that ran (model.symmetry resolved)
   j["whole_sheet_certified"] = r.whole_sheet_checked;
-  j["max_strain"] = r.max_strain;
-  j["centre_sag_m"] = r.centre_sag;
+  // A diverged (runaway) state's figures mean nothing, a non-finite one is none: null; figures
+  // past the model's own limits are flagged (model_limits), whatever the status.
+  const bool meaningful = r.stats.status != RunStatus::Diverged;
+  const auto figure = [meaningful](double v) {
+    return meaningful && std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
+  };
+  j["max_strain"] = figure(r.max_strain);
+  j["centre_sag_m"] = figure(r.centre_sag);
+  if (const std::string why = drape_limit_violation(scene.params, r.max_strain, r.centre_sag);
+      !why.empty())
+    j["model_limits"] = why;
   j["params"] = to_json(scene.params);
   j["options"] = to_json(scene.options);
   j["units"] = summary_units(
@@ -225,11 +235,11 @@ void write_drape_outputs(const fs::path& dir, const Scene& scene, const DrapeRes
     write_drape_picture(dir / "drape.png", scene, r, quads);
   else
     remove_stale_output(dir / "drape.png");
-  write_json_atomic(dir / "manifest.json", manifest({{"scene", scene.name},
-                                                     {"source", scene.source},
-                                                     {"integrator", r.stats.integrator},
-                                                     {"params", to_json(scene.params)},
-                                                     {"options", to_json(scene.options)}}));
+  finish_output_folder(dir, manifest({{"scene", scene.name},
+                                      {"source", scene.source},
+                                      {"integrator", r.stats.integrator},
+                                      {"params", to_json(scene.params)},
+                                      {"options", to_json(scene.options)}}));
 }
 
 }  // namespace knitsim

@@ -333,12 +333,13 @@ void write_knit_outputs(const fs::path& dir, const KnitScene& scene, const KnitR
   const nlohmann::json frames = write_frames(dir, scene, r, centerlines, pictures);
   write_json_atomic(dir / "summary.json",
                     knit_summary(scene, r, frames, textile ? &*textile : nullptr));
-  write_json_atomic(dir / "manifest.json", manifest({{"chart", scene.chart_file},
-                                                     {"integrator", stats.integrator},
-                                                     {"frames", scene.frames},
-                                                     {"params", params_json(m.params)},
-                                                     {"options", to_json(scene.options)}}));
+  // state.json before manifest.json, the last file of the set (src/base/files.hpp).
   write_run_state(dir, {"knit", {stats.t_final, r.x, r.v}, stats.integrator, stats.dt, model_keys});
+  finish_output_folder(dir, manifest({{"chart", scene.chart_file},
+                                      {"integrator", stats.integrator},
+                                      {"frames", scene.frames},
+                                      {"params", params_json(m.params)},
+                                      {"options", to_json(scene.options)}}));
 }
 
 }  // namespace knitsim

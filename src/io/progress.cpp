@@ -12,7 +12,8 @@ namespace knitsim {
 ProgressLine::ProgressLine(std::string label, double equilibrium_tol, bool enabled)
     : label_(std::move(label)),
       tol_(equilibrium_tol),
-      active_(enabled && ::isatty(STDERR_FILENO) == 1),
+      active_(enabled),
+      terminal_(::isatty(STDERR_FILENO) == 1),
       start_(Clock::now()),
       last_(start_) {}
 
@@ -24,7 +25,9 @@ void ProgressLine::on_check(double t, const double*, const double*, double resid
   if (!active_) return;
   if (first_residual_ < 0.0) first_residual_ = residual;
   const Clock::time_point now = Clock::now();
-  if (now - last_ < std::chrono::milliseconds(100)) return;
+  if (now - last_ < (terminal_ ? std::chrono::duration<double>(0.1)
+                               : std::chrono::duration<double>(kLogInterval)))
+    return;
   last_ = now;
   const double elapsed = std::chrono::duration<double>(now - start_).count();
   std::string eta;
@@ -33,10 +36,11 @@ void ProgressLine::on_check(double t, const double*, const double*, double resid
     const double f = std::log(first_residual_ / residual) / std::log(first_residual_ / tol_);
     if (f > 0.02) eta = "  eta ~" + format_number(elapsed * (1.0 - f) / f, 2) + " s";
   }
-  std::fprintf(stderr, "\r\033[K%s  t = %.3g s  residual %.2e (tol %.0e)  elapsed %.1f s%s",
-               label_.c_str(), t, residual, tol_, elapsed, eta.c_str());
+  std::fprintf(stderr, "%s%s  t = %.3g s  residual %.2e (tol %.0e)  elapsed %.1f s%s%s",
+               terminal_ ? "\r\033[K" : "progress: ", label_.c_str(), t, residual, tol_, elapsed,
+               eta.c_str(), terminal_ ? "" : "\n");
   std::fflush(stderr);
-  shown_ = true;
+  shown_ = terminal_;
 }
 
 

@@ -8,9 +8,11 @@
 
 namespace knitsim {
 
-// One self-overwriting status line on stderr -- only when stderr is a terminal, and at most 10
-// times a second: label, t, static residual against the tolerance, elapsed wall time and a
-// rough ETA (extrapolating log(residual) linearly in wall time). Cleared on destruction.
+// The status of a run on stderr: label, t, static residual against the tolerance, elapsed wall
+// time and a rough ETA (extrapolating log(residual) linearly in wall time). On a terminal one
+// self-overwriting line, at most 10 times a second, cleared on destruction; otherwise (stderr
+// to a file or a pipe: a batch job's log) one plain line every kLogInterval seconds of a long
+// run, so that a run that goes nowhere says so while it runs.
 class ProgressLine final : public RunObserver {
  public:
   ProgressLine(std::string label, double equilibrium_tol, bool enabled = true);
@@ -24,7 +26,9 @@ class ProgressLine final : public RunObserver {
   using Clock = std::chrono::steady_clock;
   std::string label_;
   double tol_;
+  static constexpr double kLogInterval = 30.0;  // s between log lines (stderr not a terminal)
   bool active_;
+  bool terminal_;
   bool shown_ = false;
   double first_residual_ = -1.0;
   Clock::time_point start_, last_;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <nlohmann/json.hpp>
 
 #include "src/base/files.hpp"
@@ -59,6 +60,17 @@ const std::vector<std::pair<std::string, std::string>>& drape_fields_set_elsewhe
 
 SavedRun parse_run_state(const std::string& text, const std::string& command) {
   SavedRun saved;
+  // A byte JSON text cannot hold (a control character outside a string's escapes): binary data,
+  // which the parser would report as "unexpected end of input" at a NUL.
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    if (c < 0x20 && c != '\t' && c != '\n' && c != '\r') {
+      char hex[8];
+      std::snprintf(hex, sizeof hex, "0x%02x", c);
+      throw std::invalid_argument("not a JSON file: byte " + std::to_string(i + 1) + " is " + hex +
+                                  ", a control character (binary data?)");
+    }
+  }
   try {
     const nlohmann::json state = nlohmann::json::parse(text);
     if (!state.is_object() || !state.contains("format") || state.at("format") != kRunStateFormat)
@@ -144,6 +156,10 @@ RunState continue_state(const std::string& dir, const std::string& command,
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument("--continue: " + std::string(e.what()));
   }
+  // The files of one run only: a rerun stopped while writing may have left its summary beside
+  // the earlier run's state (src/base/files.hpp, finish_output_folder).
+  if (std::string why; !output_folder_complete(dir, why))
+    throw std::invalid_argument("--continue: " + why + "; run it again");
   for (const auto& [key, value] : model.items())
     if (!saved.model.contains(key) || saved.model.at(key) != value) {
       const std::string here = value.dump(),

@@ -37,7 +37,8 @@ SavedRun parse_run_state(const std::string& text, const std::string& command);
 SavedRun read_run_state(const std::filesystem::path& dir, const std::string& command);
 // --continue DIR of `command`: the saved state, checked against this run -- `model` (keyed as
 // SavedRun::model) must equal the saved one key by key (the message names the first that differs,
-// "model.stiffness = 900 here, 852 in the run being continued; give the same <same_what>"), its
+// "model.stiffness = 900 here, 852 in the run being continued; give the same <same_what>"), the
+// folder must hold one whole run (output_folder_complete, src/base/files.hpp), its
 // t must be below options.t_max ("raise run.t_max"). A fixed-step run continued by the same
 // integrator keeps the saved step unless options.dt is set, so an interrupted euler run
 // continues on the same step sequence. Throws std::invalid_argument (one line, starting

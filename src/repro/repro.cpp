@@ -530,7 +530,7 @@ void write_manifest(ReproReport& r, const json& config) {
                {"paper_drapes_estimate", s.paper_drapes},
                {"paper_cpu_seconds_estimate", s.paper_cpu_estimate},
                {"paper_euler_cpu_seconds_estimate", s.paper_euler_cpu_estimate}};
-  write_json_atomic(r.dir / "manifest.json", m);
+  finish_output_folder(r.dir, m);
   r.keep("manifest.json");
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <sstream>
 #include <stdexcept>
 #include <utility>
 
@@ -32,46 +33,34 @@ void measure_end(const KnitModel& model, const std::vector<Vec3>& end,
   }
 }
 
+// With yarn contact, a chart whose yarns lie inside the contact's core already at rest (tucks
+// stacked 8 high or more in one wale, a block of tucks) cannot start: its first force is
+// infinite. Refused before anything is made, naming the row (top course first) and column.
+void refuse_overlap_at_rest(const KnitModel& m) {
+  if (!m.contact) return;
+  const YarnClearance c = yarn_clearance(m, yarn_polylines(m, m.rest_positions()));
+  if (!(c.over_r < kContactCore)) return;
+  const double w =
+      m.chart.wales > 1 ? m.points[m.point(1, 0)].rest.x - m.points[m.point(0, 0)].rest.x : 1.0;
+  const long wale = std::clamp(std::lround(c.where.x / w), 0L, long{m.chart.wales - 1});
+  std::ostringstream os;
+  os << "chart row " << m.chart.courses - c.b.course << ", column " << wale + 1
+     << (c.a.course == c.b.course
+             ? ": two stretches of the yarn of course " + std::to_string(c.a.course + 1)
+             : ": the yarns of courses " + std::to_string(c.a.course + 1) + " and " +
+                   std::to_string(c.b.course + 1))
+     << " (from the bottom) lie " << format_number(c.over_r, 3)
+     << " r apart at rest, inside the yarn contact's core (" << kContactCore
+     << " r): the model cannot hold this stitch arrangement (tucks stacked 8 or more high in "
+        "one wale); knit.contact = 0 runs it without contact";
+  throw std::invalid_argument(os.str());
+}
+
 }  // namespace
-
-std::string default_knit_integrator(bool yarn_contact) {
-  return yarn_contact ? "equilibrium" : "cvode-bdf";
-}
-
-void set_default_knit_velocity_atol(IntegratorOptions& options, const KnitParams& params,
-                                    const IntegratorInfo& integrator) {
-  if (!params.mechanism() && integrator.adaptive) options.velocity_atol = kStabilisedVelocityAtol;
-}
-
-std::vector<std::string> knit_run_warnings(const KnitParams& params, const std::string& integrator,
-                                           const IntegratorInfo& info) {
-  std::vector<std::string> w;
-  if (params.yarn_contact() && info.explicit_method)
-    w.push_back("yarn contact with " + integrator +
-                ": the chart's first impacts (~10 us in) carry more energy than the barrier holds "
-                "above its core in double precision, so it fails there whatever its step "
-                "(docs/knit.md, \"What is not met, and why\"); equilibrium (the default) and "
-                "implicit-euler keep every pair off its core");
-  if (params.mechanism())
-    w.push_back(std::string(params.network == KnitNetwork::Paper ? "knit.network = paper"
-                                                                 : "knit.stabiliser = 0") +
-                ": paper 2's bare network is a mechanism (blocks of fabric shear and swing at no "
-                "energy); its steady state depends on the path (integrator, step, tolerances)");
-  return w;
-}
-
-std::string knit_overlap_warning(const KnitMeasures& m) {
-  if (m.crossings.changed <= 0 && !(m.min_clearance.over_r < kClearanceWarning)) return "";
-  return "yarns overlap: clearance down to " + format_number(m.min_clearance.over_r, 3) +
-         " r (courses " + std::to_string(m.min_clearance.a.course) + " and " +
-         std::to_string(m.min_clearance.b.course) + ", at check " +
-         std::to_string(m.check_min_clearance) + ", t = " + format_number(m.t_min_clearance, 3) +
-         " s), " + std::to_string(m.crossings.changed) + " of " +
-         std::to_string(m.crossings.designed) + " designed crossings changed over/under order";
-}
 
 KnitStart start_knit(const KnitScene& scene) {
   KnitStart s{build_knit(scene.chart, scene.params), 0.0, {}, {}};  // validates the parameters
+  refuse_overlap_at_rest(s.model);
   s.x.resize(s.model.network.dof());
   s.v.resize(s.model.network.dof());
   s.model.network.initial_state(s.x.data(), s.v.data());

@@ -73,6 +73,22 @@ void check_scene_input(const std::string& text) {
                [&] { check_initial_state(build_drape_grid(scene.params).network); });
 }
 
+void check_set_input(const std::string& text) {
+  std::vector<std::string> sets;  // one --set per line, as the shell would pass them
+  std::size_t begin = 0;
+  while (begin <= text.size()) {
+    const std::size_t end = std::min(text.find('\n', begin), text.size());
+    sets.push_back(text.substr(begin, end - begin));
+    begin = end + 1;
+  }
+  Scene scene;
+  if (!accepted([&] { scene = load_scene("four_corner", sets); })) return;
+  const long side = scene.params.cells() + 1L;
+  if (side * side > kMaxBuiltPoints) return;
+  must_succeed("building the grid",
+               [&] { check_initial_state(build_drape_grid(scene.params).network); });
+}
+
 void check_chart_input(const std::string& text) {
   KnitChart chart;
   if (!accepted([&] { chart = parse_knit_chart(text); })) return;
@@ -123,7 +139,8 @@ const std::vector<FuzzEntry>& fuzz_entries() {
   static const std::vector<FuzzEntry> entries = {{"scene", check_scene_input},
                                                  {"chart", check_chart_input},
                                                  {"target", check_target_input},
-                                                 {"state", check_state_input}};
+                                                 {"state", check_state_input},
+                                                 {"set", check_set_input}};
   return entries;
 }
 
