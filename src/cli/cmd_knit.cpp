@@ -59,6 +59,7 @@
 #include <initializer_list>
 #include <iostream>
 #include <list>
+#include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
@@ -101,6 +102,7 @@ struct KnitArgs {
   std::vector<std::string> sets;
   std::string integrator;            // empty: default_knit_integrator()
   IntegratorOptions options;         // only the fields add_run_options binds are taken from here
+  std::map<std::string, std::string> typed;  // those flags' values as typed (messages)
   bool velocity_atol_given = false;  // --velocity-atol on the command line
   int frames = 4;
   std::string out;
@@ -514,6 +516,7 @@ void run(const KnitArgs& args) {
   const KnitParams& params = scene.knit;
   IntegratorOptions& opt = scene.options;
   copy_run_flags(args.options, opt);
+  scene.typed.insert(args.typed.begin(), args.typed.end());
   const std::string integrator =
       args.integrator.empty() ? default_knit_integrator(params.yarn_contact()) : args.integrator;
   std::unique_ptr<Integrator> integ;
@@ -687,7 +690,7 @@ void register_knit_command(CLI::App& app) {
   cmd->add_option("--integrator", args->integrator,
                   "Integrator (knitsim list integrators); default equilibrium with yarn contact "
                   "(knit.contact > 0, the default), else cvode-bdf");
-  CLI::Option* velocity_atol = add_run_options(cmd, args->options);
+  CLI::Option* velocity_atol = add_run_options(cmd, args->options, &args->typed);
   velocity_atol->description(velocity_atol->get_description() +
                              "; not given: 0.001 (stabilised network), or 0 (paper network)");
   cmd->add_option("--frames", args->frames,
