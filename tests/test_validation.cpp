@@ -101,6 +101,7 @@ TEST_CASE("knit --set: messages name the keys the user types, nearest key sugges
   expect_bad_input(base + "--set run.position_tol=1",
                    "run.position_tol = 1: must be in (0, 1e-2] m", tmp);
   expect_bad_input(base + "--rtol nan", "--rtol = nan: must be in (0, 1)", tmp);
+  expect_bad_input(base + "--eps-lin 1.00000001", "--eps-lin = 1.00000001: must be in (0, 1]", tmp);
   // Values as typed (printed as a double, 100.0000001 was "100", which looks in range); a key
   // given twice by --set is refused; an empty key says so.
   expect_bad_input(base + "--set knit.contact=100.0000001",
@@ -120,6 +121,8 @@ TEST_CASE("drape: NaN and inf in --set, scene files and flags name the key and t
   expect_bad_input("drape --set pins.span=nan" + out, "pins.span = nan: must be a number in (0, 1]",
                    tmp);
   expect_bad_input("drape --rtol inf" + out, "--rtol = inf: must be in (0, 1)", tmp);
+  // A flag's value as typed too (printed as a double, 1.0000001 was "1").
+  expect_bad_input("drape --rtol 1.0000001" + out, "--rtol = 1.0000001: must be in (0, 1)", tmp);
   expect_bad_input("drape --set model.stiffness=-1 --set model.stiffness=900" + out,
                    "--set model.stiffness: given twice (-1, then 900); give each key once", tmp);
   // An infinite wall-clock cap would be no cap at all (0 is the way to say so).

@@ -158,11 +158,14 @@ CLI::Option* add_atol_options(CLI::App* cmd, double& atol, double& velocity_atol
   return add_flag_of(cmd, key_of_flag("--velocity-atol"), velocity_atol);
 }
 
-CLI::Option* add_run_options(CLI::App* cmd, IntegratorOptions& o) {
+CLI::Option* add_run_options(CLI::App* cmd, IntegratorOptions& o,
+                             std::map<std::string, std::string>* typed) {
   CLI::Option* velocity_atol = nullptr;
   for (const Key& key : key_table()) {
     if (key.flag.empty() || (key.option.index() == 0 && !key.set_option)) continue;
     CLI::Option* opt = add_option_flag(cmd, key, o);
+    if (typed != nullptr)
+      opt->each([typed, &key](const std::string& text) { (*typed)[key.flag] = text; });
     if (key.flag == "--velocity-atol") velocity_atol = opt;
   }
   return velocity_atol;

@@ -4,14 +4,15 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "solvers/integrator.hpp"
-#include "src/fit/ica.hpp"
 #include "src/cli/interrupt.hpp"
+#include "src/fit/ica.hpp"
 #include "src/scene/scene.hpp"
 
 namespace CLI {
@@ -51,9 +52,11 @@ CLI::Option* add_atol_options(CLI::App* cmd, double& atol, double& velocity_atol
 // The run flags of drape and knit: one per row of key_table() with a flag, in the table's order
 // (--rtol, --atol, --velocity-atol, --dt, --max-order, --max-steps, --max-wall, --max-restarts,
 // --newton-solver, --factorization, the cvode-bdf-gmres flags), bound to the IntegratorOptions
-// field of the row. Returns the --velocity-atol option (knit appends its own default rule to
+// field of the row; each value as typed goes into `typed` (flag -> text, for Scene::typed's
+// messages) if given. Returns the --velocity-atol option (knit appends its own default rule to
 // the description).
-CLI::Option* add_run_options(CLI::App* cmd, IntegratorOptions& o);
+CLI::Option* add_run_options(CLI::App* cmd, IntegratorOptions& o,
+                             std::map<std::string, std::string>* typed = nullptr);
 // --step-history (bound to `step_history`) and --continue DIR (to `continue_from`) of drape and
 // knit; `inputs` names what a continuation must repeat ("--scene and --set").
 void add_history_and_continue_options(CLI::App* cmd, bool& step_history, std::string& continue_from,

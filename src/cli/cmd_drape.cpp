@@ -9,6 +9,7 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -37,6 +38,7 @@ struct DrapeArgs {
   std::vector<std::string> sets;
   std::string integrator;     // empty: default_integrator()
   IntegratorOptions options;  // only the fields add_run_options binds are taken from here
+  std::map<std::string, std::string> typed;  // those flags' values as typed (messages)
   std::string out;
   std::string target;
   bool step_history = false;
@@ -78,6 +80,7 @@ std::string human_summary(const Scene& scene, const DrapeResult& r, const std::s
 void run(const DrapeArgs& args) {
   Scene scene = load_scene(args.scene, args.sets);
   copy_run_flags(args.options, scene.options);
+  scene.typed.insert(args.typed.begin(), args.typed.end());
   scene.validate();
 
   const std::string integrator = args.integrator.empty() ? default_integrator() : args.integrator;
@@ -167,7 +170,7 @@ void register_drape_command(CLI::App& app) {
   cmd->add_option("--integrator", args->integrator,
                   "Integrator (knitsim list integrators); default equilibrium (the state the "
                   "damped dynamics reach, found without integrating the transient)");
-  add_run_options(cmd, args->options);
+  add_run_options(cmd, args->options, &args->typed);
   cmd->add_option("--out", args->out,
                   "Output folder (default: a fresh out/drape-<scene>-<YYYYmmdd-HHMMSS>)");
   cmd->add_option("--target", args->target,

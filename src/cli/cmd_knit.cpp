@@ -11,6 +11,7 @@
 #include <CLI/CLI.hpp>
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <stdexcept>
 
@@ -40,6 +41,7 @@ struct KnitArgs {
   std::vector<std::string> sets;
   std::string integrator;            // empty: default_knit_integrator()
   IntegratorOptions options;         // only the fields add_run_options binds are taken from here
+  std::map<std::string, std::string> typed;  // those flags' values as typed (messages)
   bool velocity_atol_given = false;  // --velocity-atol on the command line
   int frames = 4;
   std::string out;
@@ -107,6 +109,7 @@ void run(const KnitArgs& args) {
   }
   const std::string inputs = args.scene.empty() ? "--chart and --set" : "--scene and --set";
   copy_run_flags(args.options, input.options);
+  input.typed.insert(args.typed.begin(), args.typed.end());
   const std::string integrator = args.integrator.empty()
                                      ? default_knit_integrator(input.knit.yarn_contact())
                                      : args.integrator;
@@ -194,7 +197,7 @@ void register_knit_command(CLI::App& app) {
   cmd->add_option("--integrator", args->integrator,
                   "Integrator (knitsim list integrators); default equilibrium with yarn contact "
                   "(knit.contact > 0, the default), else cvode-bdf");
-  CLI::Option* velocity_atol = add_run_options(cmd, args->options);
+  CLI::Option* velocity_atol = add_run_options(cmd, args->options, &args->typed);
   velocity_atol->description(velocity_atol->get_description() +
                              "; not given: 0.001 (stabilised network), or 0 (paper network)");
   cmd->add_option("--frames", args->frames,

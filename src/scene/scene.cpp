@@ -548,7 +548,7 @@ void rethrow_as_typed(const std::invalid_argument& e, const Scene* scene) {
     std::string value = bad->value();
     if (scene != nullptr && k.number) {
       // The text typed, if it still reads back as the value refused (not changed since).
-      const auto typed = scene->typed.find(k.name);
+      const auto typed = scene->typed.find(k.label());
       if (typed != scene->typed.end()) {
         char* end = nullptr;
         const double v = std::strtod(typed->second.c_str(), &end);

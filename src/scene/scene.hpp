@@ -66,7 +66,8 @@ struct Scene {
   // The keys the scene file or a --set gave, in that order (a key may repeat): every other
   // key has its default, sample 1's value (`knitsim list keys`).
   std::vector<std::string> keys_given;
-  // Each given key's value as the user typed it (the last one given), for messages.
+  // Each given key's value as the user typed it (the last one given), and each run flag's
+  // (by flag: "--rtol"), for messages.
   std::map<std::string, std::string> typed;
 
   // DrapeParams::validate, IntegratorOptions::validate and KnitParams::validate, each bad field
