@@ -58,6 +58,42 @@ void refuse_overlap_at_rest(const KnitModel& m) {
 
 }  // namespace
 
+std::string default_knit_integrator(bool yarn_contact) {
+  return yarn_contact ? "equilibrium" : "cvode-bdf";
+}
+
+void set_default_knit_velocity_atol(IntegratorOptions& options, const KnitParams& params,
+                                    const IntegratorInfo& integrator) {
+  if (!params.mechanism() && integrator.adaptive) options.velocity_atol = kStabilisedVelocityAtol;
+}
+
+std::vector<std::string> knit_run_warnings(const KnitParams& params, const std::string& integrator,
+                                           const IntegratorInfo& info) {
+  std::vector<std::string> w;
+  if (params.yarn_contact() && info.explicit_method)
+    w.push_back("yarn contact with " + integrator +
+                ": the chart's first impacts (~10 us in) carry more energy than the barrier holds "
+                "above its core in double precision, so it fails there whatever its step "
+                "(docs/knit.md, \"What is not met, and why\"); equilibrium (the default) and "
+                "implicit-euler keep every pair off its core");
+  if (params.mechanism())
+    w.push_back(std::string(params.network == KnitNetwork::Paper ? "knit.network = paper"
+                                                                 : "knit.stabiliser = 0") +
+                ": paper 2's bare network is a mechanism (blocks of fabric shear and swing at no "
+                "energy); its steady state depends on the path (integrator, step, tolerances)");
+  return w;
+}
+
+std::string knit_overlap_warning(const KnitMeasures& m) {
+  if (m.crossings.changed <= 0 && !(m.min_clearance.over_r < kClearanceWarning)) return "";
+  return "yarns overlap: clearance down to " + format_number(m.min_clearance.over_r, 3) +
+         " r (courses " + std::to_string(m.min_clearance.a.course) + " and " +
+         std::to_string(m.min_clearance.b.course) + ", at check " +
+         std::to_string(m.check_min_clearance) + ", t = " + format_number(m.t_min_clearance, 3) +
+         " s), " + std::to_string(m.crossings.changed) + " of " +
+         std::to_string(m.crossings.designed) + " designed crossings changed over/under order";
+}
+
 KnitStart start_knit(const KnitScene& scene) {
   KnitStart s{build_knit(scene.chart, scene.params), 0.0, {}, {}};  // validates the parameters
   refuse_overlap_at_rest(s.model);
