@@ -623,6 +623,16 @@ PYBIND11_MODULE(knitsim, m) {
           "per course from the bottom, its centreline at the end sampled in arc length, an "
           "m x 3 array in m (centerlines.csv); empty for an end state that is not finite")
       .def_property_readonly(
+          "rest_centerlines",
+          [](const KnitCall& c) {
+            py::list l;
+            for (const CurveSamples& s :
+                 course_centerlines(c.result->model, c.result->model.rest_positions()))
+              l.append(points_array(s.points));
+            return l;
+          },
+          "per course, its centreline at rest (the one before.png draws), an m x 3 array in m")
+      .def_property_readonly(
           "centerline_u",
           [](const KnitCall& c) {
             py::list l;
