@@ -57,9 +57,9 @@ def main():
     for stitch in sorted(set(s["stitch"].tolist())):
         pick = s["stitch"] == stitch
         h, h0 = s["loop_height_m"][pick], s["loop_height0_m"][pick]
-        rows.append(dict(stitch=stitch, cells=int(pick.sum()),
-                         mean_loop_height_m=float(np.nanmean(h)) if np.isfinite(h).any() else "",
-                         mean_loop_height0_m=float(np.nanmean(h0)) if np.isfinite(h0).any() else ""))
+        mean = lambda v: float(np.nanmean(v)) if np.isfinite(v).any() else ""  # noqa: E731
+        rows.append(dict(stitch=stitch, cells=int(pick.sum()), mean_loop_height_m=mean(h),
+                         mean_loop_height0_m=mean(h0)))
     with open(os.path.join(a.out, "knit_loops.csv"), "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
         w.writeheader()

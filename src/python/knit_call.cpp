@@ -42,7 +42,8 @@ std::shared_ptr<KnitCall> knit_call(const KnitRequest& request, const std::atomi
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(std::string("--") + e.what());  // "--integrator = X: ..."
   }
-  if (!velocity_atol_given) set_default_knit_velocity_atol(input.options, input.knit, integ->info());
+  if (!velocity_atol_given)
+    set_default_knit_velocity_atol(input.options, input.knit, integ->info());
   input.validate();
   if (request.frames < 1)
     throw std::invalid_argument("--frames = " + std::to_string(request.frames) + ": must be >= 1");
@@ -54,8 +55,8 @@ std::shared_ptr<KnitCall> knit_call(const KnitRequest& request, const std::atomi
 
   call->scene.options.interrupt = cancel;
   try {
-    call->result = std::make_unique<KnitResult>(
-        run_knit(std::move(start), call->scene, integrator, observer));
+    call->result =
+        std::make_unique<KnitResult>(run_knit(std::move(start), call->scene, integrator, observer));
   } catch (const std::invalid_argument& e) {  // an option the model refuses at the start
     call->scene.options.interrupt = nullptr;
     rethrow_as_typed(e);
@@ -68,8 +69,8 @@ std::shared_ptr<KnitCall> knit_call(const KnitRequest& request, const std::atomi
     call->stitches_csv = stitches_csv(*call->textile);
     call->centerlines = course_centerlines(r.model, r.positions);
   }
-  call->summary = knit_summary(call->scene, r, knit_frames_json(r),
-                               call->textile ? &*call->textile : nullptr);
+  call->summary =
+      knit_summary(call->scene, r, knit_frames_json(r), call->textile ? &*call->textile : nullptr);
   return call;
 }
 

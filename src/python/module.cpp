@@ -248,9 +248,9 @@ py::object knit(const py::object& chart_or_scene, const py::object& overrides,
   return result;
 }
 
-// stitches.csv as {column: array}: numbers as float64 (an empty field, a measure the cell does not
-// have, as NaN), wale and course as int, stitch as str ('K', 'T', 'M'); parsed from the text the
-// command writes, so the values are the file's, bit for bit.
+// stitches.csv as {column: array}: numbers as float64 (an empty field, a measure the cell does
+// not have, as NaN), wale, course and held_over as int, stitch as str ('K', 'T', 'M'); parsed
+// from the text the command writes, so the values are the file's, bit for bit.
 py::dict stitches_columns(const std::string& csv) {
   py::dict out;
   if (csv.empty()) return out;
@@ -278,7 +278,8 @@ py::dict stitches_columns(const std::string& csv) {
       header = false;
       continue;
     }
-    for (std::size_t c = 0; c < names.size(); ++c) cols[c].push_back(c < fields.size() ? fields[c] : "");
+    for (std::size_t c = 0; c < names.size(); ++c)
+      cols[c].push_back(c < fields.size() ? fields[c] : "");
   }
   for (std::size_t c = 0; c < names.size(); ++c) {
     const std::vector<std::string>& col = cols[c];
@@ -287,9 +288,10 @@ py::dict stitches_columns(const std::string& csv) {
       py::list l;
       for (const std::string& v : col) l.append(v);
       out[names[c].c_str()] = py::module_::import("numpy").attr("array")(l, "U1");
-    } else if (names[c] == "wale" || names[c] == "course") {
+    } else if (names[c] == "wale" || names[c] == "course" || names[c] == "held_over") {
       py::array_t<long long> a(n);
-      for (py::ssize_t i = 0; i < n; ++i) a.mutable_at(i) = std::strtoll(col[i].c_str(), nullptr, 10);
+      for (py::ssize_t i = 0; i < n; ++i)
+        a.mutable_at(i) = std::strtoll(col[i].c_str(), nullptr, 10);
       out[names[c].c_str()] = a;
     } else {
       py::array_t<double> a(n);
@@ -470,7 +472,8 @@ PYBIND11_MODULE(knitsim, m) {
                       .cast<unsigned long>();
   m.doc() =
       "knitsim from Python: mass-spring models of knitted fabric (docs/python.md). drape(), "
-      "knit(), fit(), list_keys(), integrators(), scenes(); results hold numpy arrays and summary.json as a dict.";
+      "knit(), fit(), list_keys(), integrators(), scenes(); results hold numpy arrays and "
+      "summary.json as a dict.";
   m.attr("__version__") = KNITSIM_VERSION;
   m.attr("build") = py::dict(py::arg("version") = version_string(),
                              py::arg("python") = KNITSIM_PYTHON_EXECUTABLE,
@@ -593,7 +596,8 @@ PYBIND11_MODULE(knitsim, m) {
           "positions", [](const KnitCall& c) { return points_array(c.result->positions); },
           "every interlacing point at the end, n x 3, m (points.csv x, y, z)")
       .def_property_readonly(
-          "rest_positions", [](const KnitCall& c) { return points_array(c.result->model.rest_positions()); },
+          "rest_positions",
+          [](const KnitCall& c) { return points_array(c.result->model.rest_positions()); },
           "every interlacing point at rest, n x 3, m (points.csv x0, y0, z0)")
       .def_property_readonly(
           "wale",
@@ -636,15 +640,16 @@ PYBIND11_MODULE(knitsim, m) {
           "centerline_u",
           [](const KnitCall& c) {
             py::list l;
-            for (const CurveSamples& s : c.centerlines) l.append(vector_array(s.u.data(), s.u.size()));
+            for (const CurveSamples& s : c.centerlines)
+              l.append(vector_array(s.u.data(), s.u.size()));
             return l;
           },
           "per course, the curve parameters of its centerlines samples (centerlines.csv u)")
       .def_property_readonly(
           "stitches", [](const KnitCall& c) { return stitches_columns(c.stitches_csv); },
-          "stitches.csv as {column: array}, one row per chart cell (wale, course int; stitch "
-          "str; the measures float64 in m, NaN where the cell has none); empty for an end state "
-          "that is not finite")
+          "stitches.csv as {column: array}, one row per chart cell (wale, course, held_over "
+          "int; stitch str; the measures float64 in m, NaN where the cell has none); empty "
+          "for an end state that is not finite")
       .def_property_readonly(
           "summary", [](const KnitCall& c) { return json_to_python(c.summary); },
           "summary.json as a dict, with its 'units', 'yarn' and 'fabric' blocks")
