@@ -172,3 +172,31 @@ def test_cancel_ends_the_run_with_its_status():
     r = knitsim.knit(CHART, cancel=cancel)
     assert r.status == "interrupted"
     assert r.positions.shape == r.rest_positions.shape
+
+
+def test_threads_give_the_same_points():
+    import threading
+    one = knitsim.knit(CHART)
+    results = [None] * 4
+
+    def run(i):
+        results[i] = knitsim.knit(CHART)
+
+    threads = [threading.Thread(target=run, args=(i,)) for i in range(len(results))]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for r in results:
+        assert np.array_equal(r.positions, one.positions)
+        assert without_timings(r.summary) == without_timings(one.summary)
+
+
+def test_help_lists_the_knit_keys():
+    doc = knitsim.knit.__doc__
+    knit_keys = [k for k in knitsim.list_keys() if k["key"].startswith("knit.")]
+    assert knit_keys
+    for k in knit_keys:
+        line = next(l for l in doc.splitlines() if l.strip().startswith(k["key"] + " ("))
+        assert k["unit"] in line and "default " + k["default"] in line and k["accepted"] in line
+    assert "model.stiffness (" not in doc  # the drape's keys are not the knit's
