@@ -231,7 +231,6 @@ nlohmann::json write_frames(const fs::path& dir, const KnitScene& scene, const K
   const KnitModel& m = r.model;
   remove_stale_output(dir / "frames");  // an earlier run's may have had more frames
   fs::create_directories(dir / "frames");
-  nlohmann::json list = nlohmann::json::array();
   for (size_t f = 0; f < r.frames.size(); ++f) {
     const FrameRecorder::Frame& frame = r.frames[f];
     char stem[32];
@@ -245,16 +244,25 @@ nlohmann::json write_frames(const fs::path& dir, const KnitScene& scene, const K
                       centerlines_vtk("knitsim knit " + label, fl));
     if (pictures)
       render_front(dir / "frames" / (std::string("frame_") + stem + ".png"), m, fp, fl, label);
+  }
+  return knit_frames_json(r);
+}
+
+}  // namespace
+
+nlohmann::json knit_frames_json(const KnitResult& r) {
+  nlohmann::json list = nlohmann::json::array();
+  for (size_t f = 0; f < r.frames.size(); ++f) {
+    const FrameRecorder::Frame& frame = r.frames[f];
     list.push_back({{"index", f},
                     {"check", frame.check},
                     {"t", frame.t},
                     {"residual", frame.residual},
-                    {"max_displacement_over_r", max_displacement_over_r(m, fp)}});
+                    {"max_displacement_over_r",
+                     max_displacement_over_r(r.model, knit_positions(r.model, frame.t, frame.x))}});
   }
   return list;
 }
-
-}  // namespace
 
 nlohmann::json knit_summary(const KnitScene& scene, const KnitResult& r,
                             const nlohmann::json& frames, const TextileMeasures* textile) {

@@ -17,6 +17,10 @@ namespace knitsim {
 nlohmann::json knit_summary(const KnitScene& scene, const KnitResult& result,
                             const nlohmann::json& frames, const TextileMeasures* textile = nullptr);
 
+// summary.json's `frames` list: the captured frames' index, check, t, residual and
+// max_displacement_over_r (what write_knit_outputs writes without writing anything).
+nlohmann::json knit_frames_json(const KnitResult& result);
+
 // Writes into `dir` (which must exist):
 //   points.csv       id,wale,level,x,y,z,x0,y0,z0: every interlacing point at the end and at rest
 //   typevalue.csv    course,loop,k,x,y,z: T0..T8 of every loop at the end (loop = its wale; a

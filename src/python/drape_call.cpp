@@ -94,6 +94,8 @@ const std::vector<RunOption>& run_options() {
   return table;
 }
 
+}  // namespace
+
 void apply_run_option(IntegratorOptions& o, const std::string& name, const std::string& value) {
   for (const RunOption& r : run_options()) {
     if (r.name != name) continue;
@@ -105,8 +107,6 @@ void apply_run_option(IntegratorOptions& o, const std::string& name, const std::
   for (const RunOption& r : run_options()) names.push_back(r.name);
   throw std::invalid_argument(unknown_key_message(name, names));
 }
-
-}  // namespace
 
 const std::vector<std::pair<std::string, std::string>>& run_option_flags() {
   static const std::vector<std::pair<std::string, std::string>> flags = [] {
@@ -146,7 +146,7 @@ DrapeCall drape_call(const DrapeRequest& request, const std::atomic<bool>* cance
   try {
     result.emplace(run_drape(scene, integrator, observer));
   } catch (const std::invalid_argument& e) {  // an option the model refuses at the start
-    rethrow_renamed(e, run_option_names());
+    rethrow_as_typed(e);
   }
   scene.options.interrupt = nullptr;  // the flag dies with the call
   DrapeReport report = drape_report(scene, *result, has_target ? &target_edges : nullptr);

@@ -46,6 +46,9 @@ struct DrapeCall {
 
 // The run option names DrapeRequest::run_options takes, as (name, its flag): ("rtol", "--rtol").
 const std::vector<std::pair<std::string, std::string>>& run_option_flags();
+// Sets the run option `name` (a name of run_option_flags()) of `o` from its text; throws
+// std::invalid_argument ("--rtol = x: must be a number", or the names for an unknown one).
+void apply_run_option(IntegratorOptions& o, const std::string& name, const std::string& value);
 
 // Checks the whole request (throws std::invalid_argument), runs it with `cancel` as its interrupt
 // flag (may be nullptr) and `observer` (may be nullptr), and measures the result.

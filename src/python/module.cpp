@@ -14,7 +14,9 @@
 
 #include <atomic>
 #include <chrono>
+#include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <string>
 #include <type_traits>
@@ -25,6 +27,7 @@
 #include "src/io/manifest.hpp"
 #include "src/python/drape_call.hpp"
 #include "src/python/fit_call.hpp"
+#include "src/python/knit_call.hpp"
 
 namespace py = pybind11;
 
@@ -213,6 +216,148 @@ py::object drape(const py::object& scene, const py::object& overrides, const py:
 }
 
 
+// knitsim.knit: the knit run of `knitsim knit` (knit_call.hpp).
+py::object knit(const py::object& chart_or_scene, const py::object& overrides,
+                const py::object& integrator, int frames, const py::object& cancel_token,
+                const py::kwargs& run_options) {
+  KnitRequest request;
+  request.chart_or_scene = path_text(chart_or_scene, "chart_or_scene");
+  request.overrides = override_list(overrides);
+  if (!integrator.is_none()) {
+    if (!py::isinstance<py::str>(integrator))
+      throw std::invalid_argument("--integrator: expected a name (knitsim.integrators())");
+    request.integrator = integrator.cast<std::string>();
+  }
+  request.frames = frames;
+  for (const auto& [name, value] : run_options)
+    request.run_options.emplace_back(name.cast<std::string>(), value_text(value));
+
+  const std::shared_ptr<std::atomic<bool>> cancel = cancel_flag(cancel_token);
+  SignalPoll signals(cancel.get());
+  std::shared_ptr<KnitCall> call;
+  {
+    py::gil_scoped_release release;
+    call = knit_call(request, cancel.get(), &signals);
+  }
+  py::object result = py::cast(call);
+  if (signals.raised()) {
+    py::error_already_set e;
+    if (PyExceptionInstance_Check(e.value().ptr())) e.value().attr("result") = result;
+    throw e;
+  }
+  return result;
+}
+
+// stitches.csv as {column: array}: numbers as float64 (an empty field, a measure the cell does
+// not have, as NaN), wale, course and held_over as int, stitch as str ('K', 'T', 'M'); parsed
+// from the text the command writes, so the values are the file's, bit for bit.
+py::dict stitches_columns(const std::string& csv) {
+  py::dict out;
+  if (csv.empty()) return out;
+  std::vector<std::string> names;
+  std::vector<std::vector<std::string>> cols;
+  std::size_t pos = 0;
+  bool header = true;
+  while (pos < csv.size()) {
+    std::size_t end = csv.find('\n', pos);
+    if (end == std::string::npos) end = csv.size();
+    const std::string line = csv.substr(pos, end - pos);
+    pos = end + 1;
+    if (line.empty()) continue;
+    std::vector<std::string> fields;
+    std::size_t a = 0;
+    while (true) {
+      const std::size_t b = line.find(',', a);
+      fields.push_back(line.substr(a, b == std::string::npos ? std::string::npos : b - a));
+      if (b == std::string::npos) break;
+      a = b + 1;
+    }
+    if (header) {
+      names = fields;
+      cols.resize(names.size());
+      header = false;
+      continue;
+    }
+    for (std::size_t c = 0; c < names.size(); ++c)
+      cols[c].push_back(c < fields.size() ? fields[c] : "");
+  }
+  for (std::size_t c = 0; c < names.size(); ++c) {
+    const std::vector<std::string>& col = cols[c];
+    const auto n = static_cast<py::ssize_t>(col.size());
+    if (names[c] == "stitch") {
+      py::list l;
+      for (const std::string& v : col) l.append(v);
+      out[names[c].c_str()] = py::module_::import("numpy").attr("array")(l, "U1");
+    } else if (names[c] == "wale" || names[c] == "course" || names[c] == "held_over") {
+      py::array_t<long long> a(n);
+      for (py::ssize_t i = 0; i < n; ++i)
+        a.mutable_at(i) = std::strtoll(col[i].c_str(), nullptr, 10);
+      out[names[c].c_str()] = a;
+    } else {
+      py::array_t<double> a(n);
+      for (py::ssize_t i = 0; i < n; ++i)
+        a.mutable_at(i) = col[i].empty() ? std::numeric_limits<double>::quiet_NaN()
+                                         : std::strtod(col[i].c_str(), nullptr);
+      out[names[c].c_str()] = a;
+    }
+  }
+  return out;
+}
+
+// The key table's rows as help lines "  key (unit; default D; accepted): meaning", by column name
+// (the table's columns: key, model, unit, default, accepted, meaning); `keep` picks the rows.
+template <typename Keep>
+std::string key_lines(Keep keep) {
+  const Table keys = scene_key_table();
+  auto col = [&keys](const char* name) {
+    for (std::size_t c = 0; c < keys.columns.size(); ++c)
+      if (keys.columns[c] == name) return c;
+    throw std::logic_error(std::string("scene_key_table has no column ") + name);
+  };
+  const std::size_t key = col("key"), unit = col("unit"), def = col("default"),
+                    accepted = col("accepted"), meaning = col("meaning");
+  std::string doc;
+  for (const auto& row : keys.rows)
+    if (keep(row[key]))
+      doc += "  " + row[key] + " (" + row[unit] + "; default " + row[def] + "; " +
+             row[accepted] + "): " + row[meaning] + "\n";
+  return doc;
+}
+
+std::string knit_doc() {
+  std::string doc =
+      "knit(chart_or_scene, overrides=None, integrator=None, frames=4, cancel=None, "
+      "**run_options)\n"
+      "\n"
+      "Run a stitch chart's interlacing-point network to its steady state, as `knitsim knit` "
+      "does (the same numbers, bit for bit), and return a KnitResult (positions, "
+      "rest_positions, centerlines, stitches, summary, status; result.write(folder) writes the "
+      "command's files).\n"
+      "\n"
+      "chart_or_scene: a stitch chart file (as --chart, e.g. models/charts/single_tuck.chart) or "
+      "a knit scene ending in .toml (as --scene; docs/knit.md).\n"
+      "overrides: {key: value} (or [\"key=value\", ...]) of the knit.* and run.* keys below, as "
+      "--set takes them, e.g. {\"knit.network\": \"paper\"}.\n"
+      "integrator: a name of knitsim.integrators(); None = the command's default (equilibrium "
+      "with yarn contact, else cvode-bdf).\n"
+      "frames: captured frames (--frames), >= 1.\n"
+      "cancel: a knitsim.Cancel another thread may set() to end the run (status interrupted).\n"
+      "run_options: the run flags of `knitsim knit` by name:";
+  for (const auto& [name, flag] : run_option_flags()) doc += " " + name;
+  doc +=
+      ".\n\n"
+      "Bad input raises ValueError with the command line's one-line message (a bad chart names "
+      "its row and column); a run that does not reach its steady state returns its status. "
+      "Ctrl-C ends the run (status interrupted) and raises KeyboardInterrupt with the partial "
+      "result as .result.\n"
+      "\n"
+      "Knit and run keys (unit; default; accepted values; meaning):\n";
+  doc += key_lines([](const std::string& key) {
+    return key.rfind("knit.", 0) == 0 || key.rfind("run.", 0) == 0 || key.rfind("--", 0) == 0;
+  });
+  return doc;
+}
+
 // knitsim.fit: the ICA fit of `knitsim fit` (fit_call.hpp).
 py::object fit(const py::object& target, const py::object& scene, const py::object& overrides,
                const py::object& integrator, const py::object& bounds, const py::kwargs& options) {
@@ -311,10 +456,7 @@ std::string drape_doc() {
       "raises KeyboardInterrupt with the partial result as .result.\n"
       "\n"
       "Scene keys (unit; default; accepted values; meaning):\n";
-  const Table keys = scene_key_table();
-  for (const auto& row : keys.rows)
-    doc += "  " + row[0] + " (" + row[1] + "; default " + row[2] + "; " + row[3] + "): " +
-           row[4] + "\n";
+  doc += key_lines([](const std::string&) { return true; });
   return doc;
 }
 
@@ -330,7 +472,8 @@ PYBIND11_MODULE(knitsim, m) {
                       .cast<unsigned long>();
   m.doc() =
       "knitsim from Python: mass-spring models of knitted fabric (docs/python.md). drape(), "
-      "fit(), list_keys(), integrators(), scenes(); results hold numpy arrays and summary.json as a dict.";
+      "knit(), fit(), list_keys(), integrators(), scenes(); results hold numpy arrays and "
+      "summary.json as a dict.";
   m.attr("__version__") = KNITSIM_VERSION;
   m.attr("build") = py::dict(py::arg("version") = version_string(),
                              py::arg("python") = KNITSIM_PYTHON_EXECUTABLE,
@@ -444,6 +587,111 @@ PYBIND11_MODULE(knitsim, m) {
         py::arg("cancel") = py::none(), doc.c_str());
 
 
+  using KnitPtr = std::shared_ptr<KnitCall>;
+  py::class_<KnitCall, KnitPtr>(
+      m, "KnitResult",
+      "One knit run: arrays in SI units (m), summary.json as a dict. Point id k is row k of "
+      "positions (points.csv's order).")
+      .def_property_readonly(
+          "positions", [](const KnitCall& c) { return points_array(c.result->positions); },
+          "every interlacing point at the end, n x 3, m (points.csv x, y, z)")
+      .def_property_readonly(
+          "rest_positions",
+          [](const KnitCall& c) { return points_array(c.result->model.rest_positions()); },
+          "every interlacing point at rest, n x 3, m (points.csv x0, y0, z0)")
+      .def_property_readonly(
+          "wale",
+          [](const KnitCall& c) {
+            const auto& p = c.result->model.points;
+            py::array_t<int> a(static_cast<py::ssize_t>(p.size()));
+            for (std::size_t k = 0; k < p.size(); ++k) a.mutable_at(k) = p[k].wale;
+            return a;
+          },
+          "each point's wale (points.csv wale)")
+      .def_property_readonly(
+          "level",
+          [](const KnitCall& c) {
+            const auto& p = c.result->model.points;
+            py::array_t<int> a(static_cast<py::ssize_t>(p.size()));
+            for (std::size_t k = 0; k < p.size(); ++k) a.mutable_at(k) = p[k].level;
+            return a;
+          },
+          "each point's level (points.csv level)")
+      .def_property_readonly(
+          "centerlines",
+          [](const KnitCall& c) {
+            py::list l;
+            for (const CurveSamples& s : c.centerlines) l.append(points_array(s.points));
+            return l;
+          },
+          "per course from the bottom, its centreline at the end sampled in arc length, an "
+          "m x 3 array in m (centerlines.csv); empty for an end state that is not finite")
+      .def_property_readonly(
+          "rest_centerlines",
+          [](const KnitCall& c) {
+            py::list l;
+            for (const CurveSamples& s :
+                 course_centerlines(c.result->model, c.result->model.rest_positions()))
+              l.append(points_array(s.points));
+            return l;
+          },
+          "per course, its centreline at rest (the one before.png draws), an m x 3 array in m")
+      .def_property_readonly(
+          "centerline_u",
+          [](const KnitCall& c) {
+            py::list l;
+            for (const CurveSamples& s : c.centerlines)
+              l.append(vector_array(s.u.data(), s.u.size()));
+            return l;
+          },
+          "per course, the curve parameters of its centerlines samples (centerlines.csv u)")
+      .def_property_readonly(
+          "stitches", [](const KnitCall& c) { return stitches_columns(c.stitches_csv); },
+          "stitches.csv as {column: array}, one row per chart cell (wale, course, held_over "
+          "int; stitch str; the measures float64 in m, NaN where the cell has none); empty "
+          "for an end state that is not finite")
+      .def_property_readonly(
+          "summary", [](const KnitCall& c) { return json_to_python(c.summary); },
+          "summary.json as a dict, with its 'units', 'yarn' and 'fabric' blocks")
+      .def_property_readonly(
+          "status", [](const KnitCall& c) { return to_string(c.result->stats.status); },
+          "equilibrium, interrupted, time_limit, ... (summary['status'])")
+      .def_property_readonly(
+          "message", [](const KnitCall& c) { return c.result->stats.message; },
+          "why the run stopped")
+      .def_property_readonly(
+          "certificate", [](const KnitCall& c) { return c.result->stats.certificate; },
+          "stable_minimum, inconclusive, or '' where the stop did not pass")
+      .def_property_readonly(
+          "chart", [](const KnitCall& c) { return c.scene.name; }, "the chart's name")
+      .def_property_readonly(
+          "integrator", [](const KnitCall& c) { return c.result->stats.integrator; },
+          "the integrator's name")
+      .def(
+          "write",
+          [](const KnitPtr& c, const py::object& folder, bool pictures) {
+            const std::string dir = path_text(folder, "--out");
+            std::string written;
+            {
+              py::gil_scoped_release release;
+              written = write_knit_call(*c, dir, pictures);
+            }
+            return written;
+          },
+          py::arg("folder"), py::arg("pictures") = true,
+          "Writes the files of `knitsim knit --out folder` (points.csv, typevalue.csv, "
+          "centerlines.csv/.vtk, stitches.csv, frames/, before.png and after.png unless "
+          "pictures=False, summary.json, state.json, manifest.json); returns the folder.")
+      .def("__repr__", [](const KnitCall& c) {
+        return "<knitsim.KnitResult " + c.scene.name + " " + c.result->stats.integrator + ": " +
+               to_string(c.result->stats.status) + ", " +
+               std::to_string(c.result->positions.size()) + " points>";
+      });
+  static const std::string knit_docstring = knit_doc();
+  m.def("knit", &knit, py::arg("chart_or_scene"), py::arg("overrides") = py::none(),
+        py::arg("integrator") = py::none(), py::arg("frames") = 4,
+        py::arg("cancel") = py::none(), knit_docstring.c_str());
+
   py::class_<FitCall, std::shared_ptr<FitCall>>(
       m, "FitResult", "One ICA fit: the best parameters, their objective, the history.")
       .def_property_readonly(
@@ -508,8 +756,11 @@ PYBIND11_MODULE(knitsim, m) {
 
   m.def(
       "list_keys",
-      [] { return table_rows(scene_key_table(), {"key", "unit", "default", "accepted", "meaning"}); },
-      "The scene keys as `knitsim list keys` lists them: [{key, unit, default, accepted, "
+      [] {
+        const Table t = scene_key_table();
+        return table_rows(t, t.columns);
+      },
+      "The scene keys as `knitsim list keys` lists them: [{key, model, unit, default, accepted, "
       "meaning}].");
   m.def(
       "integrators",

@@ -32,3 +32,13 @@ def test_fit_lab_data(tmp_path):
     assert "objective" in out
     assert (tmp_path / "fit_edges.png").stat().st_size > 10000
     assert (tmp_path / "fitted_drape" / "nodes.csv").exists()
+
+
+def test_knit_loops(tmp_path):
+    out = run_example("knit_loops.py", "--out", str(tmp_path))
+    assert "single_tuck: equilibrium" in out
+    assert (tmp_path / "knit_loops.png").stat().st_size > 10000
+    with open(tmp_path / "knit_loops.csv") as f:
+        rows = {r["stitch"]: r for r in csv.DictReader(f)}
+    assert sorted(rows) == ["K", "T"] and rows["T"]["cells"] == "1"
+    assert rows["K"]["cells"] == str(8 * 6 - 1)

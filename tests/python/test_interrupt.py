@@ -2,8 +2,9 @@
 KeyboardInterrupt carrying the partial result as .result. Each test runs in a fresh interpreter
 that sends itself SIGINT, so a signal that went astray cannot end this test session."""
 import json
+import os
 
-from conftest import run_python
+from conftest import ROOT, run_python
 
 # A run of several seconds whose every step is short: verlet (explicit, a step every few
 # microseconds) on a finer four_corner; max_wall bounds it if the interrupt is missed.
@@ -110,3 +111,27 @@ def test_a_cancel_flag_ends_a_run_on_another_thread():
     # A Cancel already set stops the next run at its first check; a fresh call has its own flag.
     assert knitsim.drape(cancel=cancel, integrator="cvode-bdf").status == "interrupted"
     assert knitsim.drape(integrator="cvode-bdf").status == "equilibrium"
+
+
+def test_ctrl_c_ends_a_knit_with_its_partial_result():
+    # tucks40 without contact under verlet: many short steps for far longer than the 0.5 s.
+    script = """
+import json, os, signal, threading, time
+import knitsim
+threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT)).start()
+start = time.monotonic()
+try:
+    knitsim.knit(%r, {"knit.contact": 0}, "verlet", max_wall=60)
+    print(json.dumps({"raised": None}))
+except KeyboardInterrupt as e:
+    r = e.result
+    print(json.dumps({"raised": "KeyboardInterrupt", "status": r.status,
+                      "summary_status": r.summary["status"], "seconds": time.monotonic() - start,
+                      "n": len(r.positions)}))
+""" % os.path.join(ROOT, "models", "charts", "tucks40.chart")
+    p = run_python(script, timeout=120)
+    assert p.returncode == 0, p.stderr
+    out = json.loads(p.stdout.strip().splitlines()[-1])
+    assert out["raised"] == "KeyboardInterrupt", out
+    assert out["status"] == out["summary_status"] == "interrupted"
+    assert out["n"] > 0 and out["seconds"] < 30, out
