@@ -685,13 +685,20 @@ std::vector<ContactPoint> knit_contact_points(const KnitModel& m,
       given[k][i] = static_cast<int>(at - ids.begin());
       used[given[k][i]] = 1;
     }
-  // d vertex / d particle (x, y) by central differences, a 3 x 2 per vertex and particle: for
-  // every particle of the course at set-up (the largest are kept), else only for each vertex's
-  // given particles, in their slots.
+  // d vertex / d particle (x, y) by central differences, a 3 x 2 per vertex and particle. At
+  // set-up every particle of the course is a candidate (the largest are kept): each coordinate's
+  // derivatives are kept for the vertices it moves (a window along the yarn), and a vertex's row
+  // over all candidates is assembled when its largest are chosen, so memory stays linear in the
+  // course's length. Given particles_of, only each vertex's given particles, in their slots.
   const std::size_t columns = particles_of ? kContactParticles : ids.size();
-  std::vector<std::array<double, 6>> J(v.size() * columns, std::array<double, 6>{});
+  struct Window {
+    int first = 0;       // the first vertex moved
+    std::vector<Vec3> d; // d vertex (first + t) / d coordinate
+  };
+  std::vector<Window> windows(particles_of ? 0 : 2 * ids.size());
+  std::vector<std::array<double, 6>> J(particles_of ? v.size() * columns : 0,
+                                       std::array<double, 6>{});
   auto entry = [&](int k, std::size_t q) -> std::array<double, 6>* {
-    if (!particles_of) return &J[k * columns + q];
     for (int i = 0; i < kContactParticles; ++i)
       if (given[k][i] == static_cast<int>(q)) return &J[k * columns + i];
     return nullptr;
@@ -717,20 +724,41 @@ std::vector<ContactPoint> knit_contact_points(const KnitModel& m,
       const int first = std::max(0, a - kReach), last = std::min(n, b + kReach);
       polyline_vertices({plus.begin() + lo, plus.begin() + hi + 1}, S, first - lo, last - lo, vp);
       polyline_vertices({minus.begin() + lo, minus.begin() + hi + 1}, S, first - lo, last - lo, vm);
+      Window* w = particles_of ? nullptr : &windows[2 * q + c];
+      if (w != nullptr) w->first = first * S, w->d.resize((last - first) * S + 1);
       for (int k = first * S; k <= last * S; ++k) {
+        const int t = k - first * S;  // the vertex's index in vp, vm
+        const Vec3 d{(vp[t].x - vm[t].x) / (2.0 * h), (vp[t].y - vm[t].y) / (2.0 * h),
+                     (vp[t].z - vm[t].z) / (2.0 * h)};
+        if (w != nullptr) {
+          w->d[t] = d;
+          continue;
+        }
         std::array<double, 6>* e = entry(k, q);
         if (e == nullptr) continue;
-        const int t = k - first * S;                    // the vertex's index in vp, vm
-        (*e)[c] = (vp[t].x - vm[t].x) / (2.0 * h);      // d vx / d c
-        (*e)[2 + c] = (vp[t].y - vm[t].y) / (2.0 * h);  // d vy / d c
-        (*e)[4 + c] = (vp[t].z - vm[t].z) / (2.0 * h);  // d vz / d c
+        (*e)[c] = d.x, (*e)[2 + c] = d.y, (*e)[4 + c] = d.z;  // d v / d c
       }
     }
+  // Vertex k's row over the candidates (set-up): zero where a coordinate does not move it.
+  std::vector<std::array<double, 6>> dense(particles_of ? 0 : columns);
+  auto row_of = [&](std::size_t k) -> const std::array<double, 6>* {
+    if (particles_of) return &J[k * columns];
+    for (std::size_t q = 0; q < columns; ++q) {
+      dense[q] = std::array<double, 6>{};
+      for (int c = 0; c < 2; ++c) {
+        const Window& w = windows[2 * q + c];
+        const long t = static_cast<long>(k) - w.first;
+        if (t < 0 || t >= static_cast<long>(w.d.size())) continue;
+        dense[q][c] = w.d[t].x, dense[q][2 + c] = w.d[t].y, dense[q][4 + c] = w.d[t].z;
+      }
+    }
+    return dense.data();
+  };
   // Per vertex the kContactParticles particles of largest |W|; the rest is added to the
   // largest, so the weights sum to [I; 0] (translations in the plane carried exactly).
   std::vector<int> order(columns);
   for (std::size_t k = 0; k < v.size(); ++k) {
-    const std::array<double, 6>* row = &J[k * columns];
+    const std::array<double, 6>* row = row_of(k);
     auto size = [&](int q) {
       double s = 0.0;
       for (double w : row[q]) s += w * w;
