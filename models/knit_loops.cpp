@@ -492,7 +492,10 @@ KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
     // Renewed points keep the particles they have at rest, so their Jacobian blocks stay in the
     // contact's fixed pattern.
     auto geometry = std::make_shared<const KnitModel>(m);
-    auto rest_points = std::make_shared<const std::vector<ContactPoint>>(contact.points);
+    using Particles = std::array<int, kContactParticles>;
+    auto rest_particles = std::make_shared<std::vector<Particles>>();
+    rest_particles->reserve(contact.points.size());
+    for (const ContactPoint& q : contact.points) rest_particles->push_back(q.particles);
     auto course_start = std::make_shared<std::vector<std::size_t>>(m.chart.courses + 1, 0);
     for (const ContactPoint& q : contact.points) ++(*course_start)[q.yarn + 1];
     for (int j = 0; j < m.chart.courses; ++j) (*course_start)[j + 1] += (*course_start)[j];
@@ -502,11 +505,14 @@ KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
            yarn_polylines(*geometry, positions, kContactSamplesPerInterval).vertices)
         out.insert(out.end(), course.begin(), course.end());
     };
-    contact.linearise = [geometry, rest_points, course_start](const std::vector<Vec3>& positions,
-                                                              int course) {
+    contact.linearise = [geometry, rest_particles, course_start](
+                            const std::vector<Vec3>& positions, int course) {
       return knit_contact_points(*geometry, positions, course,
-                                 rest_points->data() + (*course_start)[course]);
+                                 rest_particles->data() + (*course_start)[course]);
     };
+    // Linearised about the rest state (the network's initial one) they are these points: each
+    // run makes its own, and the model keeps none (models/yarn_contact.hpp).
+    contact.remake_at_start = true;
     contact.refresh_tol = kContactRefreshTol * r;
     contact.refresh_move = kContactRefreshMove * r;
     contact.step_cap = kContactStepCap * r;
@@ -647,7 +653,7 @@ YarnPolylines yarn_polylines(const KnitModel& m, const std::vector<Vec3>& positi
 
 std::vector<ContactPoint> knit_contact_points(const KnitModel& m,
                                               const std::vector<Vec3>& positions, int j,
-                                              const ContactPoint* particles_of) {
+                                              const std::array<int, kContactParticles>* particles_of) {
   check_positions(m, positions);
   if (j < 0 || j >= m.chart.courses)
     throw std::invalid_argument("knit_contact_points: no such course");
@@ -678,8 +684,8 @@ std::vector<ContactPoint> knit_contact_points(const KnitModel& m,
   std::vector<std::array<int, kContactParticles>> given(particles_of ? v.size() : 0, filled(-1));
   std::vector<char> used(ids.size(), particles_of == nullptr);
   for (std::size_t k = 0; k < given.size(); ++k)
-    for (int i = 0; i < kContactParticles && particles_of[k].particles[i] >= 0; ++i) {
-      const auto at = std::find(ids.begin(), ids.end(), particles_of[k].particles[i]);
+    for (int i = 0; i < kContactParticles && particles_of[k][i] >= 0; ++i) {
+      const auto at = std::find(ids.begin(), ids.end(), particles_of[k][i]);
       if (at == ids.end())
         throw std::invalid_argument("knit_contact_points: a given particle is not the course's");
       given[k][i] = static_cast<int>(at - ids.begin());
@@ -754,6 +760,7 @@ std::vector<ContactPoint> knit_contact_points(const KnitModel& m,
     }
     return dense.data();
   };
+  out.reserve(v.size());
   // Per vertex the kContactParticles particles of largest |W|; the rest is added to the
   // largest, so the weights sum to [I; 0] (translations in the plane carried exactly).
   std::vector<int> order(columns);
@@ -803,6 +810,10 @@ std::vector<ContactPoint> knit_contact_points(const KnitModel& m,
 std::vector<ContactPoint> knit_contact_points(const KnitModel& m) {
   const std::vector<Vec3> rest = m.rest_positions();
   std::vector<ContactPoint> out;
+  std::size_t count = 0;  // S vertices per interpolation interval and the last (no regrowth)
+  for (int j = 0; j < m.chart.courses; ++j)
+    count += kContactSamplesPerInterval * (course_yarn(m, rest, j).size() - 1) + 1;
+  out.reserve(count);
   for (int j = 0; j < m.chart.courses; ++j) {
     const std::vector<ContactPoint> course = knit_contact_points(m, rest, j);
     out.insert(out.end(), course.begin(), course.end());

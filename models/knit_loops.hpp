@@ -269,10 +269,13 @@ struct KnitModel {
   std::vector<int> loop_at;                 // course * wales + wale -> loop index, -1 (miss)
   SpringNetwork network;
   // The network with yarn contact (params.yarn_contact()), else null; system() is what runs.
+  // One run of the contact's model (models/yarn_contact.hpp): a second run of the same model,
+  // e.g. on another thread, is ContactNetwork(contact->shared_model()).
   std::shared_ptr<ContactNetwork> contact;
   const MechanicalSystem& system() const {
     return contact ? static_cast<const MechanicalSystem&>(*contact) : network;
   }
+  MechanicalSystem& system() { return contact ? static_cast<MechanicalSystem&>(*contact) : network; }
 
   int point(int wale, int level) const { return point_at[level * chart.wales + wale]; }
   int loop(int wale, int course) const { return loop_at[course * chart.wales + wale]; }
@@ -344,7 +347,7 @@ std::vector<ContactPoint> knit_contact_points(const KnitModel& m);
 // Throws std::invalid_argument for a bad course, positions or particle.
 std::vector<ContactPoint> knit_contact_points(const KnitModel& m,
                                               const std::vector<Vec3>& positions, int j,
-                                              const ContactPoint* particles_of = nullptr);
+                                              const std::array<int, kContactParticles>* particles_of = nullptr);
 // The contact's sampling and renewal, in units of r (docs/knit.md, "Yarn contact"): points at
 // kContactSamplesPerInterval per interpolation interval (twice the measuring polyline's: the
 // barrier keeps points apart, and segments between points spaced s can pass within

@@ -188,9 +188,13 @@ class Integrator {
   // order history, keeping its counters; false if the method cannot (the default).
   virtual bool restart() { return false; }
 
-  // The system's functions changed at the current state (MechanicalSystem::refresh): forget
+  // The system's functions changed at the current state (MechanicalSystem::update): forget
   // what was computed from the old ones (step history, cached forces). Default: restart().
   virtual void model_changed() { restart(); }
+
+  // What the run's message adds about how the method got there (the equilibrium solver: the
+  // saddles it left, a fall-back to the dynamics), starting "; ". Default: nothing.
+  virtual std::string run_note() const { return {}; }
 
   // Method order of the step just taken: the controller's choice for variable-order methods
   // (cvode-bdf, cvode-adams), else info().order.
@@ -223,7 +227,12 @@ class RunObserver {
 // The one run-to-equilibrium driver. x, v: in the initial state at time t0 (empty = the model's
 // initial_state), out the final state. t0 > 0 continues a run that stopped there (knitsim drape
 // --continue); it must be below opt.t_max (std::invalid_argument otherwise). The counters in the
-// result are this call's only.
+// result are this call's only. Between steps, at each check, it updates the system's run state
+// (MechanicalSystem::update); a system with run state must therefore be passed non-const (the
+// const overload throws std::logic_error for one).
+RunStats run_to_equilibrium(MechanicalSystem& sys, Integrator& integ, const IntegratorOptions& opt,
+                            std::vector<double>& x, std::vector<double>& v,
+                            RunObserver* observer = nullptr, double t0 = 0.0);
 RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
                             const IntegratorOptions& opt, std::vector<double>& x,
                             std::vector<double>& v, RunObserver* observer = nullptr,
@@ -238,6 +247,10 @@ double equilibrium_threshold(const MechanicalSystem& sys, double t, const double
                              double equilibrium_tol);
 
 // Convenience: make_integrator(name) + run_to_equilibrium.
+RunStats run_to_equilibrium(MechanicalSystem& sys, const std::string& integrator,
+                            const IntegratorOptions& opt, std::vector<double>& x,
+                            std::vector<double>& v, RunObserver* observer = nullptr,
+                            double t0 = 0.0);
 RunStats run_to_equilibrium(const MechanicalSystem& sys, const std::string& integrator,
                             const IntegratorOptions& opt, std::vector<double>& x,
                             std::vector<double>& v, RunObserver* observer = nullptr,

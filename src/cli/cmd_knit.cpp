@@ -400,7 +400,7 @@ nlohmann::json contact_json(const KnitModel& m, double t, const std::vector<doub
   const ContactNetwork& c = *m.contact;
   int touching = 0;
   const double closest = c.min_distance(t, x.data(), &touching);
-  return {{"points", c.contact().points.size()},
+  return {{"points", c.points().size()},
           {"min_point_distance_over_r", std::isfinite(closest)
                                             ? nlohmann::json(closest / m.params.loop_radius)
                                             : nlohmann::json(nullptr)},
@@ -594,7 +594,7 @@ void run(const KnitArgs& args) {
   }
   if (args.frames < 1)
     throw std::invalid_argument("--frames = " + std::to_string(args.frames) + ": must be >= 1");
-  const KnitModel model = build_knit(chart, params);  // validates params
+  KnitModel model = build_knit(chart, params);  // validates params (non-const: its contact run)
   std::vector<double> x(model.network.dof()), v(model.network.dof());
   model.network.initial_state(x.data(), v.data());
   double t0 = 0.0;
