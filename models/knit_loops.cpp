@@ -3,8 +3,12 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <fstream>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
+
+#include <sys/resource.h>
 
 namespace knitsim {
 
@@ -334,6 +338,42 @@ int KnitModel::count(KnitSpringKind kind) const {
   return static_cast<int>(std::count(spring_kind.begin(), spring_kind.end(), kind));
 }
 
+double knit_memory_estimate(int wales, int courses, bool contact) {
+  const double stitches = static_cast<double>(wales) * courses;
+  return kKnitMemoryBase + stitches * (contact ? kKnitMemoryPerStitchContact : kKnitMemoryPerStitch);
+}
+
+namespace {
+
+// A "Key:   N kB" line of a /proc file, in bytes; -1 if absent.
+double proc_kb(const char* file, const std::string& key) {
+  std::ifstream in(file);
+  std::string line;
+  while (std::getline(in, line))
+    if (line.rfind(key + ":", 0) == 0) {
+      std::istringstream fields(line.substr(key.size() + 1));
+      double kb = -1.0;
+      fields >> kb;
+      return kb >= 0.0 ? 1024.0 * kb : -1.0;
+    }
+  return -1.0;
+}
+
+}  // namespace
+
+MemoryCap knit_memory_cap() {
+  MemoryCap cap{std::numeric_limits<double>::infinity(), "no limit known"};
+  const double available = proc_kb("/proc/meminfo", "MemAvailable");
+  if (available >= 0.0) cap = {available, "MemAvailable"};
+  rlimit as{};
+  if (getrlimit(RLIMIT_AS, &as) == 0 && as.rlim_cur != RLIM_INFINITY) {
+    const double used = std::max(0.0, proc_kb("/proc/self/status", "VmSize"));
+    const double room = static_cast<double>(as.rlim_cur) - used - kKnitVirtualAllowance;
+    if (room < cap.bytes) cap = {std::max(0.0, room), "the address-space limit (ulimit -v)"};
+  }
+  return cap;
+}
+
 std::vector<Vec3> KnitModel::rest_positions() const {
   std::vector<Vec3> x(points.size());
   for (size_t k = 0; k < points.size(); ++k) x[k] = points[k].rest;
@@ -349,6 +389,21 @@ KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
     os << "chart: " << W << " wales x " << C << " courses gives up to " << W * (C + 1.0)
        << " points, over the cap of " << p.max_points;
     throw std::invalid_argument(os.str());
+  }
+  {  // refused before any of it is allocated (docs/knit.md, "Memory")
+    const double need = knit_memory_estimate(W, C, p.yarn_contact());
+    const MemoryCap cap = knit_memory_cap();
+    if (need > cap.bytes) {
+      std::ostringstream os;
+      os << "chart: " << W << " wales x " << C << " courses needs about "
+         << std::llround(need / 1048576.0) << " MB" << (p.yarn_contact() ? " with yarn contact" : "")
+         << ", more than the " << std::llround(cap.bytes / 1048576.0) << " MB available ("
+         << cap.source << "; docs/knit.md, \"Memory\")";
+      if (p.yarn_contact())
+        os << "; with knit.contact = 0 about "
+           << std::llround(knit_memory_estimate(W, C, false) / 1048576.0) << " MB";
+      throw std::invalid_argument(os.str());
+    }
   }
   const double r = p.loop_radius, w = p.wale_spacing(), h = p.course_spacing();
 

@@ -286,6 +286,26 @@ struct KnitModel {
   std::vector<Vec3> rest_positions() const;
 };
 
+// Memory (docs/knit.md, "Memory"). build_knit refuses, with one line naming the size, a chart
+// whose estimated peak memory exceeds knit_memory_cap(), before allocating any of it. The
+// estimate is an upper one, linear in the stitches (measured: docs/knit.md): kKnitMemoryBase plus
+// per stitch kKnitMemoryPerStitchContact with yarn contact (its ~128 contact points' maps,
+// caches and a renewal's fresh maps), else kKnitMemoryPerStitch. Bytes.
+constexpr double kKnitMemoryBase = 64.0 * 1048576.0;
+constexpr double kKnitMemoryPerStitchContact = 256.0 * 1024.0;
+constexpr double kKnitMemoryPerStitch = 32.0 * 1024.0;
+// Under an address-space limit (ulimit -v) this much stays free for what the estimate does not
+// count: thread stacks and allocator arenas, libraries mapped later. Bytes.
+constexpr double kKnitVirtualAllowance = 256.0 * 1048576.0;
+double knit_memory_estimate(int wales, int courses, bool contact);
+struct MemoryCap {
+  double bytes;        // +inf if nothing is known
+  const char* source;  // "MemAvailable", "the address-space limit (ulimit -v)", ...
+};
+// The smaller of the machine's MemAvailable (/proc/meminfo) and, under an address-space limit,
+// that limit less the process's size (VmSize) and kKnitVirtualAllowance.
+MemoryCap knit_memory_cap();
+
 KnitModel build_knit(const KnitChart& chart, const KnitParams& params);
 
 // Type-value points of one loop in yarn order: k lists which T_k the loop has (0..8 for a knit,
