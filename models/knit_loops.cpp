@@ -1,5 +1,7 @@
 #include "models/knit_loops.hpp"
 
+#include <sys/resource.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -7,8 +9,6 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
-
-#include <sys/resource.h>
 
 namespace knitsim {
 
@@ -340,7 +340,8 @@ int KnitModel::count(KnitSpringKind kind) const {
 
 double knit_memory_estimate(int wales, int courses, bool contact) {
   const double stitches = static_cast<double>(wales) * courses;
-  return kKnitMemoryBase + stitches * (contact ? kKnitMemoryPerStitchContact : kKnitMemoryPerStitch);
+  return kKnitMemoryBase +
+         stitches * (contact ? kKnitMemoryPerStitchContact : kKnitMemoryPerStitch);
 }
 
 namespace {
@@ -396,9 +397,10 @@ KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
     if (need > cap.bytes) {
       std::ostringstream os;
       os << "chart: " << W << " wales x " << C << " courses needs about "
-         << std::llround(need / 1048576.0) << " MB" << (p.yarn_contact() ? " with yarn contact" : "")
-         << ", more than the " << std::llround(cap.bytes / 1048576.0) << " MB available ("
-         << cap.source << "; docs/knit.md, \"Memory\")";
+         << std::llround(need / 1048576.0) << " MB"
+         << (p.yarn_contact() ? " with yarn contact" : "") << ", more than the "
+         << std::llround(cap.bytes / 1048576.0) << " MB available (" << cap.source
+         << "; docs/knit.md, \"Memory\")";
       if (p.yarn_contact())
         os << "; with knit.contact = 0 about "
            << std::llround(knit_memory_estimate(W, C, false) / 1048576.0) << " MB";
@@ -560,8 +562,8 @@ KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
            yarn_polylines(*geometry, positions, kContactSamplesPerInterval).vertices)
         out.insert(out.end(), course.begin(), course.end());
     };
-    contact.linearise = [geometry, rest_particles, course_start](
-                            const std::vector<Vec3>& positions, int course) {
+    contact.linearise = [geometry, rest_particles, course_start](const std::vector<Vec3>& positions,
+                                                                 int course) {
       return knit_contact_points(*geometry, positions, course,
                                  rest_particles->data() + (*course_start)[course]);
     };
@@ -706,9 +708,9 @@ YarnPolylines yarn_polylines(const KnitModel& m, const std::vector<Vec3>& positi
   return out;
 }
 
-std::vector<ContactPoint> knit_contact_points(const KnitModel& m,
-                                              const std::vector<Vec3>& positions, int j,
-                                              const std::array<int, kContactParticles>* particles_of) {
+std::vector<ContactPoint> knit_contact_points(
+    const KnitModel& m, const std::vector<Vec3>& positions, int j,
+    const std::array<int, kContactParticles>* particles_of) {
   check_positions(m, positions);
   if (j < 0 || j >= m.chart.courses)
     throw std::invalid_argument("knit_contact_points: no such course");
@@ -753,8 +755,8 @@ std::vector<ContactPoint> knit_contact_points(const KnitModel& m,
   // course's length. Given particles_of, only each vertex's given particles, in their slots.
   const std::size_t columns = particles_of ? kContactParticles : ids.size();
   struct Window {
-    int first = 0;       // the first vertex moved
-    std::vector<Vec3> d; // d vertex (first + t) / d coordinate
+    int first = 0;        // the first vertex moved
+    std::vector<Vec3> d;  // d vertex (first + t) / d coordinate
   };
   std::vector<Window> windows(particles_of ? 0 : 2 * ids.size());
   std::vector<std::array<double, 6>> J(particles_of ? v.size() * columns : 0,

@@ -439,8 +439,8 @@ double SpringNetwork::static_residual(double t, const double* x) const {
   net_force(t, x, scratch.data());
   double worst = 0.0;
   for (int i = 0; i < dof(); i += 3) {
-    const double f2 = scratch[i] * scratch[i] + scratch[i + 1] * scratch[i + 1] +
-                      scratch[i + 2] * scratch[i + 2];
+    const double f2 =
+        scratch[i] * scratch[i] + scratch[i + 1] * scratch[i + 1] + scratch[i + 2] * scratch[i + 2];
     if (!(f2 <= worst)) worst = f2;  // NaN propagates
   }
   return std::sqrt(worst) / residual_scale_;

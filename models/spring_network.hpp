@@ -1,7 +1,7 @@
 // SpringNetwork: particles joined by linear springs, with pins, gravity, absolute damping and
 // an elongation limit -- the one ODE system behind both papers' models.
 //
-// Equations (paper 1 Eqs. 2-4; SPEC 2.1), SI units throughout:
+// Equations (paper 1 Eqs. 2-4), SI units throughout:
 //   m_i x_i'' = sum_springs F_s + m_i g - c v_i
 //   spring (a, b), length L = |x_b - x_a|, axis u = (x_b - x_a)/L, rest L0, stiffness k:
 //     F_a = f(L) u,  F_b = -F_a,  f(L) = k (L - L0) + k_lim max(0, L - L_max)
@@ -13,7 +13,7 @@
 //   so on the reference paths the k_lim term stays inactive.
 //   Spring Jacobian (3x3 block, B = dF_a/dx_b):
 //     B = f'(L) u u^T + (f(L)/L) (I - u u^T);  dF_a/dx_a = -B, dF_b/dx_a = B, dF_b/dx_b = -B
-//   For k_lim = 0 this is k [ (1 - L0/L)(I - u u^T) + u u^T ] (SPEC 2.1).
+//   For k_lim = 0 this is k [ (1 - L0/L)(I - u u^T) + u u^T ].
 //   stencil (2-4 particles i, weights w_i, stiffness k; the knit's out-of-plane bending,
 //   models/knit_loops.hpp): E = k/2 |v|^2 with v = sum_i w_i x_i, F_i = -k w_i v, Jacobian
 //   block dF_i/dx_j = -k w_i w_j I. stiffness_values() writes these blocks row-scaled by 1/m_i
@@ -29,14 +29,14 @@
 // State: only free particles are degrees of freedom, 3 per particle in particle order
 // (x, y, z). Pinned particles follow a PinPath (fixed, or moved linearly in time).
 // Damping: absolute, per particle, gamma_i = c / m_i (paper 1 Eq. 4).
-// Static residual (SPEC 2.3): max_i |F_spring,i + m_i g| / F_ref over free particles, with
-// F_ref = mean free mass x |g| (or residual_force_scale if set, e.g. without gravity).
-// Its round-off floor (residual_roundoff): each spring's length is computed from the
-// difference of two absolute positions, |delta L| <= eps (|x_a| + |x_b|) (eps = DBL_EPSILON),
-// so its force carries up to k eps (|x_a| + |x_b|); a stencil's k v up to k eps sum_j |w_j|
-// |x_j|, of which particle i gets |w_i|. The floor is max_i of the sum over i's springs and
-// stencils, / F_ref: a bound, not a typical value, that matters only for stiff springs
-// (figures: docs/numerics.md, "Round-off floor").
+// Static residual (docs/equilibrium.md): max_i |F_spring,i + m_i g| / F_ref over free particles,
+// with F_ref = mean free mass x |g| (or residual_force_scale if set, e.g. without gravity). Its
+// round-off floor (residual_roundoff): each spring's length is computed from the difference of two
+// absolute positions, |delta L| <= eps (|x_a| + |x_b|) (eps = DBL_EPSILON), so its force carries up
+// to k eps (|x_a| + |x_b|); a stencil's k v up to k eps sum_j |w_j| |x_j|, of which particle i gets
+// |w_i|. The floor is max_i of the sum over i's springs and stencils, / F_ref: a bound, not a
+// typical value, that matters only for stiff springs (figures: docs/numerics.md, "Round-off
+// floor").
 //
 // Failure modes: bad specs (sizes that do not match, an index out of range or pinned twice, a
 // spring joining a particle to itself, a stencil naming a particle twice or with fewer than 2,

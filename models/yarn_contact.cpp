@@ -38,8 +38,9 @@ void overlapping_boxes(const std::vector<Box>& boxes, double cell, OnPair on_pai
   auto ix = [&](double x) { return std::min(nx - 1, static_cast<long>((x - x0) / cell)); };
   auto iy = [&](double y) { return std::min(ny - 1, static_cast<long>((y - y0) / cell)); };
   // Each box's cells (i0, i1, j0, j1), and a counting sort of (cell, box) entries: a box enters
-  // every cell it overlaps (at most 4, as no box is wider than a cell). The entries carry their
-  // box, so a cell's pairs are tested on contiguous memory.
+  // every cell it overlaps (at most 4, as no box is wider than a cell). A cell's entries are
+  // copied with their boxes before its pairs are tested, so they are tested on contiguous memory
+  // while the sort holds only the boxes' indices (4 bytes an entry, not 48).
   struct Cells {
     int i0, i1, j0, j1;
   };
@@ -54,24 +55,30 @@ void overlapping_boxes(const std::vector<Box>& boxes, double cell, OnPair on_pai
       for (long i = c.i0; i <= c.i1; ++i) ++start[j * nx + i + 1];
   }
   for (long c = 0; c < nx * ny; ++c) start[c + 1] += start[c];
-  struct Entry {
-    Box box;
-    int i0, j0, k;
-  };
-  std::vector<Entry> entries(start.back());
+  std::vector<int> entries(start.back());
   {
     std::vector<long> fill(start.begin(), start.end() - 1);
     for (int k = 0; k < n; ++k) {
       const Cells& c = cells[k];
       for (long j = c.j0; j <= c.j1; ++j)
-        for (long i = c.i0; i <= c.i1; ++i) entries[fill[j * nx + i]++] = {boxes[k], c.i0, c.j0, k};
+        for (long i = c.i0; i <= c.i1; ++i) entries[fill[j * nx + i]++] = k;
     }
   }
-  for (long c = 0; c < nx * ny; ++c)
-    for (long p = start[c]; p < start[c + 1]; ++p)
-      for (long q = p + 1; q < start[c + 1]; ++q) {
-        const Entry& ea = entries[p];
-        const Entry& eb = entries[q];
+  struct Entry {
+    Box box;
+    int i0, j0, k;
+  };
+  std::vector<Entry> in_cell;  // one cell's entries
+  for (long c = 0; c < nx * ny; ++c) {
+    in_cell.clear();
+    for (long p = start[c]; p < start[c + 1]; ++p) {
+      const int k = entries[p];
+      in_cell.push_back({boxes[k], cells[k].i0, cells[k].j0, k});
+    }
+    for (std::size_t p = 0; p < in_cell.size(); ++p)
+      for (std::size_t q = p + 1; q < in_cell.size(); ++q) {
+        const Entry& ea = in_cell[p];
+        const Entry& eb = in_cell[q];
         const Box& a = ea.box;
         const Box& b = eb.box;
         if (a.x1 < b.x0 || b.x1 < a.x0 || a.y1 < b.y0 || b.y1 < a.y0) continue;
@@ -79,6 +86,7 @@ void overlapping_boxes(const std::vector<Box>& boxes, double cell, OnPair on_pai
         if (std::max(ea.i0, eb.i0) + nx * std::max(ea.j0, eb.j0) != c) continue;
         on_pair(std::min(ea.k, eb.k), std::max(ea.k, eb.k));
       }
+  }
 }
 
 Box around(Vec3 p, double half) { return {p.x - half, p.x + half, p.y - half, p.y + half}; }
@@ -152,7 +160,8 @@ ContactModel::ContactModel(SpringNetwork network, YarnContactSpec contact)
     net_.all_positions(0.0, x.data(), start_);
   }
   std::vector<Vec3> pts(spec_.points.size());
-  for (std::size_t k = 0; k < spec_.points.size(); ++k) pts[k] = position_of(spec_.points[k], start_);
+  for (std::size_t k = 0; k < spec_.points.size(); ++k)
+    pts[k] = position_of(spec_.points[k], start_);
   auto may_pair = [&](int a, int b) {
     const ContactPoint& pa = spec_.points[a];
     const ContactPoint& pb = spec_.points[b];
@@ -252,7 +261,8 @@ ContactNetwork::ContactNetwork(std::shared_ptr<const ContactModel> model)
 }
 
 ContactNetwork::ContactNetwork(SpringNetwork network, YarnContactSpec contact)
-    : ContactNetwork(std::make_shared<const ContactModel>(std::move(network), std::move(contact))) {}
+    : ContactNetwork(std::make_shared<const ContactModel>(std::move(network), std::move(contact))) {
+}
 
 bool ContactNetwork::may_pair(int a, int b) const {
   return yarn_of_[a] != yarn_of_[b] || std::abs(arc_of_[a] - arc_of_[b]) >= spec_.same_yarn_gap;
@@ -342,7 +352,7 @@ bool ContactNetwork::update(double t, const double* x) {
     }
   }
   if (renewed == 0) return false;
-  check_points(points_, net_);  // once, for the points kept
+  check_points(points_, net_);            // once, for the points kept
   if (cut == 0) renewed_at_ = particles;  // a cut renewal is taken up again at the next check
   refreshes_ += renewed;
   return true;
@@ -587,7 +597,8 @@ double ContactNetwork::static_residual(double t, const double* x) const {
 void ContactNetwork::stiffness_values(double t, const double* x, double* values) const {
   net_.stiffness_values(t, x, net_values_.data());
   std::fill(values, values + model_->pattern_.nnz(), 0.0);
-  for (std::size_t k = 0; k < net_values_.size(); ++k) values[model_->net_entry_[k]] = net_values_[k];
+  for (std::size_t k = 0; k < net_values_.size(); ++k)
+    values[model_->net_entry_[k]] = net_values_[k];
   const std::vector<double>& m = net_.mass();
   grad_.assign(points_.size(), Vec3{0.0, 0.0, 0.0});
   bool missed = false;

@@ -51,16 +51,16 @@ struct ContactPoint {
   Vec3 offset;       // o, m (its z is the point's depth)
   int yarn = 0;      // which yarn the point lies on
   double arc = 0.0;  // arc length along its yarn at rest, m
-  // Co-rotation (docs/knit.md, "Yarn contact": co-rotated): the point's map turns with the direction of
-  // x_j - x_i, (i, j) = turn (indices into `particles`; -1: the map does not turn), by the angle
-  // from `axis` (a unit vector in the plane, that direction where the map was made).
+  // Co-rotation (docs/knit.md, "Yarn contact": co-rotated): the point's map turns with the
+  // direction of x_j - x_i, (i, j) = turn (indices into `particles`; -1: the map does not turn), by
+  // the angle from `axis` (a unit vector in the plane, that direction where the map was made).
   std::array<int, 2> turn{-1, -1};
   std::array<double, 2> axis{1.0, 0.0};
 };
 
-// A point's co-rotation at a state (docs/knit.md, "Yarn contact": co-rotated): R(phi) as (c, s), u and a in
-// the turned frame, grad_j(phi) of its second turning particle (the first's is minus that), v and
-// |v|^2. A plain point has c = 1, s = 0 and turns = false.
+// A point's co-rotation at a state (docs/knit.md, "Yarn contact": co-rotated): R(phi) as (c, s), u
+// and a in the turned frame, grad_j(phi) of its second turning particle (the first's is minus
+// that), v and |v|^2. A plain point has c = 1, s = 0 and turns = false.
 struct PointTurn {
   double c = 1.0, s = 0.0;
   Vec3 u, a;                            // m
@@ -82,10 +82,10 @@ struct YarnContactSpec {
   double pattern_radius = 0.0;  // m: pairs this close at the start have Jacobian blocks (0: 6 d)
   double filter_keep = 0.2;     // a step keeps at least this fraction of a pair's gap to d0
   double step_cap = 0.0;        // m: a step moves no point further than this (0: 4 d)
-  // Renewal (docs/knit.md, "Yarn contact"; both set, or the points are never renewed). `exact` writes every point's
-  // exact position (points order) from every particle's position; `linearise` returns yarn y's
-  // points (as many as it has, in order) linearised about those positions. Points must be
-  // ordered by yarn.
+  // Renewal (docs/knit.md, "Yarn contact"; both set, or the points are never renewed). `exact`
+  // writes every point's exact position (points order) from every particle's position; `linearise`
+  // returns yarn y's points (as many as it has, in order) linearised about those positions. Points
+  // must be ordered by yarn.
   std::function<void(const std::vector<Vec3>&, std::vector<Vec3>&)> exact;
   std::function<std::vector<ContactPoint>(const std::vector<Vec3>&, int)> linearise;
   double refresh_tol = 0.0;   // m: a yarn is renewed when one of its points strays this far
@@ -192,8 +192,8 @@ class ContactNetwork final : public MechanicalSystem {
   void positions(double t, const double* x) const;
   // The points' maps changed: positions and near pairs are stale, yarn_of_ and arc_of_ renewed.
   void points_changed();
-  void refresh_pairs() const;                       // the near-pair list at pos_, if stale
-  bool pairs_of(double t, const double* x) const;   // positions + list; false if not finite
+  void refresh_pairs() const;                      // the near-pair list at pos_, if stale
+  bool pairs_of(double t, const double* x) const;  // positions + list; false if not finite
   bool may_pair(int a, int b) const;
   // Yarn y's points linearised about the particles' positions (spec linearise, its count checked).
   std::vector<ContactPoint> linearised(const std::vector<Vec3>& particles, int y) const;

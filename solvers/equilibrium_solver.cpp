@@ -1,5 +1,5 @@
 // equilibrium: the state the damped dynamics reach from rest, found without integrating the
-// transient (SPEC 2.3; user's view and measurements: docs/equilibrium.md).
+// transient (user's view and measurements: docs/equilibrium.md).
 //
 //   1. While pins move (t < equilibrium_start_time()) the dynamics run: cvode-bdf with the run's
 //      options. The soft modes relax far slower than the pins move (docs/equilibrium.md), so the

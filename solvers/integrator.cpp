@@ -280,9 +280,7 @@ class EquilibriumRun {
     note_reference(t0_, x_.data(), v_.data());
   }
 
-  double wall() const {
-    return std::chrono::duration<double>(clock::now() - wall_start_).count();
-  }
+  double wall() const { return std::chrono::duration<double>(clock::now() - wall_start_).count(); }
 
   // The state is finite and within runaway_position.
   bool state_ok() const {
@@ -399,8 +397,8 @@ class EquilibriumRun {
   // and the energy check", has an example) and the energy check cannot certify its end state.
   RunStats conclude(std::string message) {
     const double t = integ_.time();
-    const double e = sys_.potential_energy(t, integ_.positions()) +
-                     sys_.kinetic_energy(integ_.velocities());
+    const double e =
+        sys_.potential_energy(t, integ_.positions()) + sys_.kinetic_energy(integ_.velocities());
     stats_.energy = e;
     stats_.energy_reference = energy_reference_;
     if (t_start_eq_ > t0_ && motion_steps_ < kMotionSteps) {

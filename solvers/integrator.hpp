@@ -6,13 +6,14 @@
 //   RunStats s = run_to_equilibrium(model, *integ, opt, x, v);   // out: final state
 //
 // Integrators see only a MechanicalSystem (src/core/mechanical_system.hpp); they never know which
-// model they run. Every run stops by the same test (SPEC 2.3; solvers/equilibrium_check.hpp),
-// made every `check_every` steps from the model's equilibrium_start_time() on: the Newton
-// correction ||K^-1 F||_inf below position_tol where the stiffness K is positive definite, or
-// the static residual below equilibrium_threshold() where K is singular; the state that passes
-// is certified and checked in energy (RunStatus). Otherwise a run ends at t_max, the step cap,
-// the wall-clock cap or an interrupt request, and RunStats.status says which. Numerical failure
-// (a SUNDIALS error, a non-finite or runaway state) is a status, never an exception.
+// model they run. Every run stops by the same test (docs/equilibrium.md;
+// solvers/equilibrium_check.hpp), made every `check_every` steps from the model's
+// equilibrium_start_time() on: the Newton correction ||K^-1 F||_inf below position_tol where the
+// stiffness K is positive definite, or the static residual below equilibrium_threshold() where K is
+// singular; the state that passes is certified and checked in energy (RunStatus). Otherwise a run
+// ends at t_max, the step cap, the wall-clock cap or an interrupt request, and RunStats.status says
+// which. Numerical failure (a SUNDIALS error, a non-finite or runaway state) is a status, never an
+// exception.
 #pragma once
 
 #include <atomic>
@@ -207,7 +208,7 @@ class Integrator {
   virtual void fill_stats(RunStats& stats) const = 0;
 };
 
-// Registry: every integrator by name (SPEC 2.4).
+// Registry: every integrator by name (docs/numerics.md).
 const std::vector<IntegratorInfo>& integrator_catalog();
 std::unique_ptr<Integrator> make_integrator(const std::string& name);  // throws invalid_argument
 // The SuiteSparse release (CHOLMOD, KLU) the solvers were compiled against, e.g. "5.12.0",
@@ -256,7 +257,7 @@ RunStats run_to_equilibrium(const MechanicalSystem& sys, const std::string& inte
                             std::vector<double>& v, RunObserver* observer = nullptr,
                             double t0 = 0.0);
 
-// Linear stability prediction for the explicit fixed-step methods (SPEC 2.4), per dof i from
+// Linear stability prediction for the explicit fixed-step methods (docs/numerics.md), per dof i from
 // a Gershgorin bound on da_c/dx at (t, x): omega_i^2 <= sum_j |Ax_ij|, gamma_i = c_i/m_i.
 //   euler:  |1 + h lambda| < 1 for lambda = -gamma/2 +- sqrt(gamma^2/4 - omega^2)
 //           (overdamped: h < 2 / |lambda_fast|; underdamped: h < gamma / omega^2)

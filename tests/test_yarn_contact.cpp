@@ -123,8 +123,7 @@ TEST_CASE(
       std::size_t k = 0;
       for (const std::vector<Vec3>& course : lines.vertices)
         for (const Vec3& vertex : course)
-          worst =
-              std::max(worst, norm(position_of(m.contact->points()[k++], pos) - vertex));
+          worst = std::max(worst, norm(position_of(m.contact->points()[k++], pos) - vertex));
       return worst / r;
     };
     const double coarse = worst_error(1e-3), fine = worst_error(5e-4);
@@ -607,7 +606,7 @@ TEST_CASE("yarn contact: one model runs on two threads at once, each to the sing
     long renewed = 0;
   };
   IntegratorOptions opt;
-  opt.max_steps = 300;  // a guard: ~20 flow steps
+  opt.max_steps = 300;         // a guard: ~20 flow steps
   auto run = [&](Result& r) {  // no Catch macros here: they are not thread-safe
     ContactNetwork sys(model);
     r.stats = run_to_equilibrium(sys, default_knit_integrator(true), opt, r.x, r.v);

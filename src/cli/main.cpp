@@ -1,5 +1,5 @@
-// knitsim command line (SPEC 2.10). Each subcommand registers itself (src/cli/commands.hpp); this
-// file only parses and maps what a command throws to the exit status of the contract:
+// knitsim command line (docs/commands.md). Each subcommand registers itself (src/cli/commands.hpp);
+// this file only parses and maps what a command throws to the exit status of the contract:
 //   0  success (and --help)
 //   2  bad input: a CLI11 parse error or std::invalid_argument, printed as ONE line
 //      "knitsim: error: <message>" on stderr (commands validate all input before writing)
@@ -20,10 +20,10 @@
 #include <cstring>
 #include <exception>
 #include <filesystem>
-#include <new>
 #include <functional>
 #include <iostream>
 #include <memory>
+#include <new>
 #include <stdexcept>
 #include <string>
 #ifdef __GLIBC__

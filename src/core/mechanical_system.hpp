@@ -18,8 +18,9 @@
 // Model and run (Drake's System and Context). The const functions are functions of (t, x) and of
 // the object's state, and change no state: they may refill caches that are functions of what
 // they are evaluated at (documented as caches where they are declared). A model without run
-// state (has_run_state() false: the spring networks, the drape grid, a mirror reduction) is
-// const in fact and may be evaluated from several threads at once. A model whose functions
+// state (has_run_state() false) is const in fact; a SpringNetwork (the drape grid's, the knit's)
+// may be evaluated from several threads at once, a mirror reduction (models/mirror_reduced.hpp)
+// keeps scratch buffers and serves one thread at a time. A model whose functions
 // change over a run (the yarn contact's renewed points, which change E(x) itself) is split: a
 // const model, shareable by any number of runs and threads, and a per-run object that
 // implements MechanicalSystem over it and owns the state that changes (ContactModel and
@@ -64,8 +65,8 @@ class MechanicalSystem {
   // Values of da_c/dx = M^-1 dF/dx in stiffness_pattern() order (nnz doubles).
   virtual void stiffness_values(double t, const double* x, double* values) const = 0;
 
-  // Static residual used by the equilibrium criterion (docs/equilibrium.md): a dimensionless measure of
-  // the net force at rest, e.g. max_i |F_i(x)| / (mean mass x g).
+  // Static residual used by the equilibrium criterion (docs/equilibrium.md): a dimensionless
+  // measure of the net force at rest, e.g. max_i |F_i(x)| / (mean mass x g).
   virtual double static_residual(double t, const double* x) const = 0;
 
   // Round-off floor of static_residual at (t, x): an upper estimate of the residual that
