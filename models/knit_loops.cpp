@@ -1,8 +1,12 @@
 #include "models/knit_loops.hpp"
 
+#include <sys/resource.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <fstream>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -330,6 +334,43 @@ int KnitModel::count(KnitSpringKind kind) const {
   return static_cast<int>(std::count(spring_kind.begin(), spring_kind.end(), kind));
 }
 
+double knit_memory_estimate(int wales, int courses, bool contact) {
+  const double stitches = static_cast<double>(wales) * courses;
+  return kKnitMemoryBase +
+         stitches * (contact ? kKnitMemoryPerStitchContact : kKnitMemoryPerStitch);
+}
+
+namespace {
+
+// A "Key:   N kB" line of a /proc file, in bytes; -1 if absent.
+double proc_kb(const char* file, const std::string& key) {
+  std::ifstream in(file);
+  std::string line;
+  while (std::getline(in, line))
+    if (line.rfind(key + ":", 0) == 0) {
+      std::istringstream fields(line.substr(key.size() + 1));
+      double kb = -1.0;
+      fields >> kb;
+      return kb >= 0.0 ? 1024.0 * kb : -1.0;
+    }
+  return -1.0;
+}
+
+}  // namespace
+
+MemoryCap knit_memory_cap() {
+  MemoryCap cap{std::numeric_limits<double>::infinity(), "no limit known"};
+  const double available = proc_kb("/proc/meminfo", "MemAvailable");
+  if (available >= 0.0) cap = {available, "MemAvailable"};
+  rlimit as{};
+  if (getrlimit(RLIMIT_AS, &as) == 0 && as.rlim_cur != RLIM_INFINITY) {
+    const double used = std::max(0.0, proc_kb("/proc/self/status", "VmSize"));
+    const double room = static_cast<double>(as.rlim_cur) - used - kKnitVirtualAllowance;
+    if (room < cap.bytes) cap = {std::max(0.0, room), "the address-space limit (ulimit -v)"};
+  }
+  return cap;
+}
+
 std::vector<Vec3> KnitModel::rest_positions() const {
   std::vector<Vec3> x(points.size());
   for (size_t k = 0; k < points.size(); ++k) x[k] = points[k].rest;
@@ -357,6 +398,22 @@ KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
     os << "chart: " << W << " wales x " << C << " courses gives up to " << W * (C + 1.0)
        << " points, over the cap of " << p.max_points;
     throw std::invalid_argument(os.str());
+  }
+  {  // refused before any of it is allocated (docs/knit.md, "Memory")
+    const double need = knit_memory_estimate(W, C, p.yarn_contact());
+    const MemoryCap cap = knit_memory_cap();
+    if (need > cap.bytes) {
+      std::ostringstream os;
+      os << "chart: " << W << " wales x " << C << " courses needs about "
+         << std::llround(need / 1048576.0) << " MB"
+         << (p.yarn_contact() ? " with yarn contact" : "") << ", more than the "
+         << std::llround(cap.bytes / 1048576.0) << " MB available (" << cap.source
+         << "; docs/knit.md, \"Memory\")";
+      if (p.yarn_contact())
+        os << "; with knit.contact = 0 about "
+           << std::llround(knit_memory_estimate(W, C, false) / 1048576.0) << " MB";
+      throw std::invalid_argument(os.str());
+    }
   }
   const double r = p.loop_radius, w = p.wale_spacing(), h = p.course_spacing();
 
@@ -500,7 +557,10 @@ KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
     // Renewed points keep the particles they have at rest, so their Jacobian blocks stay in the
     // contact's fixed pattern.
     auto geometry = std::make_shared<const KnitModel>(m);
-    auto rest_points = std::make_shared<const std::vector<ContactPoint>>(contact.points);
+    using Particles = std::array<int, kContactParticles>;
+    auto rest_particles = std::make_shared<std::vector<Particles>>();
+    rest_particles->reserve(contact.points.size());
+    for (const ContactPoint& q : contact.points) rest_particles->push_back(q.particles);
     auto course_start = std::make_shared<std::vector<std::size_t>>(m.chart.courses + 1, 0);
     for (const ContactPoint& q : contact.points) ++(*course_start)[q.yarn + 1];
     for (int j = 0; j < m.chart.courses; ++j) (*course_start)[j + 1] += (*course_start)[j];
@@ -510,11 +570,14 @@ KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
            yarn_polylines(*geometry, positions, kContactSamplesPerInterval).vertices)
         out.insert(out.end(), course.begin(), course.end());
     };
-    contact.linearise = [geometry, rest_points, course_start](const std::vector<Vec3>& positions,
-                                                              int course) {
+    contact.linearise = [geometry, rest_particles, course_start](const std::vector<Vec3>& positions,
+                                                                 int course) {
       return knit_contact_points(*geometry, positions, course,
-                                 rest_points->data() + (*course_start)[course]);
+                                 rest_particles->data() + (*course_start)[course]);
     };
+    // Linearised about the rest state (the network's initial one) they are these points: each
+    // run makes its own, and the model keeps none (models/yarn_contact.hpp).
+    contact.remake_at_start = true;
     contact.refresh_tol = kContactRefreshTol * r;
     contact.refresh_move = kContactRefreshMove * r;
     contact.step_cap = kContactStepCap * r;
@@ -653,9 +716,9 @@ YarnPolylines yarn_polylines(const KnitModel& m, const std::vector<Vec3>& positi
   return out;
 }
 
-std::vector<ContactPoint> knit_contact_points(const KnitModel& m,
-                                              const std::vector<Vec3>& positions, int j,
-                                              const ContactPoint* particles_of) {
+std::vector<ContactPoint> knit_contact_points(
+    const KnitModel& m, const std::vector<Vec3>& positions, int j,
+    const std::array<int, kContactParticles>* particles_of) {
   check_positions(m, positions);
   if (j < 0 || j >= m.chart.courses)
     throw std::invalid_argument("knit_contact_points: no such course");
@@ -686,20 +749,27 @@ std::vector<ContactPoint> knit_contact_points(const KnitModel& m,
   std::vector<std::array<int, kContactParticles>> given(particles_of ? v.size() : 0, filled(-1));
   std::vector<char> used(ids.size(), particles_of == nullptr);
   for (std::size_t k = 0; k < given.size(); ++k)
-    for (int i = 0; i < kContactParticles && particles_of[k].particles[i] >= 0; ++i) {
-      const auto at = std::find(ids.begin(), ids.end(), particles_of[k].particles[i]);
+    for (int i = 0; i < kContactParticles && particles_of[k][i] >= 0; ++i) {
+      const auto at = std::find(ids.begin(), ids.end(), particles_of[k][i]);
       if (at == ids.end())
         throw std::invalid_argument("knit_contact_points: a given particle is not the course's");
       given[k][i] = static_cast<int>(at - ids.begin());
       used[given[k][i]] = 1;
     }
-  // d vertex / d particle (x, y) by central differences, a 3 x 2 per vertex and particle: for
-  // every particle of the course at set-up (the largest are kept), else only for each vertex's
-  // given particles, in their slots.
+  // d vertex / d particle (x, y) by central differences, a 3 x 2 per vertex and particle. At
+  // set-up every particle of the course is a candidate (the largest are kept): each coordinate's
+  // derivatives are kept for the vertices it moves (a window along the yarn), and a vertex's row
+  // over all candidates is assembled when its largest are chosen, so memory stays linear in the
+  // course's length. Given particles_of, only each vertex's given particles, in their slots.
   const std::size_t columns = particles_of ? kContactParticles : ids.size();
-  std::vector<std::array<double, 6>> J(v.size() * columns, std::array<double, 6>{});
+  struct Window {
+    int first = 0;        // the first vertex moved
+    std::vector<Vec3> d;  // d vertex (first + t) / d coordinate
+  };
+  std::vector<Window> windows(particles_of ? 0 : 2 * ids.size());
+  std::vector<std::array<double, 6>> J(particles_of ? v.size() * columns : 0,
+                                       std::array<double, 6>{});
   auto entry = [&](int k, std::size_t q) -> std::array<double, 6>* {
-    if (!particles_of) return &J[k * columns + q];
     for (int i = 0; i < kContactParticles; ++i)
       if (given[k][i] == static_cast<int>(q)) return &J[k * columns + i];
     return nullptr;
@@ -725,20 +795,42 @@ std::vector<ContactPoint> knit_contact_points(const KnitModel& m,
       const int first = std::max(0, a - kReach), last = std::min(n, b + kReach);
       polyline_vertices({plus.begin() + lo, plus.begin() + hi + 1}, S, first - lo, last - lo, vp);
       polyline_vertices({minus.begin() + lo, minus.begin() + hi + 1}, S, first - lo, last - lo, vm);
+      Window* w = particles_of ? nullptr : &windows[2 * q + c];
+      if (w != nullptr) w->first = first * S, w->d.resize((last - first) * S + 1);
       for (int k = first * S; k <= last * S; ++k) {
+        const int t = k - first * S;  // the vertex's index in vp, vm
+        const Vec3 d{(vp[t].x - vm[t].x) / (2.0 * h), (vp[t].y - vm[t].y) / (2.0 * h),
+                     (vp[t].z - vm[t].z) / (2.0 * h)};
+        if (w != nullptr) {
+          w->d[t] = d;
+          continue;
+        }
         std::array<double, 6>* e = entry(k, q);
         if (e == nullptr) continue;
-        const int t = k - first * S;                    // the vertex's index in vp, vm
-        (*e)[c] = (vp[t].x - vm[t].x) / (2.0 * h);      // d vx / d c
-        (*e)[2 + c] = (vp[t].y - vm[t].y) / (2.0 * h);  // d vy / d c
-        (*e)[4 + c] = (vp[t].z - vm[t].z) / (2.0 * h);  // d vz / d c
+        (*e)[c] = d.x, (*e)[2 + c] = d.y, (*e)[4 + c] = d.z;  // d v / d c
       }
     }
+  // Vertex k's row over the candidates (set-up): zero where a coordinate does not move it.
+  std::vector<std::array<double, 6>> dense(particles_of ? 0 : columns);
+  auto row_of = [&](std::size_t k) -> const std::array<double, 6>* {
+    if (particles_of) return &J[k * columns];
+    for (std::size_t q = 0; q < columns; ++q) {
+      dense[q] = std::array<double, 6>{};
+      for (int c = 0; c < 2; ++c) {
+        const Window& w = windows[2 * q + c];
+        const long t = static_cast<long>(k) - w.first;
+        if (t < 0 || t >= static_cast<long>(w.d.size())) continue;
+        dense[q][c] = w.d[t].x, dense[q][2 + c] = w.d[t].y, dense[q][4 + c] = w.d[t].z;
+      }
+    }
+    return dense.data();
+  };
+  out.reserve(v.size());
   // Per vertex the kContactParticles particles of largest |W|; the rest is added to the
   // largest, so the weights sum to [I; 0] (translations in the plane carried exactly).
   std::vector<int> order(columns);
   for (std::size_t k = 0; k < v.size(); ++k) {
-    const std::array<double, 6>* row = &J[k * columns];
+    const std::array<double, 6>* row = row_of(k);
     auto size = [&](int q) {
       double s = 0.0;
       for (double w : row[q]) s += w * w;
@@ -783,6 +875,10 @@ std::vector<ContactPoint> knit_contact_points(const KnitModel& m,
 std::vector<ContactPoint> knit_contact_points(const KnitModel& m) {
   const std::vector<Vec3> rest = m.rest_positions();
   std::vector<ContactPoint> out;
+  std::size_t count = 0;  // S vertices per interpolation interval and the last (no regrowth)
+  for (int j = 0; j < m.chart.courses; ++j)
+    count += kContactSamplesPerInterval * (course_yarn(m, rest, j).size() - 1) + 1;
+  out.reserve(count);
   for (int j = 0; j < m.chart.courses; ++j) {
     const std::vector<ContactPoint> course = knit_contact_points(m, rest, j);
     out.insert(out.end(), course.begin(), course.end());

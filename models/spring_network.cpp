@@ -130,8 +130,6 @@ SpringNetwork::SpringNetwork(SpringNetworkSpec spec) : spec_(std::move(spec)) {
           "z = 0, no gravity along z and no stencils");
   }
   structure_ = std::make_shared<StiffnessStructure>();
-  pin_pos_.resize(spec_.pinned.size());
-  scratch_.resize(n);
 }
 
 namespace {
@@ -235,19 +233,23 @@ void SpringNetwork::initial_state(double* x, double* v) const {
   std::fill(v, v + dof(), 0.0);
 }
 
-void SpringNetwork::update_pins(double t) const {
-  for (size_t k = 0; k < pin_pos_.size(); ++k) pin_pos_[k] = spec_.pin_paths[k].at(t);
+std::vector<Vec3> SpringNetwork::pins_at(double t) const {
+  std::vector<Vec3> pins(spec_.pinned.size());
+  for (size_t k = 0; k < pins.size(); ++k) pins[k] = spec_.pin_paths[k].at(t);
+  return pins;
 }
 
-inline Vec3 SpringNetwork::end_position(int particle, const double* x) const {
+inline Vec3 SpringNetwork::end_position(int particle, const double* x,
+                                        const std::vector<Vec3>& pins) const {
   const int f = free_index_[particle];
   if (f >= 0) return {x[3 * f], x[3 * f + 1], x[3 * f + 2]};
-  return pin_pos_[pin_slot_[particle]];
+  return pins[pin_slot_[particle]];
 }
 
 // b's position minus a's; in the plane (z dropped) for a planar network (header, "Planar").
-inline Vec3 SpringNetwork::spring_vector(const Spring& s, const double* x) const {
-  Vec3 d = end_position(s.b, x) - end_position(s.a, x);
+inline Vec3 SpringNetwork::spring_vector(const Spring& s, const double* x,
+                                         const std::vector<Vec3>& pins) const {
+  Vec3 d = end_position(s.b, x, pins) - end_position(s.a, x, pins);
   if (planar()) d.z = 0.0;
   return d;
 }
@@ -266,10 +268,11 @@ inline void SpringNetwork::spring_force_law(const Spring& s, double L, double& f
   }
 }
 
-inline Vec3 SpringNetwork::stencil_vector(const Stencil& st, const double* x) const {
+inline Vec3 SpringNetwork::stencil_vector(const Stencil& st, const double* x,
+                                          const std::vector<Vec3>& pins) const {
   Vec3 v{};
   for (int i = 0; i < 4 && st.particles[i] >= 0; ++i)
-    v = v + st.weights[i] * end_position(st.particles[i], x);
+    v = v + st.weights[i] * end_position(st.particles[i], x, pins);
   return v;
 }
 
@@ -285,7 +288,7 @@ void SpringNetwork::add_stencil_force(const Stencil& st, Vec3 kv, double* out) c
 }
 
 void SpringNetwork::net_force(double t, const double* x, double* force) const {
-  update_pins(t);
+  const std::vector<Vec3> pins = pins_at(t);
   const int n = dof();
   for (int i = 0; i < n; i += 3) {
     force[i] = dof_mass_[i] * spec_.gravity.x;
@@ -295,7 +298,7 @@ void SpringNetwork::net_force(double t, const double* x, double* force) const {
   for (const Spring& s : spec_.springs) {
     const int fa = free_index_[s.a], fb = free_index_[s.b];
     if (fa < 0 && fb < 0) continue;
-    const Vec3 d = spring_vector(s, x);
+    const Vec3 d = spring_vector(s, x, pins);
     const double L = norm(d);
     double f, df;
     spring_force_law(s, L, f, df);
@@ -303,7 +306,7 @@ void SpringNetwork::net_force(double t, const double* x, double* force) const {
     add_spring_pair(force, fa, fb, F);
   }
   for (const Stencil& st : spec_.stencils)
-    add_stencil_force(st, st.stiffness * stencil_vector(st, x), force);
+    add_stencil_force(st, st.stiffness * stencil_vector(st, x, pins), force);
 }
 
 void SpringNetwork::net_force_tangent(double t, const double* x, const SpringNetworkTangent& dp,
@@ -318,7 +321,7 @@ void SpringNetwork::net_force_tangent(double t, const double* x, const SpringNet
   check(dp.rest.size(), spec_.springs.size(), "rest");
   check(dp.mass.size(), spec_.positions.size(), "mass");
   check(dp.pin_position.size(), spec_.pinned.size(), "pin_position");
-  update_pins(t);
+  const std::vector<Vec3> pins = pins_at(t);
   const int n = dof();
   std::fill(df, df + n, 0.0);
   if (!dp.mass.empty())
@@ -337,7 +340,7 @@ void SpringNetwork::net_force_tangent(double t, const double* x, const SpringNet
     const Spring& s = spec_.springs[si];
     const int fa = free_index_[s.a], fb = free_index_[s.b];
     if (fa < 0 && fb < 0) continue;
-    const Vec3 d = spring_vector(s, x);
+    const Vec3 d = spring_vector(s, x, pins);
     const double L = norm(d);
     double f, dfdL;
     spring_force_law(s, L, f, dfdL);
@@ -383,14 +386,14 @@ void SpringNetwork::constant_acceleration(double /*t*/, double* a) const {
 }
 
 void SpringNetwork::stiffness_values(double t, const double* x, double* values) const {
-  update_pins(t);
+  const std::vector<Vec3> pins = pins_at(t);
   const StiffnessLayout& st = stiffness_layout();
   std::fill(values, values + st.pattern.nnz(), 0.0);
   for (size_t si = 0; si < spec_.springs.size(); ++si) {
     const Spring& s = spec_.springs[si];
     const int fa = free_index_[s.a], fb = free_index_[s.b];
     if (fa < 0 && fb < 0) continue;
-    const Vec3 d = spring_vector(s, x);
+    const Vec3 d = spring_vector(s, x, pins);
     const double L = norm(d);
     double f, df;
     spring_force_law(s, L, f, df);
@@ -435,50 +438,51 @@ void SpringNetwork::stiffness_values(double t, const double* x, double* values) 
 }
 
 double SpringNetwork::static_residual(double t, const double* x) const {
-  net_force(t, x, scratch_.data());
+  std::vector<double> scratch(dof());
+  net_force(t, x, scratch.data());
   double worst = 0.0;
   for (int i = 0; i < dof(); i += 3) {
-    const double f2 = scratch_[i] * scratch_[i] + scratch_[i + 1] * scratch_[i + 1] +
-                      scratch_[i + 2] * scratch_[i + 2];
+    const double f2 =
+        scratch[i] * scratch[i] + scratch[i + 1] * scratch[i + 1] + scratch[i + 2] * scratch[i + 2];
     if (!(f2 <= worst)) worst = f2;  // NaN propagates
   }
   return std::sqrt(worst) / residual_scale_;
 }
 
 double SpringNetwork::residual_roundoff(double t, const double* x) const {
-  update_pins(t);
-  std::fill(scratch_.begin(), scratch_.end(), 0.0);  // per free particle, at 3 f
+  const std::vector<Vec3> pins = pins_at(t);
+  std::vector<double> scratch(dof(), 0.0);  // per free particle, at 3 f
   for (const Spring& s : spec_.springs) {
     const int fa = free_index_[s.a], fb = free_index_[s.b];
     if (fa < 0 && fb < 0) continue;
     const double e = s.stiffness * std::numeric_limits<double>::epsilon() *
-                     (norm(end_position(s.a, x)) + norm(end_position(s.b, x)));
-    if (fa >= 0) scratch_[3 * fa] += e;
-    if (fb >= 0) scratch_[3 * fb] += e;
+                     (norm(end_position(s.a, x, pins)) + norm(end_position(s.b, x, pins)));
+    if (fa >= 0) scratch[3 * fa] += e;
+    if (fb >= 0) scratch[3 * fb] += e;
   }
   // A stencil's k v carries up to k eps sum_j |w_j| |x_j|; particle i gets |w_i| of it.
   for (const Stencil& st : spec_.stencils) {
     double e = 0.0;
     for (int j = 0; j < 4 && st.particles[j] >= 0; ++j)
-      e += std::abs(st.weights[j]) * norm(end_position(st.particles[j], x));
+      e += std::abs(st.weights[j]) * norm(end_position(st.particles[j], x, pins));
     e *= st.stiffness * std::numeric_limits<double>::epsilon();
     for (int i = 0; i < 4 && st.particles[i] >= 0; ++i) {
       const int f = free_index_[st.particles[i]];
-      if (f >= 0) scratch_[3 * f] += std::abs(st.weights[i]) * e;
+      if (f >= 0) scratch[3 * f] += std::abs(st.weights[i]) * e;
     }
   }
-  if (scratch_.empty()) return 0.0;
-  return *std::max_element(scratch_.begin(), scratch_.end()) / residual_scale_;
+  if (scratch.empty()) return 0.0;
+  return *std::max_element(scratch.begin(), scratch.end()) / residual_scale_;
 }
 
 bool SpringNetwork::project(double t, double* x, double* /*v*/) const {
   if (spec_.elongation_limit <= 0.0) return false;
-  update_pins(t);
+  const std::vector<Vec3> pins = pins_at(t);
   bool moved = false;
   for (const Spring& s : spec_.springs) {
     const int fa = free_index_[s.a], fb = free_index_[s.b];
     if (fa < 0 && fb < 0) continue;
-    const Vec3 d = spring_vector(s, x);
+    const Vec3 d = spring_vector(s, x, pins);
     const double Lmax = s.rest * (1.0 + spec_.elongation_limit);
     const double L2 = dot(d, d);
     if (!(L2 > Lmax * Lmax)) continue;  // the common case costs no square root
@@ -502,11 +506,11 @@ bool SpringNetwork::project(double t, double* x, double* /*v*/) const {
 }
 
 double SpringNetwork::potential_energy(double t, const double* x) const {
-  update_pins(t);
+  const std::vector<Vec3> pins = pins_at(t);
   double e = 0.0;
   for (const Spring& s : spec_.springs) {
     if (free_index_[s.a] < 0 && free_index_[s.b] < 0) continue;
-    const double L = norm(spring_vector(s, x));
+    const double L = norm(spring_vector(s, x, pins));
     e += 0.5 * s.stiffness * (L - s.rest) * (L - s.rest);
     if (spec_.elongation_limit > 0.0) {
       const double over = L - s.rest * (1.0 + spec_.elongation_limit);
@@ -517,7 +521,7 @@ double SpringNetwork::potential_energy(double t, const double* x) const {
     bool moves = false;
     for (int i = 0; i < 4 && st.particles[i] >= 0; ++i) moves |= free_index_[st.particles[i]] >= 0;
     if (!moves) continue;
-    const Vec3 v = stencil_vector(st, x);
+    const Vec3 v = stencil_vector(st, x, pins);
     e += 0.5 * st.stiffness * dot(v, v);
   }
   for (int i = 0; i < dof(); i += 3)
@@ -528,16 +532,16 @@ double SpringNetwork::potential_energy(double t, const double* x) const {
 }
 
 void SpringNetwork::all_positions(double t, const double* x, std::vector<Vec3>& out) const {
-  update_pins(t);
+  const std::vector<Vec3> pins = pins_at(t);
   out.resize(particle_count());
-  for (int p = 0; p < particle_count(); ++p) out[p] = end_position(p, x);
+  for (int p = 0; p < particle_count(); ++p) out[p] = end_position(p, x, pins);
 }
 
 double SpringNetwork::max_strain(double t, const double* x) const {
-  update_pins(t);
+  const std::vector<Vec3> pins = pins_at(t);
   double worst = -1.0;
   for (const Spring& s : spec_.springs) {
-    const double L = norm(spring_vector(s, x));
+    const double L = norm(spring_vector(s, x, pins));
     worst = std::max(worst, (L - s.rest) / s.rest);
   }
   return worst;

@@ -168,11 +168,13 @@ class SpringNetwork final : public MechanicalSystem {
   };
 
  private:
-  Vec3 end_position(int particle, const double* x) const;
-  Vec3 spring_vector(const Spring& s, const double* x) const;
-  void update_pins(double t) const;
+  // Positions of an end and of a spring's b minus a, given the pins' positions at t (pins_at).
+  Vec3 end_position(int particle, const double* x, const std::vector<Vec3>& pins) const;
+  Vec3 spring_vector(const Spring& s, const double* x, const std::vector<Vec3>& pins) const;
+  std::vector<Vec3> pins_at(double t) const;  // per pin, its position at t
   void spring_force_law(const Spring& s, double L, double& f, double& df) const;
-  Vec3 stencil_vector(const Stencil& st, const double* x) const;  // v = sum_i w_i x_i
+  // v = sum_i w_i x_i
+  Vec3 stencil_vector(const Stencil& st, const double* x, const std::vector<Vec3>& pins) const;
   void add_stencil_force(const Stencil& st, Vec3 kv, double* out) const;
 
   SpringNetworkSpec spec_;
@@ -191,8 +193,6 @@ class SpringNetwork final : public MechanicalSystem {
   };
   const StiffnessLayout& stiffness_layout() const;
   std::shared_ptr<StiffnessStructure> structure_;
-  mutable std::vector<Vec3> pin_pos_;
-  mutable std::vector<double> scratch_;
 };
 
 }  // namespace knitsim

@@ -38,8 +38,9 @@ void overlapping_boxes(const std::vector<Box>& boxes, double cell, OnPair on_pai
   auto ix = [&](double x) { return std::min(nx - 1, static_cast<long>((x - x0) / cell)); };
   auto iy = [&](double y) { return std::min(ny - 1, static_cast<long>((y - y0) / cell)); };
   // Each box's cells (i0, i1, j0, j1), and a counting sort of (cell, box) entries: a box enters
-  // every cell it overlaps (at most 4, as no box is wider than a cell). The entries carry their
-  // box, so a cell's pairs are tested on contiguous memory.
+  // every cell it overlaps (at most 4, as no box is wider than a cell). A cell's entries are
+  // copied with their boxes before its pairs are tested, so they are tested on contiguous memory
+  // while the sort holds only the boxes' indices (4 bytes an entry, not 48).
   struct Cells {
     int i0, i1, j0, j1;
   };
@@ -54,24 +55,30 @@ void overlapping_boxes(const std::vector<Box>& boxes, double cell, OnPair on_pai
       for (long i = c.i0; i <= c.i1; ++i) ++start[j * nx + i + 1];
   }
   for (long c = 0; c < nx * ny; ++c) start[c + 1] += start[c];
-  struct Entry {
-    Box box;
-    int i0, j0, k;
-  };
-  std::vector<Entry> entries(start.back());
+  std::vector<int> entries(start.back());
   {
     std::vector<long> fill(start.begin(), start.end() - 1);
     for (int k = 0; k < n; ++k) {
       const Cells& c = cells[k];
       for (long j = c.j0; j <= c.j1; ++j)
-        for (long i = c.i0; i <= c.i1; ++i) entries[fill[j * nx + i]++] = {boxes[k], c.i0, c.j0, k};
+        for (long i = c.i0; i <= c.i1; ++i) entries[fill[j * nx + i]++] = k;
     }
   }
-  for (long c = 0; c < nx * ny; ++c)
-    for (long p = start[c]; p < start[c + 1]; ++p)
-      for (long q = p + 1; q < start[c + 1]; ++q) {
-        const Entry& ea = entries[p];
-        const Entry& eb = entries[q];
+  struct Entry {
+    Box box;
+    int i0, j0, k;
+  };
+  std::vector<Entry> in_cell;  // one cell's entries
+  for (long c = 0; c < nx * ny; ++c) {
+    in_cell.clear();
+    for (long p = start[c]; p < start[c + 1]; ++p) {
+      const int k = entries[p];
+      in_cell.push_back({boxes[k], cells[k].i0, cells[k].j0, k});
+    }
+    for (std::size_t p = 0; p < in_cell.size(); ++p)
+      for (std::size_t q = p + 1; q < in_cell.size(); ++q) {
+        const Entry& ea = in_cell[p];
+        const Entry& eb = in_cell[q];
         const Box& a = ea.box;
         const Box& b = eb.box;
         if (a.x1 < b.x0 || b.x1 < a.x0 || a.y1 < b.y0 || b.y1 < a.y0) continue;
@@ -79,13 +86,37 @@ void overlapping_boxes(const std::vector<Box>& boxes, double cell, OnPair on_pai
         if (std::max(ea.i0, eb.i0) + nx * std::max(ea.j0, eb.j0) != c) continue;
         on_pair(std::min(ea.k, eb.k), std::max(ea.k, eb.k));
       }
+  }
 }
 
 Box around(Vec3 p, double half) { return {p.x - half, p.x + half, p.y - half, p.y + half}; }
 
+// Throws std::invalid_argument on a bad point.
+void check_points(const std::vector<ContactPoint>& points, const SpringNetwork& net) {
+  for (const ContactPoint& p : points) {
+    int count = 0;
+    for (int i = 0; i < kContactParticles && p.particles[i] >= 0; ++i, ++count) {
+      if (p.particles[i] >= net.particle_count())
+        throw std::invalid_argument("yarn contact: a point's particle is out of range");
+      for (double v : p.weights[i])
+        if (!std::isfinite(v)) throw std::invalid_argument("yarn contact: a weight is not finite");
+    }
+    if (count == 0 || !is_finite(p.offset))
+      throw std::invalid_argument("yarn contact: a point has no particle or a non-finite offset");
+    if (p.turn[0] >= 0 || p.turn[1] >= 0) {
+      const double a2 = p.axis[0] * p.axis[0] + p.axis[1] * p.axis[1];
+      if (p.turn[0] < 0 || p.turn[1] < 0 || p.turn[0] >= count || p.turn[1] >= count ||
+          p.turn[0] == p.turn[1] || !(std::abs(a2 - 1.0) < 1e-9))
+        throw std::invalid_argument(
+            "yarn contact: a point's turning pair must be two of its particles, its axis a unit "
+            "vector");
+    }
+  }
+}
+
 }  // namespace
 
-ContactNetwork::ContactNetwork(SpringNetwork network, YarnContactSpec contact)
+ContactModel::ContactModel(SpringNetwork network, YarnContactSpec contact)
     : net_(std::move(network)), spec_(std::move(contact)) {
   const YarnContactSpec& c = spec_;
   if (!(c.core > 0.0 && c.touching > c.core && std::isfinite(c.touching)))
@@ -99,8 +130,8 @@ ContactNetwork::ContactNetwork(SpringNetwork network, YarnContactSpec contact)
   if (spec_.pattern_radius == 0.0) spec_.pattern_radius = 6.0 * c.touching;
   if (spec_.step_cap == 0.0) spec_.step_cap = 4.0 * c.touching;
   reach_ = spec_.touching + spec_.skin;
-  check_points();
-  points_changed();
+  check_points(spec_.points, net_);
+  point_count_ = static_cast<int>(spec_.points.size());
   if (c.refresh_tol < 0.0 || c.refresh_move < 0.0)
     throw std::invalid_argument("yarn contact: negative refresh tolerance or move");
   if (c.exact && c.linearise) {
@@ -111,10 +142,9 @@ ContactNetwork::ContactNetwork(SpringNetwork network, YarnContactSpec contact)
       while (yarns <= c.points[k].yarn) yarn_begin_.push_back(static_cast<int>(k)), ++yarns;
     }
     yarn_begin_.push_back(static_cast<int>(c.points.size()));
-    std::vector<double> x0(net_.dof()), v0(net_.dof());
-    net_.initial_state(x0.data(), v0.data());
-    net_.all_positions(0.0, x0.data(), renewed_at_);
   }
+  if (c.remake_at_start && yarn_begin_.empty())
+    throw std::invalid_argument("yarn contact: remake_at_start needs renewal (exact, linearise)");
   const CscPattern& np = net_.stiffness_pattern();
   if (!has_node_triples(np))
     throw std::invalid_argument("yarn contact: the network's unknowns must be whole particles");
@@ -124,9 +154,19 @@ ContactNetwork::ContactNetwork(SpringNetwork network, YarnContactSpec contact)
   for (int col = 0; col < np.cols; col += 3)
     for (int k = np.colptr[col]; k < np.colptr[col + 1]; k += 3)
       blocks.emplace_back(np.rowind[k] / 3, col / 3);
-  std::vector<double> x(dof()), v(dof());
-  net_.initial_state(x.data(), v.data());
-  positions(0.0, x.data());
+  {
+    std::vector<double> x(net_.dof()), v(net_.dof());
+    net_.initial_state(x.data(), v.data());
+    net_.all_positions(0.0, x.data(), start_);
+  }
+  std::vector<Vec3> pts(spec_.points.size());
+  for (std::size_t k = 0; k < spec_.points.size(); ++k)
+    pts[k] = position_of(spec_.points[k], start_);
+  auto may_pair = [&](int a, int b) {
+    const ContactPoint& pa = spec_.points[a];
+    const ContactPoint& pb = spec_.points[b];
+    return pa.yarn != pb.yarn || std::abs(pa.arc - pb.arc) >= spec_.same_yarn_gap;
+  };
   // Points share their particle sets in runs along a yarn: pairs are kept per two distinct sets
   // (a near pair of points adds the blocks between their sets' particles; every set also gets the
   // blocks within it, for a point's own J^T H J and its map's curvature). The sets are paired by
@@ -155,9 +195,9 @@ ContactNetwork::ContactNetwork(SpringNetwork network, YarnContactSpec contact)
   std::vector<Box> boxes(sets.size());
   for (std::size_t s = 0; s < sets.size(); ++s) {
     Box& b = boxes[s];
-    b = around(pts_[members[member_begin[s]]], 0.5 * R);
+    b = around(pts[members[member_begin[s]]], 0.5 * R);
     for (int m = member_begin[s] + 1; m < member_begin[s + 1]; ++m) {
-      const Box p = around(pts_[members[m]], 0.5 * R);
+      const Box p = around(pts[members[m]], 0.5 * R);
       b = {std::min(b.x0, p.x0), std::max(b.x1, p.x1), std::min(b.y0, p.y0), std::max(b.y1, p.y1)};
     }
   }
@@ -167,7 +207,7 @@ ContactNetwork::ContactNetwork(SpringNetwork network, YarnContactSpec contact)
     for (int i = member_begin[sa]; i < member_begin[sa + 1]; ++i)
       for (int j = member_begin[sb]; j < member_begin[sb + 1]; ++j) {
         const int a = members[i], b = members[j];
-        if (!may_pair(a, b) || norm(pts_[a] - pts_[b]) >= R) continue;
+        if (!may_pair(a, b) || norm(pts[a] - pts[b]) >= R) continue;
         near_sets[sa].push_back(static_cast<std::uint32_t>(sb));
         near_sets[sb].push_back(static_cast<std::uint32_t>(sa));
         return;
@@ -192,53 +232,52 @@ ContactNetwork::ContactNetwork(SpringNetwork network, YarnContactSpec contact)
           blocks.emplace_back(fa, fb);
         }
   }
-  const int nf = dof() / 3;
+  const int nf = net_.dof() / 3;
   nodes_ = make_csc_pattern(nf, nf, std::move(blocks), /*with_diagonal=*/true);
   pattern_ = expand_node_pattern(nodes_);
   net_entry_.resize(np.nnz());
   for (int col = 0; col < np.cols; ++col)
     for (int k = np.colptr[col]; k < np.colptr[col + 1]; ++k)
       net_entry_[k] = pattern_.find(np.rowind[k], col);
-  net_values_.resize(np.nnz());
+  if (spec_.remake_at_start) std::vector<ContactPoint>().swap(spec_.points);  // each run's own
+}
+
+ContactNetwork::ContactNetwork(std::shared_ptr<const ContactModel> model)
+    : model_(std::move(model)), net_(model_->net_), spec_(model_->spec_), reach_(model_->reach_) {
+  renewed_at_ = model_->start_;
+  if (spec_.remake_at_start) {
+    points_.reserve(model_->point_count_);
+    for (int y = 0; y + 1 < static_cast<int>(model_->yarn_begin_.size()); ++y) {
+      const std::vector<ContactPoint> yarn = linearised(renewed_at_, y);
+      points_.insert(points_.end(), yarn.begin(), yarn.end());
+    }
+    check_points(points_, net_);
+  } else {
+    points_ = spec_.points;
+  }
+  points_changed();
+  net_values_.resize(net_.stiffness_pattern().nnz());
   force_.resize(dof());
+}
+
+ContactNetwork::ContactNetwork(SpringNetwork network, YarnContactSpec contact)
+    : ContactNetwork(std::make_shared<const ContactModel>(std::move(network), std::move(contact))) {
 }
 
 bool ContactNetwork::may_pair(int a, int b) const {
   return yarn_of_[a] != yarn_of_[b] || std::abs(arc_of_[a] - arc_of_[b]) >= spec_.same_yarn_gap;
 }
 
-void ContactNetwork::check_points() const {
-  for (const ContactPoint& p : spec_.points) {
-    int count = 0;
-    for (int i = 0; i < kContactParticles && p.particles[i] >= 0; ++i, ++count) {
-      if (p.particles[i] >= net_.particle_count())
-        throw std::invalid_argument("yarn contact: a point's particle is out of range");
-      for (double v : p.weights[i])
-        if (!std::isfinite(v)) throw std::invalid_argument("yarn contact: a weight is not finite");
-    }
-    if (count == 0 || !is_finite(p.offset))
-      throw std::invalid_argument("yarn contact: a point has no particle or a non-finite offset");
-    if (p.turn[0] >= 0 || p.turn[1] >= 0) {
-      const double a2 = p.axis[0] * p.axis[0] + p.axis[1] * p.axis[1];
-      if (p.turn[0] < 0 || p.turn[1] < 0 || p.turn[0] >= count || p.turn[1] >= count ||
-          p.turn[0] == p.turn[1] || !(std::abs(a2 - 1.0) < 1e-9))
-        throw std::invalid_argument(
-            "yarn contact: a point's turning pair must be two of its particles, its axis a unit "
-            "vector");
-    }
-  }
-}
-
 std::vector<ContactPoint> ContactNetwork::linearised(const std::vector<Vec3>& particles,
                                                      int y) const {
   std::vector<ContactPoint> fresh = spec_.linearise(particles, y);
-  if (static_cast<int>(fresh.size()) != yarn_begin_[y + 1] - yarn_begin_[y])
+  if (static_cast<int>(fresh.size()) != model_->yarn_begin_[y + 1] - model_->yarn_begin_[y])
     throw std::logic_error("yarn contact: a renewed yarn has another number of points");
   return fresh;
 }
 
-bool ContactNetwork::refresh(double t, const double* x) const {
-  if (yarn_begin_.empty() || !(spec_.refresh_tol > 0.0)) return false;
+bool ContactNetwork::update(double t, const double* x) {
+  if (model_->yarn_begin_.empty() || !(spec_.refresh_tol > 0.0)) return false;
   std::vector<Vec3> particles;
   net_.all_positions(t, x, particles);
   double moved = 0.0;
@@ -249,7 +288,7 @@ bool ContactNetwork::refresh(double t, const double* x) const {
   }
   if (moved < spec_.refresh_move) return false;
   spec_.exact(particles, exact_);
-  if (exact_.size() != spec_.points.size())
+  if (exact_.size() != points_.size())
     throw std::logic_error("yarn contact: exact positions of another number of points");
   positions(t, x);
   // Each straying yarn is renewed: its points move from where they are to their exact positions,
@@ -258,51 +297,43 @@ bool ContactNetwork::refresh(double t, const double* x) const {
   // its own.
   long renewed = 0, cut = 0;
   std::vector<int> straying;
-  for (int y = 0; y + 1 < static_cast<int>(yarn_begin_.size()); ++y) {
+  for (int y = 0; y + 1 < static_cast<int>(model_->yarn_begin_.size()); ++y) {
     double drift = 0.0;
-    for (int k = yarn_begin_[y]; k < yarn_begin_[y + 1]; ++k)
+    for (int k = model_->yarn_begin_[y]; k < model_->yarn_begin_[y + 1]; ++k)
       drift = std::max(drift, norm(exact_[k] - pts_[k]));
     if (drift > spec_.refresh_tol) straying.push_back(y);
   }
   std::vector<std::vector<ContactPoint>> fresh(straying.size());
   std::vector<Vec3> move(pts_.size());
   for (std::size_t i = 0; i < straying.size(); ++i) {
-    const int y = straying[i], begin = yarn_begin_[y], end = yarn_begin_[y + 1];
+    const int y = straying[i], begin = model_->yarn_begin_[y], end = model_->yarn_begin_[y + 1];
     fresh[i] = linearised(particles, y);
     for (int k = begin; k < end; ++k) move[k] = exact_[k] - pts_[k];
   }
-  // Installs fresh maps for straying[i], i in [i0, i1); returns the old ones.
-  auto install = [&](std::size_t i0, std::size_t i1) {
-    std::vector<ContactPoint> old;
-    for (std::size_t i = i0; i < i1; ++i) {
-      auto first = spec_.points.begin() + yarn_begin_[straying[i]];
-      old.insert(old.end(), first, first + fresh[i].size());
-      std::copy(fresh[i].begin(), fresh[i].end(), first);
-    }
+  // Swaps the fresh maps of straying[i], i in [i0, i1), into points_: fresh[i] then holds the
+  // old ones, and swapping again restores them (no third copy of the maps).
+  auto swap_in = [&](std::size_t i0, std::size_t i1) {
+    for (std::size_t i = i0; i < i1; ++i)
+      std::swap_ranges(fresh[i].begin(), fresh[i].end(),
+                       points_.begin() + model_->yarn_begin_[straying[i]]);
     points_changed();
-    return old;
   };
-  auto restore = [&](std::size_t i0, std::size_t i1, const std::vector<ContactPoint>& old) {
-    auto from = old.begin();
-    for (std::size_t i = i0; i < i1; ++i) {
-      std::copy(from, from + fresh[i].size(), spec_.points.begin() + yarn_begin_[straying[i]]);
-      from += fresh[i].size();
-    }
-    points_changed();
+  auto restore = [&](std::size_t i0, std::size_t i1) {
+    swap_in(i0, i1);
     positions(t, x);
   };
   bool batch = !straying.empty() && sweep_fraction(pts_, move, spec_.renew_keep) >= 1.0;
   if (batch) {
-    const std::vector<ContactPoint> old = install(0, straying.size());
+    swap_in(0, straying.size());
     if (min_distance(t, x) > spec_.core) {  // pts_ now holds the renewed points
       renewed = static_cast<long>(straying.size());
     } else {
-      restore(0, straying.size(), old);
+      restore(0, straying.size());
       batch = false;
     }
   }
   for (std::size_t i = 0; !batch && i < straying.size(); ++i) {
-    const int begin = yarn_begin_[straying[i]], end = yarn_begin_[straying[i] + 1];
+    const int begin = model_->yarn_begin_[straying[i]], end = model_->yarn_begin_[straying[i] + 1];
     std::fill(move.begin(), move.end(), Vec3{0.0, 0.0, 0.0});
     for (int k = begin; k < end; ++k) move[k] = exact_[k] - pts_[k];
     const double s = sweep_fraction(pts_, move, spec_.renew_keep);
@@ -313,38 +344,38 @@ bool ContactNetwork::refresh(double t, const double* x) const {
       for (int k = begin; k < end; ++k)
         fresh[i][k - begin].offset = fresh[i][k - begin].offset - (1.0 - s) * move[k];
     }
-    const std::vector<ContactPoint> old = install(i, i + 1);
+    swap_in(i, i + 1);
     if (min_distance(t, x) > spec_.core) {  // pts_ now holds the renewed points
       ++renewed;
     } else {  // round-off at the filter's floor: the old points are kept
-      restore(i, i + 1, old);
+      restore(i, i + 1);
     }
   }
   if (renewed == 0) return false;
-  check_points();                         // once, for the points kept (it also checks them)
+  check_points(points_, net_);            // once, for the points kept
   if (cut == 0) renewed_at_ = particles;  // a cut renewal is taken up again at the next check
   refreshes_ += renewed;
   return true;
 }
 
 bool ContactNetwork::renew(double t, const double* x) {
-  if (yarn_begin_.empty() || !spec_.linearise) return false;
+  if (model_->yarn_begin_.empty() || !spec_.linearise) return false;
   std::vector<Vec3> particles;
   net_.all_positions(t, x, particles);
   for (const Vec3& p : particles)
     if (!is_finite(p)) return false;
-  const std::vector<ContactPoint> old = spec_.points;
-  for (int y = 0; y + 1 < static_cast<int>(yarn_begin_.size()); ++y) {
+  const std::vector<ContactPoint> old = points_;
+  for (int y = 0; y + 1 < static_cast<int>(model_->yarn_begin_.size()); ++y) {
     const std::vector<ContactPoint> fresh = linearised(particles, y);
-    std::copy(fresh.begin(), fresh.end(), spec_.points.begin() + yarn_begin_[y]);
+    std::copy(fresh.begin(), fresh.end(), points_.begin() + model_->yarn_begin_[y]);
   }
   points_changed();
   if (!(min_distance(t, x) > spec_.core)) {
-    spec_.points = old;
+    points_ = old;
     points_changed();
     return false;
   }
-  check_points();
+  check_points(points_, net_);
   renewed_at_ = particles;
   return true;
 }
@@ -410,22 +441,22 @@ Vec3 position_of(const ContactPoint& point, const std::vector<Vec3>& particles) 
   return rotate(t.c, t.s, t.u);
 }
 
-void ContactNetwork::points_changed() const {
+void ContactNetwork::points_changed() {
   listed_at_.clear();
   cached_ = false;
-  yarn_of_.resize(spec_.points.size());
-  arc_of_.resize(spec_.points.size());
-  for (std::size_t k = 0; k < spec_.points.size(); ++k)
-    yarn_of_[k] = spec_.points[k].yarn, arc_of_[k] = spec_.points[k].arc;
+  yarn_of_.resize(points_.size());
+  arc_of_.resize(points_.size());
+  for (std::size_t k = 0; k < points_.size(); ++k)
+    yarn_of_[k] = points_[k].yarn, arc_of_[k] = points_[k].arc;
 }
 
 void ContactNetwork::positions(double t, const double* x) const {
   if (cached_ && t == cached_t_ && std::equal(cached_x_.begin(), cached_x_.end(), x)) return;
   net_.all_positions(t, x, pos_);
-  pts_.resize(spec_.points.size());
-  turns_.resize(spec_.points.size());
-  for (std::size_t k = 0; k < spec_.points.size(); ++k) {
-    turns_[k] = turned(spec_.points[k], pos_);
+  pts_.resize(points_.size());
+  turns_.resize(points_.size());
+  for (std::size_t k = 0; k < points_.size(); ++k) {
+    turns_[k] = turned(points_[k], pos_);
     pts_[k] = rotate(turns_[k].c, turns_[k].s, turns_[k].u);
   }
   cached_x_.assign(x, x + dof());
@@ -541,8 +572,8 @@ bool ContactNetwork::add_contact_forces(double t, const double* x, double* out,
                                         const std::vector<double>* mass) const {
   return for_each_contact(t, x, [&](const Pair& pr, Vec3 d, double D, double de, double) {
     const Vec3 F = (-de / D) * d;  // on a; b gets the opposite
-    spread(spec_.points[pr.a], turns_[pr.a], net_, F, out, mass);
-    spread(spec_.points[pr.b], turns_[pr.b], net_, -1.0 * F, out, mass);
+    spread(points_[pr.a], turns_[pr.a], net_, F, out, mass);
+    spread(points_[pr.b], turns_[pr.b], net_, -1.0 * F, out, mass);
   });
 }
 
@@ -565,23 +596,24 @@ double ContactNetwork::static_residual(double t, const double* x) const {
 
 void ContactNetwork::stiffness_values(double t, const double* x, double* values) const {
   net_.stiffness_values(t, x, net_values_.data());
-  std::fill(values, values + pattern_.nnz(), 0.0);
-  for (std::size_t k = 0; k < net_values_.size(); ++k) values[net_entry_[k]] = net_values_[k];
+  std::fill(values, values + model_->pattern_.nnz(), 0.0);
+  for (std::size_t k = 0; k < net_values_.size(); ++k)
+    values[model_->net_entry_[k]] = net_values_[k];
   const std::vector<double>& m = net_.mass();
-  grad_.assign(spec_.points.size(), Vec3{0.0, 0.0, 0.0});
+  grad_.assign(points_.size(), Vec3{0.0, 0.0, 0.0});
   bool missed = false;
   // Adds -block / m_r (2 x 2, row-major) to particle block (fr, fc): da/dx = -K / m.
   auto add_block = [&](int particle_r, int particle_c, const double block[4]) {
     const int fr = net_.free_index(particle_r), fc = net_.free_index(particle_c);
     if (fr < 0 || fc < 0) return;
-    const int e_node = nodes_.find(fr, fc);
+    const int e_node = model_->nodes_.find(fr, fc);
     if (e_node < 0) {
       missed = true;
       return;
     }
     for (int p = 0; p < 2; ++p)
       for (int q = 0; q < 2; ++q)
-        values[node_block_entry(nodes_, e_node, fc, p, q)] -= block[2 * p + q] / m[3 * fr];
+        values[node_block_entry(model_->nodes_, e_node, fc, p, q)] -= block[2 * p + q] / m[3 * fr];
   };
   std::array<std::array<double, 6>, kContactParticles> J[2];
   const bool finite =
@@ -594,7 +626,7 @@ void ContactNetwork::stiffness_values(double t, const double* x, double* values)
         grad_[pr.a] = grad_[pr.a] + s * d;
         grad_[pr.b] = grad_[pr.b] - s * d;
         missed = false;
-        const ContactPoint* pt[2] = {&spec_.points[pr.a], &spec_.points[pr.b]};
+        const ContactPoint* pt[2] = {&points_[pr.a], &points_[pr.b]};
         const int index[2] = {pr.a, pr.b};
         for (int A = 0; A < 2; ++A) {
           const PointTurn& tA = turns_[index[A]];
@@ -624,12 +656,12 @@ void ContactNetwork::stiffness_values(double t, const double* x, double* values)
         pattern_misses_ += missed;
       });
   if (!finite) {
-    std::fill(values, values + pattern_.nnz(), std::nan(""));
+    std::fill(values, values + model_->pattern_.nnz(), std::nan(""));
     return;
   }
   // The maps' curvature (header, "Co-rotated points"): per turning point with a gradient g.
-  for (std::size_t k = 0; k < spec_.points.size(); ++k) {
-    const ContactPoint& pt = spec_.points[k];
+  for (std::size_t k = 0; k < points_.size(); ++k) {
+    const ContactPoint& pt = points_[k];
     const Vec3 g = grad_[k];
     if (pt.turn[0] < 0 || (g.x == 0.0 && g.y == 0.0 && g.z == 0.0)) continue;
     const PointTurn& tk = turns_[k];
@@ -683,8 +715,8 @@ double ContactNetwork::admissible_step(double t, const double* x, const double* 
     cached_t_ = t;
     cached_ = true;
   };
-  std::vector<double> turn0(spec_.points.size());
-  for (std::size_t k = 0; k < spec_.points.size(); ++k) turn0[k] = turn_angle(static_cast<int>(k));
+  std::vector<double> turn0(points_.size());
+  for (std::size_t k = 0; k < points_.size(); ++k) turn0[k] = turn_angle(static_cast<int>(k));
   // The points at fraction s of the (capped) step, into pts_.
   std::vector<double> y(x, x + dof());
   double cap = 1.0, at = -1.0;  // at: the fraction pts_ holds
@@ -714,8 +746,8 @@ double ContactNetwork::admissible_step(double t, const double* x, const double* 
   // turning no point more than kChordTurn (its path's sagitta ~ kChordTurn^2 / 8 of its reach).
   double turn = 0.0;
   bool turning = false;
-  for (std::size_t k = 0; k < spec_.points.size(); ++k) {
-    if (spec_.points[k].turn[0] < 0) continue;
+  for (std::size_t k = 0; k < points_.size(); ++k) {
+    if (points_[k].turn[0] < 0) continue;
     turning = true;
     turn = std::max(turn, std::abs(std::remainder(turn_angle(static_cast<int>(k)) - turn0[k],
                                                   2.0 * 3.14159265358979323846)));
@@ -795,7 +827,7 @@ double ContactNetwork::sweep_fraction(const std::vector<Vec3>& start, const std:
 
 std::string ContactNetwork::describe() const {
   std::ostringstream o;
-  o << net_.describe() << "; yarn contact: " << spec_.points.size() << " points, barrier from "
+  o << net_.describe() << "; yarn contact: " << points_.size() << " points, barrier from "
     << spec_.touching << " m to its core " << spec_.core << " m, kappa " << spec_.stiffness
     << " N/m";
   return o.str();

@@ -1,78 +1,25 @@
 // Yarn contact: a barrier that keeps yarn centrelines of different yarn parts apart, added to a
-// SpringNetwork as one MechanicalSystem (ContactNetwork). Paper 2 has none (docs/knit.md,
-// "Yarn contact").
+// SpringNetwork. What it is and why (contact points, co-rotated maps, pairs and the barrier, the
+// near-pair list and the fixed pattern, renewal, the step filter): docs/knit.md, "Yarn contact".
 //
-// Contact points. The yarn is represented by points that are affine in the particles, so the
-// barrier has local support and an exact, sparse Jacobian (the knit's NURBS centreline is a
-// global interpolant whose inverse is dense):
-//     p = sum_i W_i x_i,xy + o      (at most 8 particles, W_i 3 x 2; o a fixed offset, m)
-// where x_i,xy is particle i's (x, y): the contact sees the particles' in-plane positions only,
-// and a point's depth p.z follows them through W_i's third row (a yarn's depth between its
-// interlacing points moves as the in-plane shape changes). That is the model of a chart that
-// stays in its plane (the knit default: no force has a z component, the interlacing points stay
-// at z = 0); a network whose particles leave the plane must not use it (build_knit refuses contact
-// with knit.bending). Each point carries its yarn's id and its arc length along that yarn at rest.
+// Model and run (Drake's System and Context): the points' maps are renewed during a run, and they
+// change the energy E(x) itself, so they are state the run owns, not the model's.
+//   ContactModel    the network, the barrier's parameters, the points at rest and the fixed
+//                   sparse pattern. Const once built: one model serves any number of runs, on
+//                   any threads at once.
+//   ContactNetwork  one run of a ContactModel: the MechanicalSystem the integrators see. It owns
+//                   the points' current maps, changed only by update() (the run driver calls it
+//                   between steps, MechanicalSystem::update) and renew(), and caches that are
+//                   functions of (t, x) and those maps: the points' positions at the latest
+//                   state, the near-pair list (its order is the list's history: a run's results
+//                   are the same bytes whenever it runs, not across two lists), scratch, and the
+//                   run's counters. One thread at a time; build one per run.
 //
-// Co-rotated points (turn set; the knit's): a plain map is exact under translations only, so a
-// free chart's energy changed as it turned in its plane and the chart drifted round. A
-// co-rotated point's map turns with one direction of its own particles, v = x_j - x_i:
-//     p = R(phi) (o + sum_i W_i R(phi)^T x_i,xy),   phi = the angle from `axis` to v,
-// R(phi) the rotation about z (depth unchanged). At the state where the map was made phi = 0 and
-// p is the plain map; p(R x + t) = R p(x) + t exactly for every rotation R about z and
-// translation t in the plane (the weights sum to [I; 0]), so the barrier's energy does not change
-// under the chart's rigid motions in its plane. Derivatives (q_i = R^T x_i, u = o + sum W_i q_i,
-// G and G2 the 3-D and 2-D generators of rotation about z):
-//     dp/dx_k = R (W_k R^T + a grad_k(phi)^T),   a = G u - sum_i W_i G2 q_i,
-// with grad_j(phi) = G2 v / |v|^2 = -grad_i(phi); the Hessian adds, for the energy's gradient g
-// at p (g~ = R^T g), the curvature of the map:
-//     n_k grad_l^T + grad_k n_l^T + c grad_k grad_l^T + (g~ . a) d^2 phi / dx_k dx_l,
-//     n_k = R2 (G W_k - W_k G2)^T g~,  c = g~ . G a - sum_k (R2^T n_k) . G2 q_k.
-//
-// Pairs. Two points interact if they lie on different yarns, or on one yarn at least
-// same_yarn_gap apart along it (neighbouring pieces of one bend never do). Energy of a pair at
-// distance D = |p_a - p_b|, with the gap g = (D - d0) / (d - d0):
-//     E = kappa (d - d0)^2 phi(g),  phi(g) = -(g - 1)^2 ln g  for 0 < g < 1,  0 for g >= 1,
-// the IPC barrier (Li et al. 2020) shifted to a core: no force at or beyond the touching distance
-// d, a repulsion growing without bound as D falls to the core distance d0 < d (E = +inf for
-// D <= d0). phi = phi' = phi'' = 0 at g = 1, so E is C^2 where contact begins.
-// Gradient and Hessian (in p_a - p_b, 3 x 3): B = dE/dD u, and
-//     H = E''(D) u u^T + (E'(D) / D) (I - u u^T),  u = (p_a - p_b) / D,
-// mapped onto the particles by the weights (force W_i^T (-B) on a's particle i, in x and y; block
-// (i, j) of d^2E/dx^2 gets s_i s_j W_i^T H W_j, s = +1 for a's particles, -1 for b's).
-//
-// Near pairs (a Verlet list): pairs closer than d + skin are listed at a state and reused while
-// no point has moved more than skin / 2 since; the list is rebuilt on a front-view (x, y) grid. The
-// sparse pattern is fixed at construction: the network's, plus the particle blocks of every pair
-// closer than pattern_radius at the start (between the two points' particles and within each
-// point's). A pair that comes into contact later on particles whose block is not in the pattern
-// still gets its forces and energy; the Jacobian then misses that block (counted:
-// pattern_misses()), which slows Newton but does not change the state reached.
-//
-// Renewal (refresh; optional): the points approximate positions the caller can compute exactly
-// (the knit's centreline vertices), to first order about a state. Given both functions, refresh
-// at an accepted state compares each yarn's points with their exact positions and re-linearises
-// the yarns whose points stray more than refresh_tol about that state (the run driver calls it at
-// each stop check; integrators then forget their history). Each yarn is renewed on its own: its
-// points are re-linearised, and move to their exact positions as far as the step filter below
-// allows with renew_keep of every pair's gap kept (where it cuts, the fresh map is offset by the
-// part not taken, which later checks take up; counted: cut_renewals()). A yarn whose exact
-// centreline is already inside a core is so renewed over the next steps while the barrier pushes
-// it out, its tangent kept current (refusing such renewals, or blending the old and fresh maps,
-// let the points stray further: docs/knit.md, "Yarn contact"). The sparse pattern stays the
-// construction's: renewed points should keep their particles (the knit's do), or their missing
-// blocks count as pattern misses.
-//
-// Step filter (admissible_step): a step that moves some point more than step_cap is cut to that;
-// then the largest fraction of it along which no pair's distance falls below
-// d0 + filter_keep (D_start - d0), found exactly for the straight move of each point from its start
-// to its end (a quadratic in the fraction). A co-rotated point's path bends: the step is swept as
-// chords between exact states, each turning no point more than kChordTurn, and the admitted end
-// is checked exactly (halved while a pair is inside a core). Pairs from the near-pair list where
-// no point ends further than skin / 2 from where it was listed (then every pair that can come
-// within d is listed), else by their swept boxes on the grid. The equilibrium
-// solver and implicit-euler shorten their steps by it, so no step jumps through the barrier.
-// The SUNDIALS methods have no such hook: a state inside the core gives a non-finite
-// acceleration, which they treat as a recoverable failure (a smaller step).
+// A point p = R(phi) (o + sum_i W_i R(phi)^T x_i,xy) (at most 8 particles, W_i 3 x 2, o a fixed
+// offset; R(phi) = I for a plain point) sees its particles' in-plane positions only: a network
+// whose particles leave the plane must not use it. Pairs: points of different yarns, or of one
+// yarn at least same_yarn_gap apart along it. Energy of a pair at distance D < d (touching) with
+// g = (D - d0) / (d - d0): E = kappa (d - d0)^2 (-(g - 1)^2 ln g), +inf for D <= d0 (the core).
 //
 // Failure modes: a bad spec (particle out of range, weights not finite, d0 >= d, non-positive
 // kappa) throws std::invalid_argument at construction. Evaluation never throws: a state with a
@@ -104,16 +51,16 @@ struct ContactPoint {
   Vec3 offset;       // o, m (its z is the point's depth)
   int yarn = 0;      // which yarn the point lies on
   double arc = 0.0;  // arc length along its yarn at rest, m
-  // Co-rotation (see "Co-rotated points" above): the point's map turns with the direction of
-  // x_j - x_i, (i, j) = turn (indices into `particles`; -1: the map does not turn), by the angle
-  // from `axis` (a unit vector in the plane, that direction where the map was made).
+  // Co-rotation (docs/knit.md, "Yarn contact": co-rotated): the point's map turns with the
+  // direction of x_j - x_i, (i, j) = turn (indices into `particles`; -1: the map does not turn), by
+  // the angle from `axis` (a unit vector in the plane, that direction where the map was made).
   std::array<int, 2> turn{-1, -1};
   std::array<double, 2> axis{1.0, 0.0};
 };
 
-// A point's co-rotation at a state (see "Co-rotated points" above): R(phi) as (c, s), u and a in
-// the turned frame, grad_j(phi) of its second turning particle (the first's is minus that), v and
-// |v|^2. A plain point has c = 1, s = 0 and turns = false.
+// A point's co-rotation at a state (docs/knit.md, "Yarn contact": co-rotated): R(phi) as (c, s), u
+// and a in the turned frame, grad_j(phi) of its second turning particle (the first's is minus
+// that), v and |v|^2. A plain point has c = 1, s = 0 and turns = false.
 struct PointTurn {
   double c = 1.0, s = 0.0;
   Vec3 u, a;                            // m
@@ -135,19 +82,52 @@ struct YarnContactSpec {
   double pattern_radius = 0.0;  // m: pairs this close at the start have Jacobian blocks (0: 6 d)
   double filter_keep = 0.2;     // a step keeps at least this fraction of a pair's gap to d0
   double step_cap = 0.0;        // m: a step moves no point further than this (0: 4 d)
-  // Renewal (see above; both set, or the points are never renewed). `exact` writes every point's
-  // exact position (points order) from every particle's position; `linearise` returns yarn y's
-  // points (as many as it has, in order) linearised about those positions. Points must be
-  // ordered by yarn.
+  // Renewal (docs/knit.md, "Yarn contact"; both set, or the points are never renewed). `exact`
+  // writes every point's exact position (points order) from every particle's position; `linearise`
+  // returns yarn y's points (as many as it has, in order) linearised about those positions. Points
+  // must be ordered by yarn.
   std::function<void(const std::vector<Vec3>&, std::vector<Vec3>&)> exact;
   std::function<std::vector<ContactPoint>(const std::vector<Vec3>&, int)> linearise;
   double refresh_tol = 0.0;   // m: a yarn is renewed when one of its points strays this far
   double refresh_move = 0.0;  // m: and only checked once a particle moved this far (x or y) since
   double renew_keep = 0.5;    // a renewal keeps at least this fraction of a pair's gap to d0
+  // With renewal: the points are `linearise`'s at the start state (every yarn linearised about
+  // the network's initial positions reproduces `points`), so the model keeps none once it has
+  // built its pattern and each run makes its own (one set of maps in memory per run, not two).
+  bool remake_at_start = false;
 };
 
+// The model: const once built, shared by runs (see above).
+class ContactModel {
+ public:
+  // Throws std::invalid_argument for a bad spec (see above).
+  ContactModel(SpringNetwork network, YarnContactSpec contact);
+
+  const SpringNetwork& network() const { return net_; }
+  // The parameters and closures, defaults filled in; its points are those at rest (empty with
+  // remake_at_start: each run makes them).
+  const YarnContactSpec& spec() const { return spec_; }
+  int point_count() const { return point_count_; }
+  const CscPattern& stiffness_pattern() const { return pattern_; }
+
+ private:
+  friend class ContactNetwork;
+  SpringNetwork net_;
+  YarnContactSpec spec_;
+  int point_count_ = 0;
+  double reach_ = 0.0;           // d + skin
+  CscPattern nodes_;             // the free particles' block pattern
+  CscPattern pattern_;           // nodes_ expanded to 3 x 3 blocks
+  std::vector<int> net_entry_;   // per value of the network's pattern, its place in pattern_
+  std::vector<int> yarn_begin_;  // per yarn, its first point (and the end last); empty: no renewal
+  std::vector<Vec3> start_;      // every particle's position in the initial state, m
+};
+
+// One run of a ContactModel (see above): a MechanicalSystem that owns the points' current maps.
 class ContactNetwork final : public MechanicalSystem {
  public:
+  explicit ContactNetwork(std::shared_ptr<const ContactModel> model);
+  // A run of a model of its own.
   ContactNetwork(SpringNetwork network, YarnContactSpec contact);
 
   // MechanicalSystem
@@ -159,7 +139,7 @@ class ContactNetwork final : public MechanicalSystem {
   }
   const std::vector<double>& damping_rate() const override { return net_.damping_rate(); }
   const std::vector<double>& mass() const override { return net_.mass(); }
-  const CscPattern& stiffness_pattern() const override { return pattern_; }
+  const CscPattern& stiffness_pattern() const override { return model_->pattern_; }
   void stiffness_values(double t, const double* x, double* values) const override;
   double static_residual(double t, const double* x) const override;
   double residual_roundoff(double t, const double* x) const override {
@@ -171,7 +151,11 @@ class ContactNetwork final : public MechanicalSystem {
   bool project(double t, double* x, double* v) const override { return net_.project(t, x, v); }
   double potential_energy(double t, const double* x) const override;
   double admissible_step(double t, const double* x, const double* dx) const override;
-  bool refresh(double t, const double* x) const override;
+  // Renewal at an accepted state (docs/knit.md, "Yarn contact"): the yarns whose points stray
+  // more than refresh_tol from their exact positions are re-linearised about (t, x), as far as
+  // the step filter allows. True if any was (the functions changed there).
+  bool update(double t, const double* x) override;
+  bool has_run_state() const override { return true; }
   std::string describe() const override;
   // Every yarn's points re-linearised about (t, x), whole (no step filter): for a run that
   // starts from a saved state (--continue), whose points at rest would not stand for the yarn
@@ -179,19 +163,24 @@ class ContactNetwork final : public MechanicalSystem {
   // not set up, or the renewed points put a pair inside its core.
   bool renew(double t, const double* x);
 
+  const ContactModel& model() const { return *model_; }
+  const std::shared_ptr<const ContactModel>& shared_model() const { return model_; }
   const SpringNetwork& network() const { return net_; }
+  // The model's parameters (its points: model().spec(); this run's: points()).
   const YarnContactSpec& contact() const { return spec_; }
+  const std::vector<ContactPoint>& points() const { return points_; }  // the current maps
   // Contact energy alone at (t, x), J (+inf inside a core).
   double contact_energy(double t, const double* x) const;
   // Smallest distance between two pairing points at (t, x), m (closer than d + skin; else
   // +inf), and how many pairs are in contact (closer than d).
   double min_distance(double t, const double* x, int* in_contact = nullptr) const;
-  // Pairs in contact whose Jacobian blocks were not all in the pattern, over all evaluations.
+  // Counters over the run. Pairs in contact whose Jacobian blocks were not all in the pattern,
+  // over all evaluations:
   long pattern_misses() const { return pattern_misses_; }
   long list_rebuilds() const { return rebuilds_; }
   // Step-filter and renewal sweeps that found their pairs in the near-pair list (sweep_fraction).
   long list_sweeps() const { return list_sweeps_; }
-  long refreshes() const { return refreshes_; }  // yarns renewed, over all refreshes
+  long refreshes() const { return refreshes_; }        // yarns renewed, over all updates
   long cut_renewals() const { return cut_renewals_; }  // renewals the step filter cut short
 
  private:
@@ -202,13 +191,12 @@ class ContactNetwork final : public MechanicalSystem {
   // (t, x) (cached_x_, cached_t_) until points_changed().
   void positions(double t, const double* x) const;
   // The points' maps changed: positions and near pairs are stale, yarn_of_ and arc_of_ renewed.
-  void points_changed() const;
-  void refresh_pairs() const;                       // the near-pair list at pos_, if stale
-  bool pairs_of(double t, const double* x) const;   // positions + list; false if not finite
+  void points_changed();
+  void refresh_pairs() const;                      // the near-pair list at pos_, if stale
+  bool pairs_of(double t, const double* x) const;  // positions + list; false if not finite
   bool may_pair(int a, int b) const;
   // Yarn y's points linearised about the particles' positions (spec linearise, its count checked).
   std::vector<ContactPoint> linearised(const std::vector<Vec3>& particles, int y) const;
-  void check_points() const;  // throws std::invalid_argument on a bad point
   // Calls on_contact(pair, p_a - p_b, D, dE/dD, d2E/dD2) for every pair closer than d at (t, x);
   // false (stopping) if the state is not finite or a pair is inside its core.
   template <class OnContact>
@@ -229,25 +217,34 @@ class ContactNetwork final : public MechanicalSystem {
   static constexpr double kChordTurn = 0.02;  // rad: the largest turn of a point per swept chord
   static constexpr int kMaxChords = 64;
 
-  SpringNetwork net_;
-  mutable YarnContactSpec spec_;  // its points are renewed by refresh
-  double reach_ = 0.0;            // d + skin
-  CscPattern nodes_;            // the free particles' block pattern
-  CscPattern pattern_;          // nodes_ expanded to 3 x 3 blocks
-  std::vector<int> net_entry_;  // per value of the network's pattern, its place in pattern_
-  std::vector<int> yarn_begin_;  // per yarn, its first point (and the end last)
-  mutable std::vector<Vec3> pos_, pts_, listed_at_, exact_, renewed_at_;  // listed_at_: points
+  std::shared_ptr<const ContactModel> model_;
+  const SpringNetwork& net_;     // model_'s
+  const YarnContactSpec& spec_;  // model_'s parameters (not its points)
+  double reach_ = 0.0;           // d + skin
+
+  // The run's state: changed only by update() and renew() (and set up by the constructor).
+  std::vector<ContactPoint> points_;  // the current maps
+  std::vector<int> yarn_of_;          // per point, its yarn (may_pair reads these, not points_)
+  std::vector<double> arc_of_;        // per point, its arc length, m
+  std::vector<Vec3> renewed_at_;      // every particle's position at the latest whole renewal
+  long refreshes_ = 0, cut_renewals_ = 0;
+
+  // Caches, functions of the state evaluated last and points_ (positions()), and of the list's
+  // history (refresh_pairs()); evaluations at the same (t, x) give the same values whatever
+  // they hold. Mutable as they are refilled by const evaluations.
+  mutable std::vector<Vec3> pos_, pts_;   // particles and points at cached_x_
   mutable std::vector<PointTurn> turns_;  // per point, at pts_'s state
   mutable std::vector<double> cached_x_;  // the state pos_, pts_ and turns_ describe, if cached_
   mutable double cached_t_ = 0.0;
   mutable bool cached_ = false;
-  mutable std::vector<int> yarn_of_;    // per point, its yarn (may_pair reads these, not points)
-  mutable std::vector<double> arc_of_;  // per point, its arc length, m
+  mutable std::vector<Vec3> listed_at_;  // the points where the near-pair list was made
+  mutable std::vector<Pair> pairs_;      // the near-pair list
+  // Scratch of one evaluation.
   mutable std::vector<Vec3> grad_;  // per point, dE/dp summed over its pairs (stiffness_values)
-  mutable std::vector<Pair> pairs_;
   mutable std::vector<double> net_values_, force_;
-  mutable long pattern_misses_ = 0, rebuilds_ = 0, refreshes_ = 0, cut_renewals_ = 0,
-               list_sweeps_ = 0;
+  std::vector<Vec3> exact_;  // update's exact positions
+  // Counters of the const evaluations.
+  mutable long pattern_misses_ = 0, rebuilds_ = 0, list_sweeps_ = 0;
 };
 
 }  // namespace knitsim

@@ -156,6 +156,15 @@ class EquilibriumSolver final : public Integrator {
   const double* positions() const override { return x_.data(); }
   const double* velocities() const override { return v_.data(); }
 
+  std::string run_note() const override {
+    std::string note;
+    if (escapes_ > 0)
+      note += "; left " + std::to_string(escapes_) +
+              " saddle(s) along a negative mode (the symmetry broke)";
+    if (fallbacks_ > 0) note += "; the flow stalled: fell back to the dynamics";
+    return note;
+  }
+
   void fill_stats(RunStats& s) const override {
     s.steps = steps_;
     s.rhs_evals = rhs_;

@@ -8,6 +8,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -207,222 +208,312 @@ std::unique_ptr<Integrator> make_integrator(const std::string& name) {
   throw std::invalid_argument("integrator = " + name + ": must be one of " + names);
 }
 
-RunStats run_to_equilibrium(const MechanicalSystem& sys, const std::string& integrator,
+namespace {
+
+// One run to equilibrium (run_to_equilibrium): the loop in run(), its steps and predicates named
+// beside it. `sys` is what the integrator evaluates; `updatable` the same object where the run
+// may update its state between steps (MechanicalSystem::update), else null.
+class EquilibriumRun {
+ public:
+  EquilibriumRun(const MechanicalSystem& sys, MechanicalSystem* updatable, Integrator& integ,
+                 const IntegratorOptions& opt, std::vector<double>& x, std::vector<double>& v,
+                 RunObserver* observer, double t0)
+      : sys_(sys),
+        updatable_(updatable),
+        integ_(integ),
+        opt_(opt),
+        x_(x),
+        v_(v),
+        observer_(observer),
+        t0_(t0),
+        n_(sys.dof()),
+        t_start_eq_(sys.equilibrium_start_time()) {}
+
+  RunStats run() {
+    start();
+    // The initial state may already be at rest (e.g. a plain knit chart).
+    if (t_start_eq_ <= t0_) {
+      const double r0 = sys_.static_residual(t0_, x_.data());
+      const std::string why = stop_test(t0_, x_.data(), r0, true);
+      if (!why.empty()) return conclude("initial state is already at equilibrium: " + why);
+    }
+    double t_prev = integ_.time();
+    while (true) {
+      const Integrator::Step st = integ_.step(opt_.t_max);
+      // After every step, not only at the residual checks: one check can be minutes away (a
+      // large grid's factorisations). A step cut short by the request (the SUNDIALS callbacks
+      // and the block factorisation read it too) fails: the state is the last accepted one.
+      if (interrupted()) return finish(RunStatus::Interrupted, "interrupted before equilibrium");
+      if (!st.ok) {  // a failed step is not counted: the cap is on steps taken
+        const bool diverged = !state_ok();
+        if (!diverged && restart_after_failure(st)) continue;
+        return end_after_failure(st, diverged);
+      }
+      ++steps_;
+      if (t_prev < t_start_eq_) ++motion_steps_;
+      const double t = integ_.time();
+      if (observer_) observer_->on_step(t, t - t_prev, integ_.last_order());
+      t_prev = t;
+      if (check_due(t)) {
+        std::optional<RunStats> end = check(t);
+        if (end) return *end;
+      }
+      if (t >= opt_.t_max) return finish(RunStatus::TimeLimit, "t_max reached before equilibrium");
+      if (steps_ >= opt_.max_steps)
+        return finish(RunStatus::StepLimit, "step cap reached before equilibrium");
+    }
+  }
+
+ private:
+  using clock = std::chrono::steady_clock;
+
+  // Validates, fills an empty state with the model's initial one, starts the integrator.
+  void start() {
+    opt_.validate();
+    if (!(t0_ >= 0.0) || !(t0_ < opt_.t_max))
+      throw std::invalid_argument("run_to_equilibrium: t0 = " + std::to_string(t0_) +
+                                  " s: must be >= 0 and < t_max");
+    if (x_.empty() || v_.empty()) {
+      x_.assign(n_, 0.0);
+      v_.assign(n_, 0.0);
+      sys_.initial_state(x_.data(), v_.data());
+    }
+    if (static_cast<int>(x_.size()) != n_ || static_cast<int>(v_.size()) != n_)
+      throw std::invalid_argument("run_to_equilibrium: state size does not match the model");
+    wall_start_ = clock::now();
+    cpu_start_ = std::clock();
+    stats_.integrator = integ_.info().name;
+    integ_.start(sys_, t0_, x_.data(), v_.data(), opt_);
+    const bool cheap_steps = integ_.info().explicit_method && !integ_.info().adaptive;
+    check_every_ = opt_.check_every > 0 ? opt_.check_every : (cheap_steps ? 1000 : 1);
+    note_reference(t0_, x_.data(), v_.data());
+  }
+
+  double wall() const { return std::chrono::duration<double>(clock::now() - wall_start_).count(); }
+
+  // The caller's flag, or the process-wide request (src/core/stop_request.hpp) that the loops
+  // inside a step read: a step they cut short must end the run, not count as a failure.
+  bool interrupted() const {
+    return (opt_.interrupt && opt_.interrupt->load(std::memory_order_relaxed)) || stop_requested();
+  }
+
+  // The state is finite and within runaway_position.
+  bool state_ok() const {
+    const double* xs = integ_.positions();
+    const double* vs = integ_.velocities();
+    for (int i = 0; i < n_; ++i)
+      if (!(std::abs(xs[i]) <= opt_.runaway_position) || !std::isfinite(vs[i])) return false;
+    return true;
+  }
+
+  // A failed step from a sound state that the integrator may cure by a restart: true if it
+  // restarted.
+  bool restart_after_failure(const Integrator::Step& st) {
+    if (st.recoverable && restarts_ < opt_.max_restarts && integ_.restart()) {
+      ++restarts_;
+      return true;
+    }
+    return false;
+  }
+
+  RunStats end_after_failure(const Integrator::Step& st, bool diverged) {
+    std::string why = st.message;
+    if (restarts_ > 0) why += " (after " + std::to_string(restarts_) + " restarts)";
+    return finish(diverged ? RunStatus::Diverged : RunStatus::SolverFailure, why);
+  }
+
+  bool check_due(double t) const { return steps_ % check_every_ == 0 || t >= opt_.t_max; }
+
+  // The check every check_every steps: the state's sanity, the model's update, the stop, the
+  // caps. A RunStats where the run ends there.
+  std::optional<RunStats> check(double t) {
+    if (!state_ok()) {
+      std::ostringstream os;
+      os << "non-finite or runaway state at t = " << t << " s";
+      integ_.fill_stats(stats_);
+      if (stats_.dt_predicted > 0.0)
+        os << " (dt = " << stats_.dt << " s, predicted stability limit " << stats_.dt_predicted
+           << " s)";
+      return finish(RunStatus::Diverged, os.str());
+    }
+    if (updatable_ && updatable_->update(t, integ_.positions())) integ_.model_changed();
+    const double r = sys_.static_residual(t, integ_.positions());
+    if (observer_) observer_->on_check(t, integ_.positions(), integ_.velocities(), r);
+    note_reference(t, integ_.positions(), integ_.velocities());
+    if (t >= t_start_eq_) {
+      const std::string why = stop_test(t, integ_.positions(), r, t >= opt_.t_max);
+      if (!why.empty()) return conclude(why);
+    }
+    if (opt_.max_wall_seconds > 0.0 && wall() > opt_.max_wall_seconds)
+      return finish(RunStatus::WallLimit, "wall-clock cap reached");
+    return std::nullopt;
+  }
+
+  // The energy check's reference: the total energy once the pins have stopped. From then on
+  // damping can only lower it, so no state the dynamics reach lies above it.
+  void note_reference(double t, const double* xs, const double* vs) {
+    if (std::isnan(energy_reference_) && t >= t_start_eq_)
+      energy_reference_ = sys_.potential_energy(t, xs) + sys_.kinetic_energy(vs);
+  }
+
+  // Whether (t, xs) at residual r is due a probe of K (a factorisation): below
+  // max(kProbeStart, equilibrium_tol) or within kFloorProbe of its round-off floor, and forced,
+  // or fallen kProbeDrop-fold since the last probe, or kProbeEvery checks since, or t doubled
+  // since.
+  bool probe_due(double t, const double* xs, double r, bool force) {
+    ++checks_since_probe_;
+    if (!(r <= std::max(kProbeStart, opt_.equilibrium_tol))) {
+      if (!(r <= 1.0)) return false;
+      if (++floor_age_ >= kFloorEvery) floor_seen_ = sys_.residual_roundoff(t, xs), floor_age_ = 0;
+      if (!(r <= kFloorProbe * floor_seen_)) return false;
+    }
+    return force || r <= next_probe_ || checks_since_probe_ >= kProbeEvery ||
+           (t > 0.0 && t >= 2.0 * t_probe_);
+  }
+
+  // The stop (a probe of K where the residual is small, equilibrium_check.hpp): the status
+  // message if (t, xs) passes it, with the certificate in stats_; else "".
+  std::string stop_test(double t, const double* xs, double r, bool force) {
+    if (!probe_due(t, xs, r, force)) return "";
+    next_probe_ = r / kProbeDrop;
+    checks_since_probe_ = 0;
+    t_probe_ = t;
+    if (!probe_) probe_ = std::make_unique<detail::StiffnessProbe>(sys_, opt_.factorization);
+    const detail::StiffnessProbe::Result p = probe_->probe(t, xs);
+    std::ostringstream os;
+    if (p.singular) {  // rigid-body or mechanism modes: the residual decides
+      const double threshold = equilibrium_threshold(sys_, t, xs, opt_.equilibrium_tol);
+      if (!(r <= threshold)) return "";
+      os << "static residual " << r << " below " << threshold
+         << " (the stop in positions does not apply: the stiffness is singular)";
+      stats_.certificate = "inconclusive";
+      stats_.residual_decided = true;
+    } else {
+      if (p.negative_pivots > 0) return "";  // a saddle: not yet
+      const double tol = std::max(opt_.position_tol, p.newton_floor);
+      if (!(p.newton_step <= tol)) return "";
+      os << "Newton correction " << p.newton_step << " m below ";
+      if (p.newton_floor > opt_.position_tol)
+        os << "its round-off floor " << tol << " m, the correction the forces' rounding alone "
+           << "makes, above position_tol " << opt_.position_tol << " m";
+      else
+        os << "position_tol " << tol << " m";
+      stats_.certificate = "stable_minimum";
+      stats_.residual_decided = false;
+    }
+    stats_.negative_pivots = p.negative_pivots;
+    stats_.min_eigenvalue = p.min_eigenvalue;
+    stats_.eigenvalue_threshold = p.threshold;
+    stats_.newton_step = p.newton_step;
+    stats_.newton_floor = p.newton_floor;
+    return os.str();
+  }
+
+  // An end state that passed the stop: Equilibrium, unless it fails the energy check. A run
+  // that crossed the pins' motion in fewer than kMotionSteps steps did not follow the pins'
+  // path, so its reference is not the dynamics' energy (docs/equilibrium.md, "The certificate
+  // and the energy check", has an example) and the energy check cannot certify its end state.
+  RunStats conclude(std::string message) {
+    const double t = integ_.time();
+    const double e =
+        sys_.potential_energy(t, integ_.positions()) + sys_.kinetic_energy(integ_.velocities());
+    stats_.energy = e;
+    stats_.energy_reference = energy_reference_;
+    if (t_start_eq_ > t0_ && motion_steps_ < kMotionSteps) {
+      std::ostringstream os;
+      os << message << "; energy check inconclusive: the pins' motion was crossed in "
+         << motion_steps_ << " step(s), fewer than " << kMotionSteps
+         << ", so the run's energy when the pins stopped is not the dynamics'";
+      message = os.str();
+      stats_.certificate = "inconclusive";
+    }
+    const double allowance = kEnergyRoundoff * (std::abs(e) + std::abs(energy_reference_));
+    if (e > energy_reference_ + allowance) {
+      std::ostringstream os;
+      os << "energy " << e << " J above the " << energy_reference_
+         << " J the run had once the pins stopped: the damped dynamics cannot reach this state ("
+         << message << ")";
+      stats_.certificate = "";
+      return finish(RunStatus::SpuriousEquilibrium, os.str());
+    }
+    return finish(RunStatus::Equilibrium, message);
+  }
+
+  // The end: the final state into x, v and the run's figures into the result.
+  RunStats finish(RunStatus status, std::string message) {
+    const double t = integ_.time();
+    std::copy_n(integ_.positions(), n_, x_.begin());
+    std::copy_n(integ_.velocities(), n_, v_.begin());
+    integ_.fill_stats(stats_);
+    if (probe_) stats_.stop_factorisations = probe_->factorisations();
+    stats_.restarts = restarts_;
+    stats_.status = status;
+    stats_.message = std::move(message) + integ_.run_note();
+    stats_.t_final = t;
+    stats_.residual = sys_.static_residual(t, x_.data());
+    stats_.residual_floor = sys_.residual_roundoff(t, x_.data());
+    stats_.wall_seconds = wall();
+    stats_.cpu_seconds = static_cast<double>(std::clock() - cpu_start_) / CLOCKS_PER_SEC;
+    return stats_;
+  }
+
+  const MechanicalSystem& sys_;
+  MechanicalSystem* const updatable_;
+  Integrator& integ_;
+  const IntegratorOptions& opt_;
+  std::vector<double>& x_;
+  std::vector<double>& v_;
+  RunObserver* const observer_;
+  const double t0_;
+  const int n_;
+  const double t_start_eq_;
+
+  RunStats stats_;
+  clock::time_point wall_start_;
+  std::clock_t cpu_start_ = 0;
+  long check_every_ = 1;
+  long steps_ = 0;
+  long restarts_ = 0;
+  long motion_steps_ = 0;  // steps taken while the pins moved (conclude)
+  double energy_reference_ = std::numeric_limits<double>::quiet_NaN();
+  // The stop's probes of K (equilibrium_check.hpp), made at the first.
+  std::unique_ptr<detail::StiffnessProbe> probe_;
+  double next_probe_ = std::max(kProbeStart, opt_.equilibrium_tol);
+  long checks_since_probe_ = 0;
+  double t_probe_ = std::numeric_limits<double>::infinity();  // t of the latest probe
+  double floor_seen_ = 0.0;  // the residual's round-off floor at a recent check
+  long floor_age_ = kFloorEvery;
+};
+
+}  // namespace
+
+RunStats run_to_equilibrium(MechanicalSystem& sys, Integrator& integ, const IntegratorOptions& opt,
+                            std::vector<double>& x, std::vector<double>& v, RunObserver* observer,
+                            double t0) {
+  return EquilibriumRun(sys, &sys, integ, opt, x, v, observer, t0).run();
+}
+
+RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
+                            const IntegratorOptions& opt, std::vector<double>& x,
+                            std::vector<double>& v, RunObserver* observer, double t0) {
+  if (sys.has_run_state())
+    throw std::logic_error("run_to_equilibrium: " + sys.describe() +
+                           " has run state: pass it non-const, so it can be updated");
+  return EquilibriumRun(sys, nullptr, integ, opt, x, v, observer, t0).run();
+}
+
+RunStats run_to_equilibrium(MechanicalSystem& sys, const std::string& integrator,
                             const IntegratorOptions& opt, std::vector<double>& x,
                             std::vector<double>& v, RunObserver* observer, double t0) {
   auto integ = make_integrator(integrator);
   return run_to_equilibrium(sys, *integ, opt, x, v, observer, t0);
 }
 
-RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
+RunStats run_to_equilibrium(const MechanicalSystem& sys, const std::string& integrator,
                             const IntegratorOptions& opt, std::vector<double>& x,
                             std::vector<double>& v, RunObserver* observer, double t0) {
-  opt.validate();
-  if (!(t0 >= 0.0) || !(t0 < opt.t_max))
-    throw std::invalid_argument("run_to_equilibrium: t0 = " + std::to_string(t0) +
-                                " s: must be >= 0 and < t_max");
-  const int n = sys.dof();
-  if (x.empty() || v.empty()) {
-    x.assign(n, 0.0);
-    v.assign(n, 0.0);
-    sys.initial_state(x.data(), v.data());
-  }
-  if (static_cast<int>(x.size()) != n || static_cast<int>(v.size()) != n)
-    throw std::invalid_argument("run_to_equilibrium: state size does not match the model");
-
-  using clock = std::chrono::steady_clock;
-  const auto wall_start = clock::now();
-  const std::clock_t cpu_start = std::clock();
-  auto wall = [&] { return std::chrono::duration<double>(clock::now() - wall_start).count(); };
-
-  RunStats stats;
-  stats.integrator = integ.info().name;
-  integ.start(sys, t0, x.data(), v.data(), opt);
-
-  const bool cheap_steps = integ.info().explicit_method && !integ.info().adaptive;
-  const long check_every = opt.check_every > 0 ? opt.check_every : (cheap_steps ? 1000 : 1);
-  const double t_start_eq = sys.equilibrium_start_time();
-  long restarts = 0;
-  std::unique_ptr<detail::StiffnessProbe> probe;  // K at the stop's tests, made at the first
-  auto finish = [&](RunStatus status, std::string message) {
-    const double t = integ.time();
-    std::copy_n(integ.positions(), n, x.begin());
-    std::copy_n(integ.velocities(), n, v.begin());
-    integ.fill_stats(stats);
-    if (probe) stats.stop_factorisations = probe->factorisations();
-    stats.restarts = restarts;
-    stats.status = status;
-    stats.message = std::move(message);
-    if (stats.saddle_escapes > 0)
-      stats.message += "; left " + std::to_string(stats.saddle_escapes) +
-                       " saddle(s) along a negative mode (the symmetry broke)";
-    if (stats.fallbacks > 0) stats.message += "; the flow stalled: fell back to the dynamics";
-    stats.t_final = t;
-    stats.residual = sys.static_residual(t, x.data());
-    stats.residual_floor = sys.residual_roundoff(t, x.data());
-    stats.wall_seconds = wall();
-    stats.cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
-    return stats;
-  };
-  // The caller's flag, or the process-wide request (src/core/stop_request.hpp) that the loops
-  // inside a step read: a step they cut short must end the run, not count as a failure.
-  auto interrupted = [&] {
-    return (opt.interrupt && opt.interrupt->load(std::memory_order_relaxed)) || stop_requested();
-  };
-  auto state_ok = [&]() -> bool {
-    const double* xs = integ.positions();
-    const double* vs = integ.velocities();
-    for (int i = 0; i < n; ++i)
-      if (!(std::abs(xs[i]) <= opt.runaway_position) || !std::isfinite(vs[i])) return false;
-    return true;
-  };
-
-  // The energy check's reference: the total energy once the pins have stopped. From then on
-  // damping can only lower it, so no state the dynamics reach lies above it.
-  double energy_reference = std::numeric_limits<double>::quiet_NaN();
-  auto note_reference = [&](double t, const double* xs, const double* vs) {
-    if (std::isnan(energy_reference) && t >= t_start_eq)
-      energy_reference = sys.potential_energy(t, xs) + sys.kinetic_energy(vs);
-  };
-  note_reference(t0, x.data(), v.data());
-  // Steps taken while the pins moved: a run that crossed the motion in fewer than
-  // kMotionSteps did not follow the pins' path, so its reference is not the dynamics' energy
-  // (docs/equilibrium.md, "The certificate and the energy check", has an example) and the
-  // energy check cannot certify its end state.
-  long motion_steps = 0;
-
-  // The stop: a probe of K where the residual is small (equilibrium_check.hpp).
-  double next_probe = std::max(kProbeStart, opt.equilibrium_tol);
-  long checks_since_probe = 0;
-  double t_probe = std::numeric_limits<double>::infinity();  // t of the latest test
-  // Returns the status message if (t, xs) passes the stop, with the certificate in stats.
-  double floor_seen = 0.0;  // the residual's round-off floor at a recent check
-  long floor_age = kFloorEvery;
-  auto stop_test = [&](double t, const double* xs, double r, bool force) -> std::string {
-    ++checks_since_probe;
-    if (!(r <= std::max(kProbeStart, opt.equilibrium_tol))) {
-      if (!(r <= 1.0)) return "";
-      if (++floor_age >= kFloorEvery) floor_seen = sys.residual_roundoff(t, xs), floor_age = 0;
-      if (!(r <= kFloorProbe * floor_seen)) return "";
-    }
-    if (!force && r > next_probe && checks_since_probe < kProbeEvery &&
-        !(t > 0.0 && t >= 2.0 * t_probe))
-      return "";
-    next_probe = r / kProbeDrop;
-    checks_since_probe = 0;
-    t_probe = t;
-    if (!probe) probe = std::make_unique<detail::StiffnessProbe>(sys, opt.factorization);
-    const detail::StiffnessProbe::Result p = probe->probe(t, xs);
-    std::ostringstream os;
-    if (p.singular) {  // rigid-body or mechanism modes: the residual decides
-      const double threshold = equilibrium_threshold(sys, t, xs, opt.equilibrium_tol);
-      if (!(r <= threshold)) return "";
-      os << "static residual " << r << " below " << threshold
-         << " (the stop in positions does not apply: the stiffness is singular)";
-      stats.certificate = "inconclusive";
-      stats.residual_decided = true;
-    } else {
-      if (p.negative_pivots > 0) return "";  // a saddle: not yet
-      const double tol = std::max(opt.position_tol, p.newton_floor);
-      if (!(p.newton_step <= tol)) return "";
-      os << "Newton correction " << p.newton_step << " m below ";
-      if (p.newton_floor > opt.position_tol)
-        os << "its round-off floor " << tol << " m, the correction the forces' rounding alone "
-           << "makes, above position_tol " << opt.position_tol << " m";
-      else
-        os << "position_tol " << tol << " m";
-      stats.certificate = "stable_minimum";
-      stats.residual_decided = false;
-    }
-    stats.negative_pivots = p.negative_pivots;
-    stats.min_eigenvalue = p.min_eigenvalue;
-    stats.eigenvalue_threshold = p.threshold;
-    stats.newton_step = p.newton_step;
-    stats.newton_floor = p.newton_floor;
-    return os.str();
-  };
-  // An end state that passed the stop: Equilibrium, unless it fails the energy check.
-  auto conclude = [&](std::string message) {
-    const double t = integ.time();
-    const double e = sys.potential_energy(t, integ.positions()) +
-                     sys.kinetic_energy(integ.velocities());
-    stats.energy = e;
-    stats.energy_reference = energy_reference;
-    if (t_start_eq > t0 && motion_steps < kMotionSteps) {
-      std::ostringstream os;
-      os << message << "; energy check inconclusive: the pins' motion was crossed in "
-         << motion_steps << " step(s), fewer than " << kMotionSteps
-         << ", so the run's energy when the pins stopped is not the dynamics'";
-      message = os.str();
-      stats.certificate = "inconclusive";
-    }
-    const double allowance = kEnergyRoundoff * (std::abs(e) + std::abs(energy_reference));
-    if (e > energy_reference + allowance) {
-      std::ostringstream os;
-      os << "energy " << e << " J above the " << energy_reference
-         << " J the run had once the pins stopped: the damped dynamics cannot reach this state ("
-         << message << ")";
-      stats.certificate = "";
-      return finish(RunStatus::SpuriousEquilibrium, os.str());
-    }
-    return finish(RunStatus::Equilibrium, message);
-  };
-
-  // The initial state may already be at rest (e.g. a plain knit chart).
-  if (t_start_eq <= t0) {
-    const double r0 = sys.static_residual(t0, x.data());
-    const std::string why = stop_test(t0, x.data(), r0, true);
-    if (!why.empty()) return conclude("initial state is already at equilibrium: " + why);
-  }
-
-  long steps = 0;
-  double t_prev = integ.time();
-  while (true) {
-    const Integrator::Step st = integ.step(opt.t_max);
-    // After every step, not only at the residual checks: one check can be minutes away (a
-    // large grid's factorisations). A step cut short by the request (the SUNDIALS callbacks
-    // and the block factorisation read it too) fails: the state is the last accepted one.
-    if (interrupted()) return finish(RunStatus::Interrupted, "interrupted before equilibrium");
-    if (!st.ok) {  // a failed step is not counted: the cap is on steps taken
-      const bool diverged = !state_ok();
-      if (!diverged && st.recoverable && restarts < opt.max_restarts && integ.restart()) {
-        ++restarts;
-        continue;
-      }
-      std::string why = st.message;
-      if (restarts > 0) why += " (after " + std::to_string(restarts) + " restarts)";
-      return finish(diverged ? RunStatus::Diverged : RunStatus::SolverFailure, why);
-    }
-    ++steps;
-    if (t_prev < t_start_eq) ++motion_steps;
-    const double t = integ.time();
-    if (observer) observer->on_step(t, t - t_prev, integ.last_order());
-    t_prev = t;
-    if (steps % check_every == 0 || t >= opt.t_max) {
-      if (!state_ok()) {
-        std::ostringstream os;
-        os << "non-finite or runaway state at t = " << t << " s";
-        integ.fill_stats(stats);
-        if (stats.dt_predicted > 0.0)
-          os << " (dt = " << stats.dt << " s, predicted stability limit " << stats.dt_predicted
-             << " s)";
-        return finish(RunStatus::Diverged, os.str());
-      }
-      if (sys.refresh(t, integ.positions())) integ.model_changed();
-      const double r = sys.static_residual(t, integ.positions());
-      if (observer) observer->on_check(t, integ.positions(), integ.velocities(), r);
-      note_reference(t, integ.positions(), integ.velocities());
-      if (t >= t_start_eq) {
-        const std::string why = stop_test(t, integ.positions(), r, t >= opt.t_max);
-        if (!why.empty()) return conclude(why);
-      }
-      if (opt.max_wall_seconds > 0.0 && wall() > opt.max_wall_seconds)
-        return finish(RunStatus::WallLimit, "wall-clock cap reached");
-    }
-    if (t >= opt.t_max) return finish(RunStatus::TimeLimit, "t_max reached before equilibrium");
-    if (steps >= opt.max_steps)
-      return finish(RunStatus::StepLimit, "step cap reached before equilibrium");
-  }
+  auto integ = make_integrator(integrator);
+  return run_to_equilibrium(sys, *integ, opt, x, v, observer, t0);
 }
 
 double equilibrium_threshold(const MechanicalSystem& sys, double t, const double* x,

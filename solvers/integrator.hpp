@@ -6,7 +6,7 @@
 //   RunStats s = run_to_equilibrium(model, *integ, opt, x, v);   // out: final state
 //
 // Integrators see only a MechanicalSystem (src/core/mechanical_system.hpp); they never know which
-// model they run. Every run stops by the same test (SPEC 2.3; solvers/equilibrium_check.hpp),
+// model they run. Every run stops by the same test (docs/equilibrium.md; solvers/equilibrium_check.hpp),
 // made every `check_every` steps from the model's equilibrium_start_time() on: the Newton
 // correction ||K^-1 F||_inf below position_tol where the stiffness K is positive definite, or
 // the static residual below equilibrium_threshold() where K is singular; the state that passes
@@ -32,7 +32,7 @@
 
 namespace knitsim {
 
-// Registry: every integrator by name (SPEC 2.4).
+// Registry: every integrator by name (docs/numerics.md).
 const std::vector<IntegratorInfo>& integrator_catalog();
 std::unique_ptr<Integrator> make_integrator(const std::string& name);  // throws invalid_argument
 // The SuiteSparse release (CHOLMOD, KLU) the solvers were compiled against, e.g. "5.12.0",
@@ -42,7 +42,12 @@ std::string suitesparse_version();
 // The one run-to-equilibrium driver. x, v: in the initial state at time t0 (empty = the model's
 // initial_state), out the final state. t0 > 0 continues a run that stopped there (knitsim drape
 // --continue); it must be below opt.t_max (std::invalid_argument otherwise). The counters in the
-// result are this call's only.
+// result are this call's only. Between steps, at each check, it updates the system's run state
+// (MechanicalSystem::update); a system with run state must therefore be passed non-const (the
+// const overload throws std::logic_error for one).
+RunStats run_to_equilibrium(MechanicalSystem& sys, Integrator& integ, const IntegratorOptions& opt,
+                            std::vector<double>& x, std::vector<double>& v,
+                            RunObserver* observer = nullptr, double t0 = 0.0);
 RunStats run_to_equilibrium(const MechanicalSystem& sys, Integrator& integ,
                             const IntegratorOptions& opt, std::vector<double>& x,
                             std::vector<double>& v, RunObserver* observer = nullptr,
@@ -57,12 +62,16 @@ double equilibrium_threshold(const MechanicalSystem& sys, double t, const double
                              double equilibrium_tol);
 
 // Convenience: make_integrator(name) + run_to_equilibrium.
+RunStats run_to_equilibrium(MechanicalSystem& sys, const std::string& integrator,
+                            const IntegratorOptions& opt, std::vector<double>& x,
+                            std::vector<double>& v, RunObserver* observer = nullptr,
+                            double t0 = 0.0);
 RunStats run_to_equilibrium(const MechanicalSystem& sys, const std::string& integrator,
                             const IntegratorOptions& opt, std::vector<double>& x,
                             std::vector<double>& v, RunObserver* observer = nullptr,
                             double t0 = 0.0);
 
-// Linear stability prediction for the explicit fixed-step methods (SPEC 2.4), per dof i from
+// Linear stability prediction for the explicit fixed-step methods (docs/numerics.md), per dof i from
 // a Gershgorin bound on da_c/dx at (t, x): omega_i^2 <= sum_j |Ax_ij|, gamma_i = c_i/m_i.
 //   euler:  |1 + h lambda| < 1 for lambda = -gamma/2 +- sqrt(gamma^2/4 - omega^2)
 //           (overdamped: h < 2 / |lambda_fast|; underdamped: h < gamma / omega^2)

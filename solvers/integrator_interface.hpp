@@ -47,9 +47,13 @@ class Integrator {
   // order history, keeping its counters; false if the method cannot (the default).
   virtual bool restart() { return false; }
 
-  // The system's functions changed at the current state (MechanicalSystem::refresh): forget
+  // The system's functions changed at the current state (MechanicalSystem::update): forget
   // what was computed from the old ones (step history, cached forces). Default: restart().
   virtual void model_changed() { restart(); }
+
+  // What the run's message adds about how the method got there (the equilibrium solver: the
+  // saddles it left, a fall-back to the dynamics), starting "; ". Default: nothing.
+  virtual std::string run_note() const { return {}; }
 
   // Method order of the step just taken: the controller's choice for variable-order methods
   // (cvode-bdf, cvode-adams), else info().order.

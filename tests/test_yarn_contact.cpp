@@ -6,6 +6,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <random>
+#include <thread>
 #include <vector>
 
 #include "models/knit_loops.hpp"
@@ -37,7 +38,7 @@ std::vector<double> tuck_in_contact(const KnitModel& m) {
   std::vector<double> x, v;
   IntegratorOptions opt;
   opt.max_wall_seconds = 30.0;  // a guard: it takes ~10 steps
-  const RunStats s = run_to_equilibrium(m.system(), "implicit-euler", opt, x, v);
+  const RunStats s = run_to_equilibrium(*m.contact, "implicit-euler", opt, x, v);
   REQUIRE(s.status == RunStatus::Equilibrium);
   return x;
 }
@@ -78,7 +79,7 @@ TEST_CASE("yarn contact: the points are the rest polylines' vertices, affine in 
     REQUIRE(m.contact != nullptr);
     const std::vector<Vec3> rest = m.rest_positions();
     const YarnPolylines lines = yarn_polylines(m, rest, kContactSamplesPerInterval);
-    const std::vector<ContactPoint>& pts = m.contact->contact().points;
+    const std::vector<ContactPoint>& pts = m.contact->points();
     std::size_t k = 0;
     double worst = 0.0, weight_error = 0.0;
     for (std::size_t j = 0; j < lines.vertices.size(); ++j)
@@ -122,8 +123,7 @@ TEST_CASE(
       std::size_t k = 0;
       for (const std::vector<Vec3>& course : lines.vertices)
         for (const Vec3& vertex : course)
-          worst =
-              std::max(worst, norm(position_of(m.contact->contact().points[k++], pos) - vertex));
+          worst = std::max(worst, norm(position_of(m.contact->points()[k++], pos) - vertex));
       return worst / r;
     };
     const double coarse = worst_error(1e-3), fine = worst_error(5e-4);
@@ -135,7 +135,7 @@ TEST_CASE(
 TEST_CASE("yarn contact: refresh re-linearises the points about the state where they stray",
           "[contact]") {
   const KnitModel m = chart_model("several_tucks.chart", with_contact());
-  const ContactNetwork& net = *m.contact;
+  ContactNetwork& net = *m.contact;
   const double r = m.params.loop_radius;
   std::vector<double> x(net.dof()), v(net.dof());
   net.initial_state(x.data(), v.data());
@@ -147,7 +147,7 @@ TEST_CASE("yarn contact: refresh re-linearises the points about the state where 
     std::size_t k = 0;
     for (const std::vector<Vec3>& course : lines.vertices)
       for (const Vec3& vertex : course)
-        worst = std::max(worst, norm(position_of(net.contact().points[k++], pos) - vertex));
+        worst = std::max(worst, norm(position_of(net.points()[k++], pos) - vertex));
     return worst / r;
   };
   // The rest state turned by 0.3 rad and moved: the co-rotated points follow the vertices
@@ -159,18 +159,18 @@ TEST_CASE("yarn contact: refresh re-linearises the points about the state where 
     x[i + 1] = sn * X + cs * Y - 5.0 * r;
   }
   CHECK(worst_stray() <= 1e-9);
-  CHECK_FALSE(net.refresh(0.0, x.data()));
+  CHECK_FALSE(net.update(0.0, x.data()));
   // Then stretched by 1.2 along x (the vertices move off their first-order maps): the points
   // stray.
   for (int i = 0; i < net.dof(); i += 3) x[i] *= 1.2;
   REQUIRE(net.min_distance(0.0, x.data()) > net.contact().core);
   const double before = worst_stray();
   CHECK(before > 2.0 * kContactRefreshTol);
-  CHECK(net.refresh(0.0, x.data()));
+  CHECK(net.update(0.0, x.data()));
   CHECK(net.cut_renewals() == 0);
   CHECK(worst_stray() <= 1e-9);  // linearised here: the points are the vertices
   CHECK(net.refreshes() == m.chart.courses);
-  CHECK_FALSE(net.refresh(0.0, x.data()));  // nothing strays now
+  CHECK_FALSE(net.update(0.0, x.data()));  // nothing strays now
   // The renewed points' forces are still -grad E of one smooth energy (central differences).
   std::vector<double> a(net.dof());
   std::vector<double> xp = x, xm = x;
@@ -221,7 +221,7 @@ TEST_CASE("yarn contact: co-rotated points follow rigid motions exactly; forces 
   c.touching = 1.0;
   c.core = 0.5;
   c.stiffness = 10.0;
-  const ContactNetwork net(SpringNetwork(spec), c);
+  ContactNetwork net(SpringNetwork(spec), c);
   // A state away from the maps' own: each pair of particles turned and stretched differently,
   // then yarn 1 moved in the plane until the points are 0.75 apart (g = 0.5).
   std::vector<double> x(net.dof()), v(net.dof());
@@ -295,23 +295,23 @@ TEST_CASE("yarn contact: a renewal that would bring a pair near its core is take
     (void)pos;
     return std::vector<ContactPoint>{p};
   };
-  const ContactNetwork net(SpringNetwork(spec), c);
+  ContactNetwork net(SpringNetwork(spec), c);
   REQUIRE(net.contact().renew_keep == 0.5);
   std::vector<double> x = {0.0, 0.0, 0.0, 1.05, 0.0, 0.0};
   shift = 0.08;  // renewed, the points are 0.97 apart: above the floor 0.9 + 0.5 (1 - 0.9)
-  CHECK(net.refresh(0.0, x.data()));
+  CHECK(net.update(0.0, x.data()));
   CHECK(net.cut_renewals() == 0);
   CHECK(net.min_distance(0.0, x.data()) == Approx(0.97));
   // Exact positions 0.85 apart, inside the core: the points move only to 0.9 + 0.5 (0.97 - 0.9).
   shift = 0.2;
-  CHECK(net.refresh(0.0, x.data()));
+  CHECK(net.update(0.0, x.data()));
   CHECK(net.cut_renewals() == 1);
   CHECK(net.refreshes() == 2);
   CHECK(net.min_distance(0.0, x.data()) == Approx(0.935));
   // Renewed again at the same state, they close half the remaining gap each time, never the core.
   double last = net.min_distance(0.0, x.data());
   for (int k = 0; k < 30; ++k) {
-    net.refresh(0.0, x.data());
+    net.update(0.0, x.data());
     const double now = net.min_distance(0.0, x.data());
     CHECK(now < last);
     CHECK(now > 0.9);
@@ -331,7 +331,7 @@ TEST_CASE("yarn contact: plain jersey stays exactly at rest, no pair in contact"
   for (const char* integrator : {"cvode-bdf", "equilibrium", "verlet"}) {
     INFO(integrator);
     std::vector<double> x, v;
-    const RunStats s = run_to_equilibrium(m.system(), integrator, IntegratorOptions{}, x, v);
+    const RunStats s = run_to_equilibrium(*m.contact, integrator, IntegratorOptions{}, x, v);
     CHECK(s.status == RunStatus::Equilibrium);
     CHECK(x == x0);
   }
@@ -385,7 +385,7 @@ TEST_CASE("yarn contact: inside the core the energy is infinite and forces are n
   // Two points of different yarns on single particles, pushed together along x.
   const SpringNetworkSpec spec = two_particles();
   YarnContactSpec c = two_points();
-  const ContactNetwork net(SpringNetwork(spec), c);
+  ContactNetwork net(SpringNetwork(spec), c);
   std::vector<double> x = {0.0, 0.0, 0.0, 0.95, 0.0, 0.0};
   CHECK(std::isfinite(net.potential_energy(0.0, x.data())));
   std::vector<double> a(6);
@@ -472,6 +472,8 @@ TEST_CASE("yarn contact: small steps are swept on the near-pair list, to the sam
   const KnitModel m = chart_model("single_tuck.chart", with_contact());
   const std::vector<double> x = tuck_in_contact(m);
   YarnContactSpec thin = m.contact->contact();
+  thin.points = m.contact->points();  // the run's, renewed
+  thin.remake_at_start = false;
   thin.skin = 1e-9 * thin.touching;
   const ContactNetwork boxes(m.network, thin);
   const ContactNetwork& listed = *m.contact;
@@ -505,7 +507,7 @@ TEST_CASE("yarn contact: the equilibrium solver and implicit-euler stay outside 
     // sanitized run checks the same.
     opt.max_steps = 300;
     std::vector<double> x, v;
-    const RunStats s = run_to_equilibrium(m.system(), integrator, opt, x, v);
+    const RunStats s = run_to_equilibrium(*m.contact, integrator, opt, x, v);
     INFO(s.message);
     CHECK(s.status == RunStatus::Equilibrium);
     CHECK(s.fallbacks == 0);
@@ -543,7 +545,7 @@ TEST_CASE("yarn contact: single_tuck relaxed with contact keeps its yarns apart"
   // the same chart's yarns come to 0.53 r (tests/test_yarn_measures.cpp has the bare network).
   const KnitModel m = chart_model("single_tuck.chart", with_contact(10.0));
   std::vector<double> x, v;
-  const RunStats s = run_to_equilibrium(m.system(), "implicit-euler", IntegratorOptions{}, x, v);
+  const RunStats s = run_to_equilibrium(*m.contact, "implicit-euler", IntegratorOptions{}, x, v);
   INFO(s.message);
   REQUIRE(s.status == RunStatus::Equilibrium);
   std::vector<Vec3> pos;
@@ -561,7 +563,7 @@ TEST_CASE("yarn contact: single_tuck relaxed with contact keeps its yarns apart"
   std::size_t idx = 0;
   for (const std::vector<Vec3>& course : fine.vertices)
     for (const Vec3& vertex : course)
-      worst = std::max(worst, norm(position_of(m.contact->contact().points[idx++], pos) - vertex));
+      worst = std::max(worst, norm(position_of(m.contact->points()[idx++], pos) - vertex));
   CHECK(worst <= 2.0 * kContactRefreshTol * r);
   CHECK(m.contact->min_distance(0.0, x.data()) > m.contact->contact().core);
 }
@@ -582,7 +584,7 @@ TEST_CASE("yarn contact: the committed tuck and miss charts keep 0.9 r over the 
     IntegratorOptions opt;
     opt.max_steps = 300;  // a guard: each takes 15-40 flow steps, a few seconds
     const RunStats s =
-        run_to_equilibrium(m.system(), default_knit_integrator(true), opt, x, v, &over);
+        run_to_equilibrium(*m.contact, default_knit_integrator(true), opt, x, v, &over);
     INFO(s.message);
     REQUIRE(s.status == RunStatus::Equilibrium);
     CHECK(s.fallbacks == 0);
@@ -590,4 +592,62 @@ TEST_CASE("yarn contact: the committed tuck and miss charts keep 0.9 r over the 
     CHECK(over.minimum().over_r >= 0.9);  // measured 0.947, 0.941, 0.936
     CHECK(m.contact->min_distance(s.t_final, x.data()) > m.contact->contact().core);
   }
+}
+
+TEST_CASE("yarn contact: one model runs on two threads at once, each to the single run's bytes",
+          "[contact][threads]") {
+  // The model is const and shared; each run (ContactNetwork) owns its renewed points. single_tuck
+  // renews its yarns during the run, so the runs' states do change.
+  const KnitModel m = chart_model("single_tuck.chart", with_contact(10.0));
+  const std::shared_ptr<const ContactModel> model = m.contact->shared_model();
+  struct Result {
+    std::vector<double> x, v;
+    RunStats stats;
+    long renewed = 0;
+  };
+  IntegratorOptions opt;
+  opt.max_steps = 300;         // a guard: ~20 flow steps
+  auto run = [&](Result& r) {  // no Catch macros here: they are not thread-safe
+    ContactNetwork sys(model);
+    r.stats = run_to_equilibrium(sys, default_knit_integrator(true), opt, r.x, r.v);
+    r.renewed = sys.refreshes();
+  };
+  Result single, a, b;
+  run(single);
+  std::thread ta([&] { run(a); }), tb([&] { run(b); });
+  ta.join();
+  tb.join();
+  REQUIRE(single.stats.status == RunStatus::Equilibrium);
+  CHECK(single.renewed > 0);
+  for (const Result* r : {&a, &b}) {
+    CHECK(r->stats.status == single.stats.status);
+    CHECK(r->stats.steps == single.stats.steps);
+    CHECK(r->stats.rhs_evals == single.stats.rhs_evals);
+    CHECK(r->renewed == single.renewed);
+    CHECK(r->x == single.x);  // bit for bit
+    CHECK(r->v == single.v);
+    CHECK(r->stats.residual == single.stats.residual);
+  }
+  // The knit model's own run and the model's points are untouched by the runs.
+  CHECK(m.contact->refreshes() == 0);
+  CHECK(model->spec().points.empty());  // remade by each run (remake_at_start)
+}
+
+TEST_CASE("yarn contact: a run's points remade at rest are the set-up points, bit for bit",
+          "[contact]") {
+  // The knit's model keeps no maps (remake_at_start): each run linearises every course about
+  // the rest state, given the set-up points' particles; that must be the set-up points exactly.
+  const KnitModel m = chart_model("several_misses.chart", with_contact());
+  const std::vector<ContactPoint> setup = knit_contact_points(m);
+  const ContactNetwork run(m.contact->shared_model());
+  const std::vector<ContactPoint>& remade = run.points();
+  REQUIRE(remade.size() == setup.size());
+  long differ = 0;
+  for (std::size_t k = 0; k < setup.size(); ++k) {
+    const ContactPoint &p = setup[k], &q = remade[k];
+    differ += p.particles != q.particles || p.weights != q.weights || p.offset.x != q.offset.x ||
+              p.offset.y != q.offset.y || p.offset.z != q.offset.z || p.yarn != q.yarn ||
+              p.arc != q.arc || p.turn != q.turn || p.axis != q.axis;
+  }
+  CHECK(differ == 0);
 }

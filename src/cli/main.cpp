@@ -12,6 +12,8 @@
 //      std::filesystem::filesystem_error from making an output folder or checkpoint)
 //   5  the --out folder is in use by another knitsim run still going (the folder is flock'ed,
 //      src/base/files.hpp): one line, nothing written
+//   2  also a model too large for the memory available: refused at set-up by its estimate
+//      (docs/knit.md, "Memory"), or, where an estimate missed, std::bad_alloc, one line
 //   1  anything else (an internal error), one line on stderr
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -21,6 +23,7 @@
 #include <functional>
 #include <iostream>
 #include <memory>
+#include <new>
 #include <stdexcept>
 #include <string>
 #ifdef __GLIBC__
@@ -153,6 +156,8 @@ int main(int argc, char** argv) {
     const std::string prefix = "filesystem error: ";
     if (what.rfind(prefix, 0) == 0) what.erase(0, prefix.size());
     return fail(4, what);
+  } catch (const std::bad_alloc&) {  // the set-up estimates missed (docs/knit.md, "Memory")
+    return fail(2, "out of memory: the model does not fit in the memory available");
   } catch (const std::exception& e) {
     return fail(1, e.what());
   }

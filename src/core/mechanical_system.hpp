@@ -15,10 +15,17 @@
 // M a_c = -dE/dx with E = potential_energy (gravity included), so M da_c/dx is symmetric; the
 // equilibrium solver's energy test and the certificate rely on both.
 //
-// Implementations hold parameters, never integration state. Methods are const but may use
-// private scratch buffers (and rebuild internal lists, e.g. yarn contact's near pairs), so one
-// instance must not be evaluated from two threads at once (build one instance per thread:
-// models are cheap to build).
+// Model and run (Drake's System and Context). The const functions are functions of (t, x) and of
+// the object's state, and change no state: they may refill caches that are functions of what
+// they are evaluated at (documented as caches where they are declared). A model without run
+// state (has_run_state() false) is const in fact; a SpringNetwork (the drape grid's, the knit's)
+// may be evaluated from several threads at once, a mirror reduction (models/mirror_reduced.hpp)
+// keeps scratch buffers and serves one thread at a time. A model whose functions
+// change over a run (the yarn contact's renewed points, which change E(x) itself) is split: a
+// const model, shareable by any number of runs and threads, and a per-run object that
+// implements MechanicalSystem over it and owns the state that changes (ContactModel and
+// ContactNetwork, models/yarn_contact.hpp). That state changes only in update(), called by the
+// run driver between steps through a non-const reference; a per-run object serves one thread.
 #pragma once
 
 #include <string>
@@ -58,8 +65,8 @@ class MechanicalSystem {
   // Values of da_c/dx = M^-1 dF/dx in stiffness_pattern() order (nnz doubles).
   virtual void stiffness_values(double t, const double* x, double* values) const = 0;
 
-  // Static residual used by the equilibrium criterion (SPEC 2.3): a dimensionless measure of
-  // the net force at rest, e.g. max_i |F_i(x)| / (mean mass x g).
+  // Static residual used by the equilibrium criterion (docs/equilibrium.md): a dimensionless
+  // measure of the net force at rest, e.g. max_i |F_i(x)| / (mean mass x g).
   virtual double static_residual(double t, const double* x) const = 0;
 
   // Round-off floor of static_residual at (t, x): an upper estimate of the residual that
@@ -92,12 +99,16 @@ class MechanicalSystem {
     return 1.0;
   }
 
-  // Lets a model that approximates part of itself about a state (the yarn contact's points,
-  // linearised about where the yarn was) renew that approximation at an accepted state x;
-  // returns true if its functions changed there, so integrators must forget what they computed
-  // from them (Integrator::model_changed). The run driver calls it at each stop check. Default:
-  // nothing to renew.
-  virtual bool refresh(double /*t*/, const double* /*x*/) const { return false; }
+  // The explicit update of the run's state between steps: lets a per-run object that
+  // approximates part of its model about a state (the yarn contact's points, linearised about
+  // where the yarn was) renew that approximation at an accepted state x; returns true if its
+  // functions changed there, so integrators must forget what they computed from them
+  // (Integrator::model_changed). The run driver calls it at each stop check. Default: no run
+  // state, nothing to update.
+  virtual bool update(double /*t*/, const double* /*x*/) { return false; }
+  // True for a per-run object whose update() may change its functions (see the top): the run
+  // driver then needs it non-const.
+  virtual bool has_run_state() const { return false; }
 
   // Position constraint projection for the explicit reference paths (Provot 1995): called
   // after each step; returns true if anything moved. Implicit paths never call it.

@@ -133,7 +133,7 @@ nlohmann::json contact_json(const KnitModel& m, double t, const std::vector<doub
   const ContactNetwork& c = *m.contact;
   int touching = 0;
   const double closest = c.min_distance(t, x.data(), &touching);
-  return {{"points", c.contact().points.size()},
+  return {{"points", c.points().size()},
           {"min_point_distance_over_r", std::isfinite(closest)
                                             ? nlohmann::json(closest / m.params.loop_radius)
                                             : nlohmann::json(nullptr)},

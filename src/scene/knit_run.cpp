@@ -133,7 +133,7 @@ KnitResult run_knit(KnitStart start, const KnitScene& scene, const std::string& 
   ClearanceOverRun clearance(model, &recorder, kClearanceResample);
   clearance.observe(r.t_start, r.x.data(), true);
   const double measure_cpu_before = clearance.cpu_seconds();
-  r.stats = run_to_equilibrium(model.system(), *integ, scene.options, r.x, r.v, &clearance,
+  r.stats = run_to_equilibrium(r.model.system(), *integ, scene.options, r.x, r.v, &clearance,
                                r.t_start);
   measures.measure_cpu_seconds = clearance.cpu_seconds() - measure_cpu_before;
   clearance.observe(r.stats.t_final, r.x.data(), true);
