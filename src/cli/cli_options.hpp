@@ -34,7 +34,7 @@ void require_well_formed_values(CLI::App& app);
 // other optimizers read too): how `fit --optimizer lm` finds the ICA flags it ignores.
 inline constexpr const char* kIcaOptionGroup = "ICA options";
 
-// The ICA flags (SPEC 2.10): --seed --jobs --decades --countries --imperialists --beta --gamma
+// The ICA flags (docs/commands.md): --seed --jobs --decades --countries --imperialists --beta --gamma
 // --revolution --xi --stop-one-empire, bound to `o`.
 void add_ica_options(CLI::App* cmd, IcaOptions& o);
 

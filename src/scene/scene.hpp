@@ -1,5 +1,6 @@
-// Drape scenes (SPEC 2.2, 2.10): a DrapeParams set plus the run options of SPEC 2.3, loaded
-// from a built-in name or a TOML file, with `--set key=value` overrides, and run to equilibrium.
+// Drape scenes (docs/scenes.md): a DrapeParams set plus the run options (docs/equilibrium.md),
+// loaded from a built-in name or a TOML file, with `--set key=value` overrides, and run to
+// equilibrium.
 //
 // Scene file (TOML), keys and units exactly as in models/scenes/four_corner.toml; every key is
 // optional (defaults: DrapeParams / IntegratorOptions, i.e. sample 1 hung from four corners):
