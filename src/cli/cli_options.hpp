@@ -34,8 +34,8 @@ void require_well_formed_values(CLI::App& app);
 // other optimizers read too): how `fit --optimizer lm` finds the ICA flags it ignores.
 inline constexpr const char* kIcaOptionGroup = "ICA options";
 
-// The ICA flags (docs/commands.md): --seed --jobs --decades --countries --imperialists --beta --gamma
-// --revolution --xi --stop-one-empire, bound to `o`.
+// The ICA flags (docs/commands.md): --seed --jobs --decades --countries --imperialists --beta
+// --gamma --revolution --xi --stop-one-empire, bound to `o`.
 void add_ica_options(CLI::App* cmd, IcaOptions& o);
 
 // --seed bound to `seed` (std::uint64_t or unsigned): a decimal integer from 0 to the type's
