@@ -15,6 +15,7 @@
 #include "models/material_sheet.hpp"
 #include "solvers/integrator.hpp"
 #include "src/core/jacobian_check.hpp"
+#include "tests/corrupted_stiffness.hpp"
 
 using namespace knitsim;
 
@@ -143,34 +144,6 @@ std::vector<double> perturbed(const MechanicalSystem& sys, double amp, unsigned 
   return x;
 }
 
-// The sheet with one Jacobian entry off by 1 %: what the check must catch.
-class WrongJacobian final : public MechanicalSystem {
- public:
-  explicit WrongJacobian(const MaterialSheet& s, int entry) : s_(s), entry_(entry) {}
-  int dof() const override { return s_.dof(); }
-  void initial_state(double* x, double* v) const override { s_.initial_state(x, v); }
-  void conservative_acceleration(double t, const double* x, double* a) const override {
-    s_.conservative_acceleration(t, x, a);
-  }
-  const std::vector<double>& damping_rate() const override { return s_.damping_rate(); }
-  const std::vector<double>& mass() const override { return s_.mass(); }
-  const CscPattern& stiffness_pattern() const override { return s_.stiffness_pattern(); }
-  void stiffness_values(double t, const double* x, double* values) const override {
-    s_.stiffness_values(t, x, values);
-    values[entry_] *= 1.01;
-  }
-  double static_residual(double t, const double* x) const override {
-    return s_.static_residual(t, x);
-  }
-  double potential_energy(double t, const double* x) const override {
-    return s_.potential_energy(t, x);
-  }
-  std::string describe() const override { return "wrong"; }
-
- private:
-  const MaterialSheet& s_;
-  int entry_;
-};
 
 MaterialSheetParams small_sheet(bool bending_dominant) {
   MaterialSheetParams p;
@@ -227,7 +200,7 @@ TEST_CASE("material sheet: forces are -dE/dx and the Jacobian matches finite dif
     const MaterialSheet sheet(small_sheet(bending_dominant));
     const std::vector<double> x = perturbed(sheet, 0.004, 1);
     const int diag = sheet.stiffness_pattern().find(7, 7);
-    const WrongJacobian wrong(sheet, diag);
+    const test::CorruptedStiffness wrong(sheet, {diag});  // one entry off by 1 %
     CHECK(check_stiffness_jacobian(wrong, 0.0, x.data()).max_relative_error > 1e-3);
   }
 }

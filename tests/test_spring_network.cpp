@@ -10,6 +10,7 @@
 #include "models/spring_network.hpp"
 #include "solvers/integrator.hpp"
 #include "src/core/jacobian_check.hpp"
+#include "tests/corrupted_stiffness.hpp"
 #include "src/core/sparse.hpp"
 
 using namespace knitsim;
@@ -46,34 +47,6 @@ void check_derivatives(const SpringNetwork& net, double t, double h) {
   }
 }
 
-// Wraps a system and corrupts one Jacobian entry: the checker must catch it.
-class WrongJacobian final : public MechanicalSystem {
- public:
-  explicit WrongJacobian(const MechanicalSystem& s) : s_(s) {}
-  int dof() const override { return s_.dof(); }
-  void initial_state(double* x, double* v) const override { s_.initial_state(x, v); }
-  void conservative_acceleration(double t, const double* x, double* a) const override {
-    s_.conservative_acceleration(t, x, a);
-  }
-  const std::vector<double>& damping_rate() const override { return s_.damping_rate(); }
-  const std::vector<double>& mass() const override { return s_.mass(); }
-  const CscPattern& stiffness_pattern() const override { return s_.stiffness_pattern(); }
-  void stiffness_values(double t, const double* x, double* values) const override {
-    s_.stiffness_values(t, x, values);
-    const int mid = s_.dof() / 2;
-    values[s_.stiffness_pattern().find(mid, mid)] *= 1.01;  // a 1 % error in one entry
-  }
-  double static_residual(double t, const double* x) const override {
-    return s_.static_residual(t, x);
-  }
-  double potential_energy(double t, const double* x) const override {
-    return s_.potential_energy(t, x);
-  }
-  std::string describe() const override { return "wrong"; }
-
- private:
-  const MechanicalSystem& s_;
-};
 
 }  // namespace
 
@@ -99,7 +72,8 @@ TEST_CASE("Jacobian check catches a deliberately wrong Jacobian") {
   DrapeParams p;
   p.natural_length = 0.1;
   DrapeGrid g = build_drape_grid(p);
-  WrongJacobian wrong(g.network);
+  const int mid = g.network.dof() / 2;  // a 1 % error in one entry
+  const test::CorruptedStiffness wrong(g.network, {g.network.stiffness_pattern().find(mid, mid)});
   auto x = perturbed_state(g.network, 0.02, 7);
   CHECK(check_stiffness_jacobian(g.network, 0.0, x.data()).max_relative_error < 1e-6);
   CHECK(check_stiffness_jacobian(wrong, 0.0, x.data()).max_relative_error > 1e-3);

@@ -12,6 +12,7 @@
 #include "models/yarn_rods.hpp"
 #include "solvers/integrator.hpp"
 #include "src/core/jacobian_check.hpp"
+#include "tests/corrupted_stiffness.hpp"
 
 using namespace knitsim;
 
@@ -77,37 +78,11 @@ std::vector<double> start_of(const MechanicalSystem& sys) {
   return x;
 }
 
-// Corrupts the Jacobian by 1 % in the 3 x 3 block (row vertex r, column vertex c): the check must
-// catch it.
-class CorruptBlock final : public MechanicalSystem {
- public:
-  CorruptBlock(const YarnRods& s, int r, int c) : s_(s), r_(s.free_index(r)), c_(s.free_index(c)) {}
-  int dof() const override { return s_.dof(); }
-  void initial_state(double* x, double* v) const override { s_.initial_state(x, v); }
-  void conservative_acceleration(double t, const double* x, double* a) const override {
-    s_.conservative_acceleration(t, x, a);
-  }
-  const std::vector<double>& damping_rate() const override { return s_.damping_rate(); }
-  const std::vector<double>& mass() const override { return s_.mass(); }
-  const CscPattern& stiffness_pattern() const override { return s_.stiffness_pattern(); }
-  void stiffness_values(double t, const double* x, double* values) const override {
-    s_.stiffness_values(t, x, values);
-    for (int p = 0; p < 3; ++p)
-      for (int q = 0; q < 3; ++q)
-        values[s_.stiffness_pattern().find(3 * r_ + p, 3 * c_ + q)] *= 1.01;
-  }
-  double static_residual(double t, const double* x) const override {
-    return s_.static_residual(t, x);
-  }
-  double potential_energy(double t, const double* x) const override {
-    return s_.potential_energy(t, x);
-  }
-  std::string describe() const override { return "corrupted"; }
-
- private:
-  const YarnRods& s_;
-  int r_, c_;
-};
+// The Jacobian 1 % off in the 3 x 3 block (row vertex r, column vertex c): the check must catch it.
+test::CorruptedStiffness corrupt_block(const YarnRods& s, int r, int c) {
+  return test::CorruptedStiffness(
+      s, test::block_entries(s.stiffness_pattern(), s.free_index(r), s.free_index(c)));
+}
 
 // max_i |f_i + dE/dx_i| / max_i |f_i| by central differences of step h (m).
 double gradient_error(const YarnRods& sys, const std::vector<double>& x, double h) {
@@ -285,11 +260,13 @@ TEST_CASE(
   const std::vector<double> x = start_of(sys);
   REQUIRE(check_stiffness_jacobian(sys, 0.0, x.data(), 1e-8).max_relative_error < kJacobianTol);
   // Vertices 3 and 5 of the hairpin meet only through bending (x_{i-1}, x_{i+1} of vertex 4).
-  const CorruptBlock bending(sys, sys.vertex_index(0, 3), sys.vertex_index(0, 5));
+  const test::CorruptedStiffness bending =
+      corrupt_block(sys, sys.vertex_index(0, 3), sys.vertex_index(0, 5));
   CHECK(check_stiffness_jacobian(bending, 0.0, x.data(), 1e-8).max_relative_error >
         10 * kJacobianTol);
   // The crossing yarn's vertex 5 and the hairpin's vertex 4 meet only through contact.
-  const CorruptBlock contact(sys, sys.vertex_index(1, 5), sys.vertex_index(0, 4));
+  const test::CorruptedStiffness contact =
+      corrupt_block(sys, sys.vertex_index(1, 5), sys.vertex_index(0, 4));
   CHECK(check_stiffness_jacobian(contact, 0.0, x.data(), 1e-8).max_relative_error >
         10 * kJacobianTol);
 }
