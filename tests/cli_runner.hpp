@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <sstream>
 #include <string>
 #include <system_error>
@@ -147,6 +148,25 @@ inline bool knitsim_handles(pid_t pid, int signal) {
     if (line.rfind("SigCgt:", 0) == 0)
       return (std::stoull(line.substr(7), nullptr, 16) >> (signal - 1)) & 1ULL;
   return false;
+}
+
+// CPU seconds (user + system) process `pid` has used so far (/proc/<pid>/stat; Linux), -1 if it
+// cannot be read. A test that must signal a run after its set-up waits for some: the set-up
+// itself stops at a signal and writes nothing (docs/reliability.md, "Signals"), and under the
+// sanitizers it takes far longer than in a Release build.
+inline double cpu_seconds_of(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+  std::string stat((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const size_t close = stat.rfind(')');  // the command name may hold spaces
+  if (close == std::string::npos) return -1.0;
+  std::istringstream fields(stat.substr(close + 2));
+  std::string f;
+  unsigned long long utime = 0, stime = 0;
+  for (int k = 3; k <= 15 && fields >> f; ++k) {  // fields 14 and 15: utime, stime (ticks)
+    if (k == 14) utime = std::stoull(f);
+    if (k == 15) stime = std::stoull(f);
+  }
+  return static_cast<double>(utime + stime) / static_cast<double>(::sysconf(_SC_CLK_TCK));
 }
 
 // Newline-terminated lines in `p` so far (a line being written is not counted).

@@ -390,9 +390,10 @@ TEST_CASE(
     "interrupted, exit 128 + signal") {
   using namespace knitsim::test;
   TempDir tmp("interrupt");
-  // Two runs that take minutes (explicit Euler to equilibrium), signalled as soon as their
-  // handler is installed: the run ends after the step it is in (not at its first residual
-  // check, 1000 Euler steps later: docs/reliability.md, "Signals").
+  // Two runs that take minutes (explicit Euler to equilibrium), signalled once their handler is
+  // installed and their set-up is past (a signal there writes nothing): the run ends after the
+  // step it is in (not at its first residual check, 1000 Euler steps later:
+  // docs/reliability.md, "Signals").
   std::string chart;
   for (int r = 0; r < 20; ++r, chart += '\n')
     for (int c = 0; c < 20; ++c) chart += (r % 4 == 1 && c % 5 == 2) ? 'T' : 'K';
@@ -401,19 +402,26 @@ TEST_CASE(
     std::string args;
     int signal;
     std::vector<std::string> files;
+    double past_set_up;  // s of CPU: the set-up takes ms (Release) to ~0.5 s (ASan); the knit's
+                         // Euler run settles in ~1.4 s (Release)
   };
   const std::vector<Case> cases = {
-      {"drape --integrator euler", SIGINT, {"summary.json", "nodes.csv", "drape.png"}},
+      {"drape --integrator euler", SIGINT, {"summary.json", "nodes.csv", "drape.png"}, 2.0},
       {"knit --integrator euler --set knit.contact=0 --chart '" +
            (tmp.path / "tucks.chart").string() + "'",
        SIGTERM,
-       {"summary.json", "points.csv", "after.png"}}};
+       {"summary.json", "points.csv", "after.png"},
+       0.2}};
   for (const Case& c : cases) {
     INFO(c.args);
     const fs::path out = tmp.path / ("out-" + std::to_string(c.signal));
     const int status = interrupted_run(
         c.args + " --quiet --out '" + out.string() + "'", c.signal,
-        [&](pid_t pid) { return knitsim::test::knitsim_handles(pid, c.signal); }, tmp);
+        [&](pid_t pid) {
+          return knitsim::test::knitsim_handles(pid, c.signal) &&
+                 knitsim::test::cpu_seconds_of(pid) >= c.past_set_up;
+        },
+        tmp);
     const std::string err = slurp(tmp.path / "background-stderr.txt");
     INFO("stderr: " << err);
     REQUIRE(WIFEXITED(status));

@@ -394,8 +394,10 @@ TEST_CASE("one run per --out: a second run into a busy folder exits 5; no stale 
   // The second run is made while the first is stopped holding the lock (signal_when), so the
   // outcome does not depend on timing; then the first is interrupted and writes its outputs.
   Run second;
-  const SignalledRun first = signal_when(start_knitsim(slow, tmp), SIGINT, [&] {
-    if (!held()) return false;
+  const pid_t first_pid = start_knitsim(slow, tmp);
+  const SignalledRun first = signal_when(first_pid, SIGINT, [&] {
+    // Past its set-up (a signal there writes nothing; ms in Release, ~0.5 s under ASan).
+    if (!held() || cpu_seconds_of(first_pid) < 2.0) return false;
     second = run_knitsim("drape --no-pictures --quiet --out '" + out.string() + "'", tmp);
     return true;
   });
