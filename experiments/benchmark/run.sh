@@ -40,8 +40,11 @@ drape() {
   local scene=$1 integ=$2 rep=$3; shift 3
   local dir=$OUT/runs/$scene-$integ-$rep
   rm -rf "$dir"
+  # The whole sheet unless the caller names a reduction (a key may be given once).
+  local whole=(--set model.symmetry=none)
+  case " $* " in *model.symmetry=*) whole=() ;; esac
   "$KNITSIM" drape --scene "$scene" --integrator "$integ" --quiet --out "$dir" \
-    --set model.symmetry=none "$@" >/dev/null || true
+    "${whole[@]}" "$@" >/dev/null || true
   python3 - "$dir/summary.json" "$scene" "$integ" "$rep" >> "$runs_csv" <<'PY'
 import json, sys
 s = json.load(open(sys.argv[1]))

@@ -98,9 +98,12 @@ run() {
   L0=$(python3 -c "print(repr(0.50 / $n))")
   c=$(python3 -c "print(repr(12.0 * ((0.50 / $n) / 0.049) ** 2))")
   rm -rf "$dir"; mkdir -p "$dir"
+  # The whole sheet unless the caller names a reduction (a key may be given once).
+  local whole=(--set model.symmetry=none)
+  case " $* " in *model.symmetry=*) whole=() ;; esac
   /usr/bin/time -v -o "$dir/time.txt" "$KNITSIM" drape --scene four_corner \
     --set model.natural_length="$L0" --set model.damping="$c" --integrator "$integ" \
-    --max-wall "$MAX_WALL" --quiet --out "$dir/drape" --set model.symmetry=none "$@" > "$dir/stdout.txt" 2>&1 || true
+    --max-wall "$MAX_WALL" --quiet --out "$dir/drape" "${whole[@]}" "$@" > "$dir/stdout.txt" 2>&1 || true
   python3 - "$dir" "$n" "$solver" "$L0" "$c" "$ROUND" >> "$runs_csv" <<'PY'
 import json, re, sys
 d, n, solver, L0, c, rnd = sys.argv[1:7]
