@@ -47,8 +47,9 @@ def read_nodes(folder):
 
 
 def prolong(coarse, template, folder):
-    """Write folder/state.json: the template run's state (the fine model, its keys and layout)
-    with x = the coarse run's equilibrium interpolated bilinearly, v = 0, t = coarse t_final.
+    """Write folder/state.json (and the template's manifest.json): the template run's state (the
+    fine model, its keys and layout) with x = the coarse run's equilibrium interpolated
+    bilinearly, v = 0, t = coarse t_final.
     The integrated coordinates are those of the unpinned nodes in id order (as write_run_state
     writes them); the length is checked against the template's."""
     pos = {(int(r["i"]), int(r["j"])): [float(r[k]) for k in "xyz"] for r in read_nodes(coarse)}
@@ -80,6 +81,9 @@ def prolong(coarse, template, folder):
     os.makedirs(folder, exist_ok=True)
     with open(os.path.join(folder, "state.json"), "w") as f:
         json.dump(state, f)
+    # --continue takes only a folder whose set of files is complete, marked by its manifest
+    # (written last): the template's, which describes the same fine model and options.
+    shutil.copyfile(os.path.join(template, "manifest.json"), os.path.join(folder, "manifest.json"))
 
 
 def first_residual(run):
