@@ -57,15 +57,6 @@ void count_write() {
   if (k >= 0 && ++done >= k) ::kill(::getpid(), SIGKILL);
 }
 
-std::string utc_stamp() {
-  const std::time_t now = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&now, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
-}
-
 // Before the first write into an output folder of this process (or a folder inside one):
 // its marker. Returns whether `path` lies in such a folder.
 bool before_output_write(const fs::path& path) {
@@ -116,6 +107,15 @@ std::string local_stamp() {
 
 
 }  // namespace
+
+std::string utc_stamp() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
 
 void write_file_atomic(const fs::path& path, const std::string& content) {
   write_file_atomic_with(path, [&content](const std::string& tmp) {

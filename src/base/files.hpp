@@ -38,6 +38,9 @@ struct OutputFolderBusy : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// The time now in UTC as ISO 8601, "2026-12-07T21:18:22Z" (manifests, the in-progress marker).
+std::string utc_stamp();
+
 void write_file_atomic(const std::filesystem::path& path, const std::string& content);
 // For writers that take a file name (the PNG renderer): write(tmp) must create the file tmp.
 void write_file_atomic_with(const std::filesystem::path& path,

@@ -297,10 +297,7 @@ void run_lm_fit(const FitArgs& args, const Scene& base, const DrapeFitProblem& p
     se[drape_gene_names()[g]] = finite_or_null(id.parameters[g].standard_error);
     cse[drape_gene_names()[g]] = finite_or_null(id.parameters[g].conditional_standard_error);
   }
-  nlohmann::json bounds = nlohmann::json::object();
-  for (int g = 0; g < kDrapeGenes; ++g)
-    bounds[drape_gene_names()[g]] = {problem.options().bounds.lower[g],
-                                     problem.options().bounds.upper[g]};
+  const nlohmann::json bounds = bounds_json(problem.options().bounds);
   const nlohmann::json settings = {{"scene", base.name},
                                    {"scene_source", base.source},
                                    {"sets", args.sets},

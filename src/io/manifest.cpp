@@ -6,6 +6,7 @@
 
 #include "solvers/integrator.hpp"
 #include "src/base/command_line.hpp"
+#include "src/base/files.hpp"
 #include "src/parallel/work_units.hpp"
 #include "src/render/render.hpp"
 
@@ -36,18 +37,6 @@
 
 namespace knitsim {
 
-namespace {
-
-std::string utc_stamp() {
-  const std::time_t now = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&now, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
-}
-
-}  // namespace
 
 std::string version_string() {
   return std::string("knitsim ") + KNITSIM_VERSION + " (commit " + KNITSIM_GIT_COMMIT + ", " +
