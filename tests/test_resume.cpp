@@ -607,7 +607,9 @@ TEST_CASE("knitsim knit --continue: a run continued where it stopped is the unin
   CHECK(s.at("stats").at("steps").get<int>() <= 30);
   CHECK(s.at("yarn").at("clearance_min_over_r").get<double>() >= 0.9);
 
-  // Refused with one line and nothing written: another chart, other parameters, a drape's state.
+  // Refused with one line and nothing written: another chart, other parameters (a key given
+  // there and not here too), a drape's state.
+  REQUIRE(knit("--integrator euler --max-steps 10 --set knit.pins=bottom", "pinned").status == 3);
   REQUIRE(run_knitsim("drape --integrator cvode-bdf --max-steps 10 --quiet --out '" +
                           (tmp.path / "drape").string() + "'",
                       tmp)
@@ -620,6 +622,8 @@ TEST_CASE("knitsim knit --continue: a run continued where it stopped is the unin
                        Bad{first, "wide.chart", "chart differs from the run being continued"},
                        Bad{first + " --set knit.damping=0.001", "tuck.chart",
                            "knit.damping = 0.001 here, 0.0005 in the run being continued"},
+                       Bad{" --continue '" + (tmp.path / "pinned").string() + "'", "tuck.chart",
+                           "knit.pins = \"bottom\" in the run being continued, the default here"},
                        Bad{" --continue '" + (tmp.path / "drape").string() + "'", "tuck.chart",
                            "the state of a knitsim drape run; this is knitsim knit"}}) {
     INFO(b.args);

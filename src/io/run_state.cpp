@@ -170,6 +170,13 @@ RunState continue_state(const std::string& dir, const std::string& command,
       throw std::invalid_argument(where + differ + " the run being continued; give the same " +
                                   same_what);
     }
+  // A key kept only where it differs from its default (a text key such as knit.pins) is absent
+  // here when this run takes the default: one the saved run kept differs from it.
+  for (const auto& [key, value] : saved.model.items())
+    if (!model.contains(key))
+      throw std::invalid_argument(where + key + " = " + value.dump().substr(0, 40) +
+                                  " in the run being continued, the default here; give the same " +
+                                  same_what);
   if (!(saved.state.t < options.t_max))
     throw std::invalid_argument(where + "that run stopped at t = " + format_number(saved.state.t) +
                                 " s, not below run.t_max = " + format_number(options.t_max) +
