@@ -53,6 +53,7 @@
 #include "src/fit/lm_fit.hpp"
 #include "src/fit/targets.hpp"
 #include "src/io/drape_outputs.hpp"
+#include "src/io/fit_outputs.hpp"
 #include "src/io/json.hpp"
 #include "src/io/manifest.hpp"
 #include "src/measure/measurement.hpp"
@@ -122,28 +123,6 @@ void warn_if_upside_down(const DrapeFitProblem& problem, const std::string& targ
          " hangs above its pins; lab z must grow upward (negate image rows; docs/fitting.md)");
 }
 
-// summary.json's `units` of a fit (docs/summary_json.md): what each number is measured in.
-nlohmann::json fit_units(bool lm) {
-  nlohmann::json u = {
-      {"params, base_params, bounds, best_country",
-       "stiffness N/m; damping N s/m; elongation_limit %; natural_length m; the topology gene u "
-       "in [0, 3) (best_country's last entry, bounds.topology)"},
-      {"objective", "%: the Eq. 5 error of the fitted drape's edges against the target"},
-      {"wall_seconds, cpu_seconds", "s"},
-      {"evaluations, failed_evaluations", "counts of drapes"}};
-  if (lm) {
-    u["standard_errors, conditional_standard_errors"] = "the unit of each parameter (params)";
-    u["identifiability"] =
-        "sigma 1: the standard deviation of the Eq. 5 residuals (a fraction: the objective is "
-        "100 x their rms); stiffness_over_length_relative_error 1: a fraction; "
-        "condition_number 1; correlation_stiffness_natural_length 1";
-    u["starts"] = "screened, predicted, objective %; x as best_country";
-  } else {
-    u["history"] = "best, mean %: the imperialists' Eq. 5 costs per decade";
-  }
-  return u;
-}
-
 // One line on stdout: the fitted natural length also sets the mesh (n = round(W / L0) cells per
 // side) and the model sheet's side n L0, so a fitted L0 is a fitted mesh (docs/fitting.md).
 std::string mesh_note(const Scene& base, const DrapeParams& fitted) {
@@ -162,27 +141,6 @@ const std::vector<std::string> kFitBaseKeys = {"fabric.width", "fabric.areal_den
                                                "pins.layout"};
 
 constexpr const char* kCheckpointFile = "ica_checkpoint.json";
-
-nlohmann::json params_json(const DrapeParams& p) {
-  return {{"stiffness", p.stiffness},
-          {"damping", p.damping},
-          {"elongation_limit", p.elongation_limit},
-          {"natural_length", p.natural_length},
-          {"topology", std::string(1, p.topology)}};
-}
-
-nlohmann::json ica_json(const IcaOptions& o) {
-  nlohmann::json j = to_json(o);
-  j["seed"] = o.seed;
-  j["jobs"] = o.jobs;
-  return j;
-}
-
-nlohmann::json bounds_json(const DrapeFitBounds& b) {
-  nlohmann::json bounds = nlohmann::json::object();
-  for (int g = 0; g < kDrapeGenes; ++g) bounds[drape_gene_names()[g]] = {b.lower[g], b.upper[g]};
-  return bounds;
-}
 
 // What a checkpoint must have been made with to be resumed by this run (see the header).
 nlohmann::json checkpoint_config(const FitArgs& args, const Scene& base,
@@ -395,85 +353,6 @@ void print_ica_start(const FitArgs& args, const Scene& base, const DrapeFitProbl
   std::cout << std::flush;
 }
 
-// The ICA's convergence history, one row per decade (history.csv and the console).
-Table history_table(const DrapeFitResult& fit) {
-  Table history;
-  history.columns = {"decade", "best", "mean", "empires", "evaluations"};
-  for (const IcaDecade& d : fit.history)
-    history.rows.push_back({std::to_string(d.decade), format_number(d.best_cost, 17),
-                            format_number(d.mean_cost, 17), std::to_string(d.empires),
-                            std::to_string(d.evaluations)});
-  return history;
-}
-
-// The same history as summary.json's "history".
-nlohmann::json history_json(const DrapeFitResult& fit) {
-  nlohmann::json history = nlohmann::json::array();
-  for (const IcaDecade& d : fit.history)
-    history.push_back({{"decade", d.decade},
-                       {"best", d.best_cost},
-                       {"mean", d.mean_cost},
-                       {"empires", d.empires},
-                       {"evaluations", d.evaluations}});
-  return history;
-}
-
-// The fitted drape's re-run: its status, "not_run" for a fit cut short.
-struct FittedDrape {
-  std::string status = "not_run";
-  bool equilibrium = false;
-};
-
-// The fitted drape, re-run (deterministic: the same run the ICA scored) into dir/drape; not for
-// a fit cut short, whose best country is provisional.
-FittedDrape rerun_fitted_drape(const FitArgs& args, const DrapeFitProblem& problem,
-                               const DrapeFitResult& fit, const std::filesystem::path& dir) {
-  FittedDrape result;
-  if (fit.status == IcaStatus::Interrupted) return result;
-  const Scene fitted = problem.scene_of(fit.best_x);
-  const DrapeResult drape = run_drape(fitted, problem.integrator());
-  const std::filesystem::path drape_dir = dir / "drape";
-  std::filesystem::create_directories(drape_dir);
-  write_drape_outputs(drape_dir, fitted, drape, &problem.measured(), !args.no_pictures);
-  result.status = to_string(drape.stats.status);
-  result.equilibrium = drape.stats.status == RunStatus::Equilibrium;
-  return result;
-}
-
-// The ICA fit's summary.json and manifest.json in dir (fields: the file's header comment).
-void write_ica_summary(const FitArgs& args, const Scene& base, const DrapeFitProblem& problem,
-                       const DrapeFitResult& fit, const std::string& drape_status,
-                       const std::shared_ptr<const IcaState>& resumed_from,
-                       const std::filesystem::path& dir) {
-  const nlohmann::json bounds = bounds_json(problem.options().bounds);
-  const nlohmann::json settings = {{"scene", base.name},
-                                   {"scene_source", base.source},
-                                   {"sets", args.sets},
-                                   {"target", args.target},
-                                   {"target_scene", problem.target_scene()},
-                                   {"optimizer", args.optimizer},
-                                   {"integrator", problem.integrator()},
-                                   {"ica", ica_json(args.ica)},
-                                   {"bounds", bounds},
-                                   {"base_params", to_json(base.params)},
-                                   {"run_options", to_json(base.options)}};
-  nlohmann::json summary = settings;
-  summary["params"] = params_json(fit.params);
-  summary["objective"] = fit.objective;
-  summary["evaluations"] = fit.evaluations;
-  summary["failed_evaluations"] = fit.failed_evaluations;
-  summary["status"] = to_string(fit.status);
-  summary["message"] = fit.message;
-  summary["wall_seconds"] = fit.wall_seconds;
-  summary["best_country"] = fit.best_x;
-  summary["history"] = history_json(fit);
-  summary["fitted_drape_status"] = drape_status;
-  if (resumed_from) summary["resumed_from_decade"] = resumed_from->decade;
-  summary["units"] = fit_units(false);
-  write_json_atomic(dir / "summary.json", summary);
-  finish_output_folder(dir, manifest(settings));
-}
-
 // The ICA fit's console report: the history, the status and the fitted parameters.
 void print_ica_result(const FitArgs& args, const Scene& base, const DrapeFitProblem& problem,
                       const DrapeFitResult& fit, const Table& history,
@@ -504,11 +383,24 @@ void run_ica_fit(const FitArgs& args, const Scene& base, const DrapeFitProblem& 
   if (!args.quiet) print_ica_start(args, base, problem, resumed_from, dir);
   interrupt = std::make_unique<InterruptScope>(InterruptScope::Reach::BetweenUnits);
   const DrapeFitResult fit = fit_drape(problem);
-  const Table history = history_table(fit);
-  write_file_atomic(dir / "history.csv", history.csv());
-  const FittedDrape drape = rerun_fitted_drape(args, problem, fit, dir);
-  write_ica_summary(args, base, problem, fit, drape.status, resumed_from, dir);
-  if (!args.quiet) print_ica_result(args, base, problem, fit, history, dir);
+  // The fitted drape, re-run (deterministic: the same run the ICA scored); not for a fit cut
+  // short, whose best country is provisional.
+  std::optional<Scene> fitted;
+  std::optional<DrapeResult> drape;
+  std::optional<DrapeReport> measured;
+  std::optional<FittedDrapeOutputs> drape_outputs;
+  if (fit.status != IcaStatus::Interrupted) {
+    fitted.emplace(problem.scene_of(fit.best_x));
+    drape.emplace(run_drape(*fitted, problem.integrator()));
+    measured.emplace(drape_report(*fitted, *drape, &problem.measured()));
+    drape_outputs.emplace(FittedDrapeOutputs{*fitted, *drape, *measured, problem.measured()});
+  }
+  const IcaFitReport report =
+      ica_fit_report(base, args.sets, args.target, problem, fit, drape ? &*drape : nullptr,
+                     resumed_from ? resumed_from->decade : -1);
+  write_ica_fit_outputs(dir, report, drape_outputs ? &*drape_outputs : nullptr,
+                        !args.no_pictures);
+  if (!args.quiet) print_ica_result(args, base, problem, fit, report.history, dir);
   if (fit.status == IcaStatus::Interrupted) {
     std::cerr << "knitsim fit: interrupted by " << interrupt->signal_name() << " after decade "
               << fit.history.back().decade << " of " << args.ica.decades
@@ -516,7 +408,8 @@ void run_ica_fit(const FitArgs& args, const Scene& base, const DrapeFitProblem& 
               << "/; the same command with --resume goes on from there" << std::endl;
     throw CLI::RuntimeError(interrupt->exit_code());
   }
-  if (fit.status == IcaStatus::AllFailed || !drape.equilibrium) throw CLI::RuntimeError(3);
+  if (fit.status == IcaStatus::AllFailed || !drape || drape->stats.status != RunStatus::Equilibrium)
+    throw CLI::RuntimeError(3);
 }
 
 void run(const FitArgs& args) {
