@@ -205,6 +205,30 @@ std::string not_determined_line(const DrapeIdentifiability& id, double max_strai
   return line + " (docs/fitting.md)\n";
 }
 
+// The fitted drape, re-run (deterministic: the same run the fit scored) and measured against
+// the target, as drape/ holds it.
+struct FittedDrape {
+  Scene scene;
+  DrapeResult result;
+  DrapeReport report;
+};
+
+FittedDrape rerun_fitted_drape(const DrapeFitProblem& problem, const std::vector<double>& best_x) {
+  Scene scene = problem.scene_of(best_x);
+  DrapeResult result = run_drape(scene, problem.integrator());
+  DrapeReport report = drape_report(scene, result, &problem.measured());
+  return {std::move(scene), std::move(result), std::move(report)};
+}
+
+// The fit's files in dir (write_fit_outputs), drape/ where the fitted drape was re-run.
+void write_fit(const std::filesystem::path& dir, const FitReport& report,
+               const DrapeFitProblem& problem, const std::optional<FittedDrape>& drape,
+               bool picture) {
+  if (!drape) return write_fit_outputs(dir, report, nullptr, picture);
+  const FittedDrapeOutputs outputs{drape->scene, drape->result, drape->report, problem.measured()};
+  write_fit_outputs(dir, report, &outputs, picture);
+}
+
 // --optimizer lm: the multi-start Levenberg-Marquardt fit and its outputs in dir: summary.json
 // (the ICA's fields params, objective, evaluations, failed_evaluations, status, message,
 // wall_seconds, best_country, plus cpu_seconds, standard_errors, identifiability and starts),
@@ -222,87 +246,16 @@ void run_lm_fit(const FitArgs& args, const Scene& base, const DrapeFitProblem& p
   DrapeLmOptions lm = args.lm;
   lm.seed = args.ica.seed;  // --seed draws the random starts too
   const DrapeLmResult fit = fit_drape_lm(problem, lm);
-  auto finite_or_null = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nullptr; };
-  Table starts;
-  starts.columns = {"topology", "cells",  "screened",    "predicted",
-                    "refined",  "status", "evaluations", "objective"};
-  for (int g = 0; g < kDrapeContinuous; ++g) starts.columns.push_back(drape_gene_names()[g]);
-  nlohmann::json starts_json = nlohmann::json::array();
-  for (const DrapeLmStart& s : fit.starts) {
-    const std::string status = s.refined ? to_string(s.lm.status) : "screened";
-    const int evaluations = s.refined ? s.lm.evaluations : 1;
-    starts.rows.push_back({std::string(1, s.topology), std::to_string(s.cells),
-                           format_number(s.screened, 6), format_number(s.predicted, 6),
-                           s.refined ? "1" : "0", status, std::to_string(evaluations),
-                           format_number(s.objective, 17)});
-    for (int g = 0; g < kDrapeContinuous; ++g)
-      starts.rows.back().push_back(format_number(s.x[g], 17));
-    starts_json.push_back({{"topology", std::string(1, s.topology)},
-                           {"cells", s.cells},
-                           {"x0", s.x0},
-                           {"x", s.x},
-                           {"screened", finite_or_null(s.screened)},
-                           {"predicted", finite_or_null(s.predicted)},
-                           {"refined", s.refined},
-                           {"objective", finite_or_null(s.objective)},
-                           {"status", status},
-                           {"evaluations", evaluations}});
-  }
-  write_file_atomic(dir / "starts.csv", starts.csv());
+  std::optional<FittedDrape> drape;
+  if (fit.ok) drape.emplace(rerun_fitted_drape(problem, fit.best_x));
+  const FitReport report = lm_fit_report(base, args.sets, args.target, problem, lm, fit,
+                                         drape ? &drape->result : nullptr);
+  write_fit(dir, report, problem, drape, !args.no_pictures);
+  const bool drape_ok = drape && drape->result.stats.status == RunStatus::Equilibrium;
+  const double max_strain = drape ? drape->result.max_strain : 0.0;
   const DrapeIdentifiability& id = fit.identifiability;
-  nlohmann::json se = nlohmann::json::object(), cse = nlohmann::json::object();
-  for (int g = 0; g < kDrapeContinuous; ++g) {
-    se[drape_gene_names()[g]] = finite_or_null(id.parameters[g].standard_error);
-    cse[drape_gene_names()[g]] = finite_or_null(id.parameters[g].conditional_standard_error);
-  }
-  const nlohmann::json bounds = bounds_json(problem.options().bounds);
-  const nlohmann::json settings = {{"scene", base.name},
-                                   {"scene_source", base.source},
-                                   {"sets", args.sets},
-                                   {"target", args.target},
-                                   {"target_scene", problem.target_scene()},
-                                   {"optimizer", args.optimizer},
-                                   {"integrator", problem.integrator()},
-                                   {"lm", to_json(lm)},
-                                   {"bounds", bounds},
-                                   {"base_params", to_json(base.params)},
-                                   {"run_options", to_json(base.options)}};
-  nlohmann::json summary = settings;
-  bool drape_ok = false;
-  double max_strain = 0.0;  // of the fitted drape
-  if (fit.ok) {
-    const Scene fitted = problem.scene_of(fit.best_x);
-    const DrapeResult drape = run_drape(fitted, problem.integrator());
-    drape_ok = drape.stats.status == RunStatus::Equilibrium;
-    max_strain = drape.max_strain;
-    std::filesystem::create_directories(dir / "drape");
-    write_drape_outputs(dir / "drape", fitted, drape, &problem.measured(), !args.no_pictures);
-    summary["params"] = params_json(fit.params);
-    summary["objective"] = fit.objective;
-    summary["best_country"] = fit.best_x;
-    summary["fitted_drape_status"] = to_string(drape.stats.status);
-  }
-  summary["evaluations"] = fit.evaluations;
-  summary["failed_evaluations"] = fit.failed_evaluations;
-  summary["status"] = fit.ok ? "converged" : "all_failed";
-  summary["message"] = fit.message;
-  summary["wall_seconds"] = fit.wall_seconds;
-  summary["cpu_seconds"] = fit.cpu_seconds;
-  summary["standard_errors"] = se;
-  summary["conditional_standard_errors"] = cse;
-  summary["identifiability"] = {
-      {"condition_number", finite_or_null(id.condition_number)},
-      {"rank", id.rank},
-      {"residuals", id.residuals},
-      {"sigma", id.sigma},
-      {"correlation_stiffness_natural_length", finite_or_null(id.correlation_stiffness_length)},
-      {"stiffness_over_length_relative_error", finite_or_null(id.ratio_relative_error)}};
-  summary["starts"] = starts_json;
-  summary["units"] = fit_units(true);
-  write_json_atomic(dir / "summary.json", summary);
-  finish_output_folder(dir, manifest(settings));
   if (!args.quiet) {
-    std::cout << starts.text() << "\nstatus: " << fit.message << "\n";
+    std::cout << report.table.text() << "\nstatus: " << fit.message << "\n";
     // What the edges determine first: k / L0 (with the topology and n, chosen by the
     // screening); then the parameters one by one, whose standard errors are infinite where the
     // data cannot separate them, and one line saying why.
@@ -383,24 +336,14 @@ void run_ica_fit(const FitArgs& args, const Scene& base, const DrapeFitProblem& 
   if (!args.quiet) print_ica_start(args, base, problem, resumed_from, dir);
   interrupt = std::make_unique<InterruptScope>(InterruptScope::Reach::BetweenUnits);
   const DrapeFitResult fit = fit_drape(problem);
-  // The fitted drape, re-run (deterministic: the same run the ICA scored); not for a fit cut
-  // short, whose best country is provisional.
-  std::optional<Scene> fitted;
-  std::optional<DrapeResult> drape;
-  std::optional<DrapeReport> measured;
-  std::optional<FittedDrapeOutputs> drape_outputs;
-  if (fit.status != IcaStatus::Interrupted) {
-    fitted.emplace(problem.scene_of(fit.best_x));
-    drape.emplace(run_drape(*fitted, problem.integrator()));
-    measured.emplace(drape_report(*fitted, *drape, &problem.measured()));
-    drape_outputs.emplace(FittedDrapeOutputs{*fitted, *drape, *measured, problem.measured()});
-  }
-  const IcaFitReport report =
-      ica_fit_report(base, args.sets, args.target, problem, fit, drape ? &*drape : nullptr,
+  // Not for a fit cut short, whose best country is provisional.
+  std::optional<FittedDrape> drape;
+  if (fit.status != IcaStatus::Interrupted) drape.emplace(rerun_fitted_drape(problem, fit.best_x));
+  const FitReport report =
+      ica_fit_report(base, args.sets, args.target, problem, fit, drape ? &drape->result : nullptr,
                      resumed_from ? resumed_from->decade : -1);
-  write_ica_fit_outputs(dir, report, drape_outputs ? &*drape_outputs : nullptr,
-                        !args.no_pictures);
-  if (!args.quiet) print_ica_result(args, base, problem, fit, report.history, dir);
+  write_fit(dir, report, problem, drape, !args.no_pictures);
+  if (!args.quiet) print_ica_result(args, base, problem, fit, report.table, dir);
   if (fit.status == IcaStatus::Interrupted) {
     std::cerr << "knitsim fit: interrupted by " << interrupt->signal_name() << " after decade "
               << fit.history.back().decade << " of " << args.ica.decades
@@ -408,7 +351,8 @@ void run_ica_fit(const FitArgs& args, const Scene& base, const DrapeFitProblem& 
               << "/; the same command with --resume goes on from there" << std::endl;
     throw CLI::RuntimeError(interrupt->exit_code());
   }
-  if (fit.status == IcaStatus::AllFailed || !drape || drape->stats.status != RunStatus::Equilibrium)
+  if (fit.status == IcaStatus::AllFailed || !drape ||
+      drape->result.stats.status != RunStatus::Equilibrium)
     throw CLI::RuntimeError(3);
 }
 

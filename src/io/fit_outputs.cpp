@@ -1,5 +1,7 @@
 #include "src/io/fit_outputs.hpp"
 
+#include <cmath>
+
 #include "src/base/files.hpp"
 #include "src/base/text.hpp"
 #include "src/io/json.hpp"
@@ -74,11 +76,11 @@ nlohmann::json history_json(const DrapeFitResult& fit) {
 
 }  // namespace
 
-IcaFitReport ica_fit_report(const Scene& base, const std::vector<std::string>& sets,
-                            const std::string& target, const DrapeFitProblem& problem,
-                            const DrapeFitResult& fit, const DrapeResult* fitted_drape,
-                            int resumed_from_decade) {
-  IcaFitReport report;
+FitReport ica_fit_report(const Scene& base, const std::vector<std::string>& sets,
+                         const std::string& target, const DrapeFitProblem& problem,
+                         const DrapeFitResult& fit, const DrapeResult* fitted_drape,
+                         int resumed_from_decade) {
+  FitReport report;
   report.settings = {{"scene", base.name},
                      {"scene_source", base.source},
                      {"sets", sets},
@@ -104,13 +106,90 @@ IcaFitReport ica_fit_report(const Scene& base, const std::vector<std::string>& s
       fitted_drape ? std::string(to_string(fitted_drape->stats.status)) : "not_run";
   if (resumed_from_decade >= 0) summary["resumed_from_decade"] = resumed_from_decade;
   summary["units"] = fit_units(false);
-  report.history = history_table(fit);
+  report.table_file = "history.csv";
+  report.table = history_table(fit);
   return report;
 }
 
-void write_ica_fit_outputs(const std::filesystem::path& dir, const IcaFitReport& report,
-                           const FittedDrapeOutputs* drape, bool picture) {
-  write_file_atomic(dir / "history.csv", report.history.csv());
+FitReport lm_fit_report(const Scene& base, const std::vector<std::string>& sets,
+                        const std::string& target, const DrapeFitProblem& problem,
+                        const DrapeLmOptions& lm, const DrapeLmResult& fit,
+                        const DrapeResult* fitted_drape) {
+  auto finite_or_null = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nullptr; };
+  FitReport report;
+  report.table_file = "starts.csv";
+  Table& starts = report.table;
+  starts.columns = {"topology", "cells",  "screened",    "predicted",
+                    "refined",  "status", "evaluations", "objective"};
+  for (int g = 0; g < kDrapeContinuous; ++g) starts.columns.push_back(drape_gene_names()[g]);
+  nlohmann::json starts_json = nlohmann::json::array();
+  for (const DrapeLmStart& s : fit.starts) {
+    const std::string status = s.refined ? to_string(s.lm.status) : "screened";
+    const int evaluations = s.refined ? s.lm.evaluations : 1;
+    starts.rows.push_back({std::string(1, s.topology), std::to_string(s.cells),
+                           format_number(s.screened, 6), format_number(s.predicted, 6),
+                           s.refined ? "1" : "0", status, std::to_string(evaluations),
+                           format_number(s.objective, 17)});
+    for (int g = 0; g < kDrapeContinuous; ++g)
+      starts.rows.back().push_back(format_number(s.x[g], 17));
+    starts_json.push_back({{"topology", std::string(1, s.topology)},
+                           {"cells", s.cells},
+                           {"x0", s.x0},
+                           {"x", s.x},
+                           {"screened", finite_or_null(s.screened)},
+                           {"predicted", finite_or_null(s.predicted)},
+                           {"refined", s.refined},
+                           {"objective", finite_or_null(s.objective)},
+                           {"status", status},
+                           {"evaluations", evaluations}});
+  }
+  const DrapeIdentifiability& id = fit.identifiability;
+  nlohmann::json se = nlohmann::json::object(), cse = nlohmann::json::object();
+  for (int g = 0; g < kDrapeContinuous; ++g) {
+    se[drape_gene_names()[g]] = finite_or_null(id.parameters[g].standard_error);
+    cse[drape_gene_names()[g]] = finite_or_null(id.parameters[g].conditional_standard_error);
+  }
+  report.settings = {{"scene", base.name},
+                     {"scene_source", base.source},
+                     {"sets", sets},
+                     {"target", target},
+                     {"target_scene", problem.target_scene()},
+                     {"optimizer", "lm"},
+                     {"integrator", problem.integrator()},
+                     {"lm", to_json(lm)},
+                     {"bounds", bounds_json(problem.options().bounds)},
+                     {"base_params", to_json(base.params)},
+                     {"run_options", to_json(base.options)}};
+  nlohmann::json& summary = report.summary = report.settings;
+  if (fit.ok) {
+    summary["params"] = params_json(fit.params);
+    summary["objective"] = fit.objective;
+    summary["best_country"] = fit.best_x;
+    if (fitted_drape) summary["fitted_drape_status"] = to_string(fitted_drape->stats.status);
+  }
+  summary["evaluations"] = fit.evaluations;
+  summary["failed_evaluations"] = fit.failed_evaluations;
+  summary["status"] = fit.ok ? "converged" : "all_failed";
+  summary["message"] = fit.message;
+  summary["wall_seconds"] = fit.wall_seconds;
+  summary["cpu_seconds"] = fit.cpu_seconds;
+  summary["standard_errors"] = se;
+  summary["conditional_standard_errors"] = cse;
+  summary["identifiability"] = {
+      {"condition_number", finite_or_null(id.condition_number)},
+      {"rank", id.rank},
+      {"residuals", id.residuals},
+      {"sigma", id.sigma},
+      {"correlation_stiffness_natural_length", finite_or_null(id.correlation_stiffness_length)},
+      {"stiffness_over_length_relative_error", finite_or_null(id.ratio_relative_error)}};
+  summary["starts"] = starts_json;
+  summary["units"] = fit_units(true);
+  return report;
+}
+
+void write_fit_outputs(const std::filesystem::path& dir, const FitReport& report,
+                       const FittedDrapeOutputs* drape, bool picture) {
+  write_file_atomic(dir / report.table_file, report.table.csv());
   if (drape) {
     const std::filesystem::path drape_dir = dir / "drape";
     std::filesystem::create_directories(drape_dir);

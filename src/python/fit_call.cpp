@@ -147,11 +147,11 @@ std::string write_fit_call(const FitCall& call, const std::string& folder, bool 
   const std::filesystem::path dir =
       make_output_dir(folder, "fit-" + call.report.settings.at("scene").get<std::string>());
   if (!call.drape) {
-    write_ica_fit_outputs(dir, call.report, nullptr, picture);
+    write_fit_outputs(dir, call.report, nullptr, picture);
   } else {
     const DrapeCall& d = *call.drape;
     const FittedDrapeOutputs drape{d.scene, d.result, d.report, d.target_edges};
-    write_ica_fit_outputs(dir, call.report, &drape, picture);
+    write_fit_outputs(dir, call.report, &drape, picture);
   }
   return dir.string();
 }

@@ -42,7 +42,7 @@ struct FitCall {
   std::string target_scene;
   // The fitted drape, re-run (not for a fit cut short, whose best country is provisional).
   std::shared_ptr<DrapeCall> drape;
-  IcaFitReport report;  // summary.json, history.csv and the manifest's options, as the command's
+  FitReport report;  // summary.json, history.csv and the manifest's options, as the command's
 };
 
 // (name, flag) of the options FitRequest::options takes.
@@ -52,7 +52,7 @@ const std::vector<std::pair<std::string, std::string>>& fit_option_flags();
 // with status interrupted.
 FitCall fit_call(const FitRequest& request, const std::function<bool()>& stop = nullptr);
 
-// Writes the files `knitsim fit --out folder` writes but the checkpoint (write_ica_fit_outputs:
+// Writes the files `knitsim fit --out folder` writes but the checkpoint (write_fit_outputs:
 // history.csv, drape/ with drape.png unless picture = false, summary.json, manifest.json) into
 // `folder`, made as --out makes it (make_output_dir). Returns the folder's path.
 std::string write_fit_call(const FitCall& call, const std::string& folder, bool picture = true);
