@@ -11,7 +11,8 @@ set(levels
   "models solvers"
   "src/measure src/render"
   "src/scene"
-  "src/io src/fit"
+  "src/fit"
+  "src/io"
   "src/repro"
   "src/cli src/python")
 

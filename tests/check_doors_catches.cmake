@@ -25,9 +25,9 @@ file(APPEND ${WORK}/src/core/sparse.cpp "\n#include \"src/cli/commands.hpp\"\n")
 expect_caught("core including cli" "src/core/sparse.cpp: includes src/cli/commands.hpp")
 file(COPY ${ROOT}/src/core/sparse.cpp DESTINATION ${WORK}/src/core)
 
-file(APPEND ${WORK}/src/io/vtk.cpp "\n#include \"src/fit/ica.hpp\"\n")  # a sibling on one level
-expect_caught("io including fit" "src/io/vtk.cpp: includes src/fit/ica.hpp")
-file(COPY ${ROOT}/src/io/vtk.cpp DESTINATION ${WORK}/src/io)
+file(APPEND ${WORK}/src/render/plot.cpp "\n#include \"src/measure/measurement.hpp\"\n")  # a sibling on one level
+expect_caught("render including measure" "src/render/plot.cpp: includes src/measure/measurement.hpp")
+file(COPY ${ROOT}/src/render/plot.cpp DESTINATION ${WORK}/src/render)
 
 file(MAKE_DIRECTORY ${WORK}/src/attic)
 expect_caught("a folder that is no room" "src/attic/: a folder of src/ that is no room")

@@ -8,8 +8,17 @@ four_corner drapes (model.stiffness evenly from 500 to 1200 N/m) run
   py2   from Python on two threads (run k on thread k mod 2),
   cpp2  by the C++ loop on two threads,
   cli   by one `knitsim drape --no-pictures --quiet` process per drape (--cli-calls of them),
+        all into one --out folder (each run replaces the files of the one before),
 
-each repeated --reps times, in that order within a repeat (paired). Writes OUT/runs.csv (one row
+each repeated --reps times, in that order within a repeat (paired). Once, after the first
+repeat, where a CLI call's time goes (--cli-calls of each):
+
+  start      `knitsim --version` processes: the binary's start and exit, nothing run;
+  first      `knitsim_python_bench --runs 1` processes, timed inside (the call only): a drape
+             in a fresh process, without its files;
+  cli_tmpfs  the cli sweep with --out in /dev/shm (a memory file system; skipped without it);
+  cli_fresh  the cli sweep with a new --out folder per call (no file replaced).
+ Writes OUT/runs.csv (one row
 per method and repeat: wall and CPU seconds of the whole sweep) and OUT/manifest.json;
 summary.py makes the tables.
 
@@ -70,16 +79,34 @@ def cpp_sweep(bench, n, threads):
     return r["seconds"], r["cpu_seconds"], r["sag_sum"]
 
 
-def cli_sweep(cli, n, work):
-    def children():
-        r = resource.getrusage(resource.RUSAGE_CHILDREN)
-        return r.ru_utime + r.ru_stime
+def children():
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def cli_sweep(cli, n, work, fresh=False):
     cpu, wall = children(), time.perf_counter()
     for k in range(n):
+        out = os.path.join(work, "run%d" % k if fresh else "run")
         subprocess.run([cli, "drape", "--set", "model.stiffness=%r" % stiffness(k, n),
-                        "--no-pictures", "--quiet", "--out", os.path.join(work, "run")],
-                       check=True)
+                        "--no-pictures", "--quiet", "--out", out], check=True)
     return time.perf_counter() - wall, children() - cpu, float("nan")
+
+
+def start_sweep(cli, n):
+    cpu, wall = children(), time.perf_counter()
+    for _ in range(n):
+        subprocess.run([cli, "--version"], check=True, stdout=subprocess.DEVNULL)
+    return time.perf_counter() - wall, children() - cpu, float("nan")
+
+
+def first_call_sweep(bench, n):
+    """n fresh processes of one drape each, timed inside: the call, not the process."""
+    wall = cpu = 0.0
+    for _ in range(n):
+        w, c, _ = cpp_sweep(bench, 1, 1)
+        wall, cpu = wall + w, cpu + c
+    return wall, cpu, float("nan")
 
 
 def main():
@@ -120,6 +147,14 @@ def main():
                 sys.exit("experiments/python: the loops disagree: sum of sags %r" % sums)
             if rep == 1:
                 record(rep, "cli", cli_calls, 1, cli_sweep(cli, cli_calls, work))
+                record(rep, "start", cli_calls, 1, start_sweep(cli, cli_calls))
+                record(rep, "first", cli_calls, 1, first_call_sweep(bench, cli_calls))
+                if os.access("/dev/shm", os.W_OK):
+                    with tempfile.TemporaryDirectory(dir="/dev/shm") as shm:
+                        record(rep, "cli_tmpfs", cli_calls, 1, cli_sweep(cli, cli_calls, shm))
+                with tempfile.TemporaryDirectory() as fresh:
+                    record(rep, "cli_fresh", cli_calls, 1,
+                           cli_sweep(cli, cli_calls, fresh, fresh=True))
     expkit.write_csv(os.path.join(a.out, "runs.csv"), rows)
     expkit.write_manifest(a, "python", extra={
         "runs": runs, "reps": reps, "cli_calls": cli_calls, "python": sys.executable,

@@ -53,6 +53,7 @@
 #include "src/fit/lm_fit.hpp"
 #include "src/fit/targets.hpp"
 #include "src/io/drape_outputs.hpp"
+#include "src/io/fit_outputs.hpp"
 #include "src/io/json.hpp"
 #include "src/io/manifest.hpp"
 #include "src/measure/measurement.hpp"
@@ -122,28 +123,6 @@ void warn_if_upside_down(const DrapeFitProblem& problem, const std::string& targ
          " hangs above its pins; lab z must grow upward (negate image rows; docs/fitting.md)");
 }
 
-// summary.json's `units` of a fit (docs/summary_json.md): what each number is measured in.
-nlohmann::json fit_units(bool lm) {
-  nlohmann::json u = {
-      {"params, base_params, bounds, best_country",
-       "stiffness N/m; damping N s/m; elongation_limit %; natural_length m; the topology gene u "
-       "in [0, 3) (best_country's last entry, bounds.topology)"},
-      {"objective", "%: the Eq. 5 error of the fitted drape's edges against the target"},
-      {"wall_seconds, cpu_seconds", "s"},
-      {"evaluations, failed_evaluations", "counts of drapes"}};
-  if (lm) {
-    u["standard_errors, conditional_standard_errors"] = "the unit of each parameter (params)";
-    u["identifiability"] =
-        "sigma 1: the standard deviation of the Eq. 5 residuals (a fraction: the objective is "
-        "100 x their rms); stiffness_over_length_relative_error 1: a fraction; "
-        "condition_number 1; correlation_stiffness_natural_length 1";
-    u["starts"] = "screened, predicted, objective %; x as best_country";
-  } else {
-    u["history"] = "best, mean %: the imperialists' Eq. 5 costs per decade";
-  }
-  return u;
-}
-
 // One line on stdout: the fitted natural length also sets the mesh (n = round(W / L0) cells per
 // side) and the model sheet's side n L0, so a fitted L0 is a fitted mesh (docs/fitting.md).
 std::string mesh_note(const Scene& base, const DrapeParams& fitted) {
@@ -162,27 +141,6 @@ const std::vector<std::string> kFitBaseKeys = {"fabric.width", "fabric.areal_den
                                                "pins.layout"};
 
 constexpr const char* kCheckpointFile = "ica_checkpoint.json";
-
-nlohmann::json params_json(const DrapeParams& p) {
-  return {{"stiffness", p.stiffness},
-          {"damping", p.damping},
-          {"elongation_limit", p.elongation_limit},
-          {"natural_length", p.natural_length},
-          {"topology", std::string(1, p.topology)}};
-}
-
-nlohmann::json ica_json(const IcaOptions& o) {
-  nlohmann::json j = to_json(o);
-  j["seed"] = o.seed;
-  j["jobs"] = o.jobs;
-  return j;
-}
-
-nlohmann::json bounds_json(const DrapeFitBounds& b) {
-  nlohmann::json bounds = nlohmann::json::object();
-  for (int g = 0; g < kDrapeGenes; ++g) bounds[drape_gene_names()[g]] = {b.lower[g], b.upper[g]};
-  return bounds;
-}
 
 // What a checkpoint must have been made with to be resumed by this run (see the header).
 nlohmann::json checkpoint_config(const FitArgs& args, const Scene& base,
@@ -247,6 +205,30 @@ std::string not_determined_line(const DrapeIdentifiability& id, double max_strai
   return line + " (docs/fitting.md)\n";
 }
 
+// The fitted drape, re-run (deterministic: the same run the fit scored) and measured against
+// the target, as drape/ holds it.
+struct FittedDrape {
+  Scene scene;
+  DrapeResult result;
+  DrapeReport report;
+};
+
+FittedDrape rerun_fitted_drape(const DrapeFitProblem& problem, const std::vector<double>& best_x) {
+  Scene scene = problem.scene_of(best_x);
+  DrapeResult result = run_drape(scene, problem.integrator());
+  DrapeReport report = drape_report(scene, result, &problem.measured());
+  return {std::move(scene), std::move(result), std::move(report)};
+}
+
+// The fit's files in dir (write_fit_outputs), drape/ where the fitted drape was re-run.
+void write_fit(const std::filesystem::path& dir, const FitReport& report,
+               const DrapeFitProblem& problem, const std::optional<FittedDrape>& drape,
+               bool picture) {
+  if (!drape) return write_fit_outputs(dir, report, nullptr, picture);
+  const FittedDrapeOutputs outputs{drape->scene, drape->result, drape->report, problem.measured()};
+  write_fit_outputs(dir, report, &outputs, picture);
+}
+
 // --optimizer lm: the multi-start Levenberg-Marquardt fit and its outputs in dir: summary.json
 // (the ICA's fields params, objective, evaluations, failed_evaluations, status, message,
 // wall_seconds, best_country, plus cpu_seconds, standard_errors, identifiability and starts),
@@ -264,87 +246,16 @@ void run_lm_fit(const FitArgs& args, const Scene& base, const DrapeFitProblem& p
   DrapeLmOptions lm = args.lm;
   lm.seed = args.ica.seed;  // --seed draws the random starts too
   const DrapeLmResult fit = fit_drape_lm(problem, lm);
-  auto finite_or_null = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nullptr; };
-  Table starts;
-  starts.columns = {"topology", "cells",  "screened",    "predicted",
-                    "refined",  "status", "evaluations", "objective"};
-  for (int g = 0; g < kDrapeContinuous; ++g) starts.columns.push_back(drape_gene_names()[g]);
-  nlohmann::json starts_json = nlohmann::json::array();
-  for (const DrapeLmStart& s : fit.starts) {
-    const std::string status = s.refined ? to_string(s.lm.status) : "screened";
-    const int evaluations = s.refined ? s.lm.evaluations : 1;
-    starts.rows.push_back({std::string(1, s.topology), std::to_string(s.cells),
-                           format_number(s.screened, 6), format_number(s.predicted, 6),
-                           s.refined ? "1" : "0", status, std::to_string(evaluations),
-                           format_number(s.objective, 17)});
-    for (int g = 0; g < kDrapeContinuous; ++g)
-      starts.rows.back().push_back(format_number(s.x[g], 17));
-    starts_json.push_back({{"topology", std::string(1, s.topology)},
-                           {"cells", s.cells},
-                           {"x0", s.x0},
-                           {"x", s.x},
-                           {"screened", finite_or_null(s.screened)},
-                           {"predicted", finite_or_null(s.predicted)},
-                           {"refined", s.refined},
-                           {"objective", finite_or_null(s.objective)},
-                           {"status", status},
-                           {"evaluations", evaluations}});
-  }
-  write_file_atomic(dir / "starts.csv", starts.csv());
+  std::optional<FittedDrape> drape;
+  if (fit.ok) drape.emplace(rerun_fitted_drape(problem, fit.best_x));
+  const FitReport report = lm_fit_report(base, args.sets, args.target, problem, lm, fit,
+                                         drape ? &drape->result : nullptr);
+  write_fit(dir, report, problem, drape, !args.no_pictures);
+  const bool drape_ok = drape && drape->result.stats.status == RunStatus::Equilibrium;
+  const double max_strain = drape ? drape->result.max_strain : 0.0;
   const DrapeIdentifiability& id = fit.identifiability;
-  nlohmann::json se = nlohmann::json::object(), cse = nlohmann::json::object();
-  for (int g = 0; g < kDrapeContinuous; ++g) {
-    se[drape_gene_names()[g]] = finite_or_null(id.parameters[g].standard_error);
-    cse[drape_gene_names()[g]] = finite_or_null(id.parameters[g].conditional_standard_error);
-  }
-  const nlohmann::json bounds = bounds_json(problem.options().bounds);
-  const nlohmann::json settings = {{"scene", base.name},
-                                   {"scene_source", base.source},
-                                   {"sets", args.sets},
-                                   {"target", args.target},
-                                   {"target_scene", problem.target_scene()},
-                                   {"optimizer", args.optimizer},
-                                   {"integrator", problem.integrator()},
-                                   {"lm", to_json(lm)},
-                                   {"bounds", bounds},
-                                   {"base_params", to_json(base.params)},
-                                   {"run_options", to_json(base.options)}};
-  nlohmann::json summary = settings;
-  bool drape_ok = false;
-  double max_strain = 0.0;  // of the fitted drape
-  if (fit.ok) {
-    const Scene fitted = problem.scene_of(fit.best_x);
-    const DrapeResult drape = run_drape(fitted, problem.integrator());
-    drape_ok = drape.stats.status == RunStatus::Equilibrium;
-    max_strain = drape.max_strain;
-    std::filesystem::create_directories(dir / "drape");
-    write_drape_outputs(dir / "drape", fitted, drape, &problem.measured(), !args.no_pictures);
-    summary["params"] = params_json(fit.params);
-    summary["objective"] = fit.objective;
-    summary["best_country"] = fit.best_x;
-    summary["fitted_drape_status"] = to_string(drape.stats.status);
-  }
-  summary["evaluations"] = fit.evaluations;
-  summary["failed_evaluations"] = fit.failed_evaluations;
-  summary["status"] = fit.ok ? "converged" : "all_failed";
-  summary["message"] = fit.message;
-  summary["wall_seconds"] = fit.wall_seconds;
-  summary["cpu_seconds"] = fit.cpu_seconds;
-  summary["standard_errors"] = se;
-  summary["conditional_standard_errors"] = cse;
-  summary["identifiability"] = {
-      {"condition_number", finite_or_null(id.condition_number)},
-      {"rank", id.rank},
-      {"residuals", id.residuals},
-      {"sigma", id.sigma},
-      {"correlation_stiffness_natural_length", finite_or_null(id.correlation_stiffness_length)},
-      {"stiffness_over_length_relative_error", finite_or_null(id.ratio_relative_error)}};
-  summary["starts"] = starts_json;
-  summary["units"] = fit_units(true);
-  write_json_atomic(dir / "summary.json", summary);
-  finish_output_folder(dir, manifest(settings));
   if (!args.quiet) {
-    std::cout << starts.text() << "\nstatus: " << fit.message << "\n";
+    std::cout << report.table.text() << "\nstatus: " << fit.message << "\n";
     // What the edges determine first: k / L0 (with the topology and n, chosen by the
     // screening); then the parameters one by one, whose standard errors are infinite where the
     // data cannot separate them, and one line saying why.
@@ -395,85 +306,6 @@ void print_ica_start(const FitArgs& args, const Scene& base, const DrapeFitProbl
   std::cout << std::flush;
 }
 
-// The ICA's convergence history, one row per decade (history.csv and the console).
-Table history_table(const DrapeFitResult& fit) {
-  Table history;
-  history.columns = {"decade", "best", "mean", "empires", "evaluations"};
-  for (const IcaDecade& d : fit.history)
-    history.rows.push_back({std::to_string(d.decade), format_number(d.best_cost, 17),
-                            format_number(d.mean_cost, 17), std::to_string(d.empires),
-                            std::to_string(d.evaluations)});
-  return history;
-}
-
-// The same history as summary.json's "history".
-nlohmann::json history_json(const DrapeFitResult& fit) {
-  nlohmann::json history = nlohmann::json::array();
-  for (const IcaDecade& d : fit.history)
-    history.push_back({{"decade", d.decade},
-                       {"best", d.best_cost},
-                       {"mean", d.mean_cost},
-                       {"empires", d.empires},
-                       {"evaluations", d.evaluations}});
-  return history;
-}
-
-// The fitted drape's re-run: its status, "not_run" for a fit cut short.
-struct FittedDrape {
-  std::string status = "not_run";
-  bool equilibrium = false;
-};
-
-// The fitted drape, re-run (deterministic: the same run the ICA scored) into dir/drape; not for
-// a fit cut short, whose best country is provisional.
-FittedDrape rerun_fitted_drape(const FitArgs& args, const DrapeFitProblem& problem,
-                               const DrapeFitResult& fit, const std::filesystem::path& dir) {
-  FittedDrape result;
-  if (fit.status == IcaStatus::Interrupted) return result;
-  const Scene fitted = problem.scene_of(fit.best_x);
-  const DrapeResult drape = run_drape(fitted, problem.integrator());
-  const std::filesystem::path drape_dir = dir / "drape";
-  std::filesystem::create_directories(drape_dir);
-  write_drape_outputs(drape_dir, fitted, drape, &problem.measured(), !args.no_pictures);
-  result.status = to_string(drape.stats.status);
-  result.equilibrium = drape.stats.status == RunStatus::Equilibrium;
-  return result;
-}
-
-// The ICA fit's summary.json and manifest.json in dir (fields: the file's header comment).
-void write_ica_summary(const FitArgs& args, const Scene& base, const DrapeFitProblem& problem,
-                       const DrapeFitResult& fit, const std::string& drape_status,
-                       const std::shared_ptr<const IcaState>& resumed_from,
-                       const std::filesystem::path& dir) {
-  const nlohmann::json bounds = bounds_json(problem.options().bounds);
-  const nlohmann::json settings = {{"scene", base.name},
-                                   {"scene_source", base.source},
-                                   {"sets", args.sets},
-                                   {"target", args.target},
-                                   {"target_scene", problem.target_scene()},
-                                   {"optimizer", args.optimizer},
-                                   {"integrator", problem.integrator()},
-                                   {"ica", ica_json(args.ica)},
-                                   {"bounds", bounds},
-                                   {"base_params", to_json(base.params)},
-                                   {"run_options", to_json(base.options)}};
-  nlohmann::json summary = settings;
-  summary["params"] = params_json(fit.params);
-  summary["objective"] = fit.objective;
-  summary["evaluations"] = fit.evaluations;
-  summary["failed_evaluations"] = fit.failed_evaluations;
-  summary["status"] = to_string(fit.status);
-  summary["message"] = fit.message;
-  summary["wall_seconds"] = fit.wall_seconds;
-  summary["best_country"] = fit.best_x;
-  summary["history"] = history_json(fit);
-  summary["fitted_drape_status"] = drape_status;
-  if (resumed_from) summary["resumed_from_decade"] = resumed_from->decade;
-  summary["units"] = fit_units(false);
-  write_json_atomic(dir / "summary.json", summary);
-  finish_output_folder(dir, manifest(settings));
-}
-
 // The ICA fit's console report: the history, the status and the fitted parameters.
 void print_ica_result(const FitArgs& args, const Scene& base, const DrapeFitProblem& problem,
                       const DrapeFitResult& fit, const Table& history,
@@ -504,11 +336,14 @@ void run_ica_fit(const FitArgs& args, const Scene& base, const DrapeFitProblem& 
   if (!args.quiet) print_ica_start(args, base, problem, resumed_from, dir);
   interrupt = std::make_unique<InterruptScope>(InterruptScope::Reach::BetweenUnits);
   const DrapeFitResult fit = fit_drape(problem);
-  const Table history = history_table(fit);
-  write_file_atomic(dir / "history.csv", history.csv());
-  const FittedDrape drape = rerun_fitted_drape(args, problem, fit, dir);
-  write_ica_summary(args, base, problem, fit, drape.status, resumed_from, dir);
-  if (!args.quiet) print_ica_result(args, base, problem, fit, history, dir);
+  // Not for a fit cut short, whose best country is provisional.
+  std::optional<FittedDrape> drape;
+  if (fit.status != IcaStatus::Interrupted) drape.emplace(rerun_fitted_drape(problem, fit.best_x));
+  const FitReport report =
+      ica_fit_report(base, args.sets, args.target, problem, fit, drape ? &drape->result : nullptr,
+                     resumed_from ? resumed_from->decade : -1);
+  write_fit(dir, report, problem, drape, !args.no_pictures);
+  if (!args.quiet) print_ica_result(args, base, problem, fit, report.table, dir);
   if (fit.status == IcaStatus::Interrupted) {
     std::cerr << "knitsim fit: interrupted by " << interrupt->signal_name() << " after decade "
               << fit.history.back().decade << " of " << args.ica.decades
@@ -516,7 +351,9 @@ void run_ica_fit(const FitArgs& args, const Scene& base, const DrapeFitProblem& 
               << "/; the same command with --resume goes on from there" << std::endl;
     throw CLI::RuntimeError(interrupt->exit_code());
   }
-  if (fit.status == IcaStatus::AllFailed || !drape.equilibrium) throw CLI::RuntimeError(3);
+  if (fit.status == IcaStatus::AllFailed || !drape ||
+      drape->result.stats.status != RunStatus::Equilibrium)
+    throw CLI::RuntimeError(3);
 }
 
 void run(const FitArgs& args) {

@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <stdexcept>
 
+#include "src/base/files.hpp"
 #include "src/base/text.hpp"
 
 namespace knitsim {
@@ -128,7 +129,7 @@ FitCall fit_call(const FitRequest& request, const std::function<bool()>& stop) {
     rethrow_renamed(e, ica_flag_names());
   }
 
-  FitCall call{fit_drape(*problem), problem->integrator(), problem->target_scene(), nullptr};
+  FitCall call{fit_drape(*problem), problem->integrator(), problem->target_scene(), nullptr, {}};
   if (call.fit.status != IcaStatus::Interrupted) {
     Scene fitted = problem->scene_of(call.fit.best_x);
     DrapeResult drape = run_drape(fitted, problem->integrator());
@@ -137,7 +138,22 @@ FitCall fit_call(const FitRequest& request, const std::function<bool()>& stop) {
                                                        std::move(drape), true, problem->measured(),
                                                        std::move(report)});
   }
+  call.report = ica_fit_report(base, request.overrides, request.target, *problem, call.fit,
+                               call.drape ? &call.drape->result : nullptr);
   return call;
+}
+
+std::string write_fit_call(const FitCall& call, const std::string& folder, bool picture) {
+  const std::filesystem::path dir =
+      make_output_dir(folder, "fit-" + call.report.settings.at("scene").get<std::string>());
+  if (!call.drape) {
+    write_fit_outputs(dir, call.report, nullptr, picture);
+  } else {
+    const DrapeCall& d = *call.drape;
+    const FittedDrapeOutputs drape{d.scene, d.result, d.report, d.target_edges};
+    write_fit_outputs(dir, call.report, &drape, picture);
+  }
+  return dir.string();
 }
 
 }  // namespace knitsim

@@ -414,7 +414,8 @@ std::string fit_doc() {
       "\n"
       "Fit the drape model's parameters to target edges with the ICA, as `knitsim fit` does "
       "(the same fit, bit for bit), and return a FitResult (params, objective, evaluations, "
-      "history, best_country, status, and the fitted drape as a DrapeResult).\n"
+      "history, best_country, status, summary, and the fitted drape as a DrapeResult; "
+      "result.write(folder) writes the command's files).\n"
       "\n"
       "target: the target edges CSV (docs/fitting.md).\n"
       "scene, overrides, integrator: the base scene, as for drape() (fabric, pins, run options).\n"
@@ -744,6 +745,24 @@ PYBIND11_MODULE(knitsim, m) {
           "drape", [](const FitCall& c) { return c.drape; },
           "the fitted drape re-run (a DrapeResult with the objective against the target in its "
           "summary), None for a fit cut short")
+      .def_property_readonly(
+          "summary", [](const FitCall& c) { return json_to_python(c.report.summary); },
+          "summary.json of `knitsim fit` as a dict, with its 'units' map")
+      .def(
+          "write",
+          [](const std::shared_ptr<FitCall>& c, const py::object& folder, bool pictures) {
+            const std::string dir = path_text(folder, "--out");
+            std::string written;
+            {
+              py::gil_scoped_release release;
+              written = write_fit_call(*c, dir, pictures);
+            }
+            return written;
+          },
+          py::arg("folder"), py::arg("pictures") = true,
+          "Writes the files of `knitsim fit --out folder` but its checkpoint (history.csv, "
+          "drape/ with drape.png unless pictures=False, summary.json, manifest.json); returns "
+          "the folder.")
       .def("__repr__", [](const FitCall& c) {
         return "<knitsim.FitResult " + std::string(to_string(c.fit.status)) + ": objective " +
                format_number(c.fit.objective, 4) + " % after " +

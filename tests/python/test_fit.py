@@ -35,6 +35,31 @@ def test_same_fit_as_the_cli(cli, tmp_path):
     d = json.loads((tmp_path / "drape" / "summary.json").read_text())
     assert r.drape.summary["objective"] == d["objective"] == r.objective
 
+    # summary is the command's summary.json (its units map included), the wall time aside.
+    assert "units" in r.summary and r.summary["units"] == s["units"]
+    assert without_timings(r.summary) == without_timings(s)
+    assert r.summary["wall_seconds"] == r.wall_seconds
+
+    # result.write() writes the command's files: the same bytes, timings and manifests aside.
+    py_dir = tmp_path / "py"
+    assert r.write(py_dir, pictures=False) == str(py_dir)
+    assert sorted(os.listdir(py_dir)) == sorted(set(os.listdir(tmp_path)) - {"py",
+                                                "ica_checkpoint.json"})
+    assert sorted(os.listdir(py_dir / "drape")) == sorted(os.listdir(tmp_path / "drape"))
+    for name in ["history.csv", "drape/nodes.csv", "drape/edges.csv", "drape/target_edges.csv",
+                 "drape/drape.vtk", "drape/state.json"]:
+        assert (py_dir / name).read_bytes() == (tmp_path / name).read_bytes(), name
+    for name in ["summary.json", "drape/summary.json"]:
+        assert without_timings(json.loads((py_dir / name).read_text())) == \
+            without_timings(json.loads((tmp_path / name).read_text())), name
+    for name in ["manifest.json", "drape/manifest.json"]:
+        m_py, m_cli = (json.loads((d / name).read_text()) for d in (py_dir, tmp_path))
+        assert m_py["options"] == m_cli["options"], name
+
+
+def without_timings(summary):
+    return {k: v for k, v in summary.items() if k not in ("wall_seconds", "cpu_seconds")}
+
 
 def test_bounds_narrow_the_search():
     r = knitsim.fit(TARGET, SCENE, bounds={"stiffness": (600, 610), "topology": (0, 1)}, **BUDGET)

@@ -135,3 +135,34 @@ except KeyboardInterrupt as e:
     assert out["raised"] == "KeyboardInterrupt", out
     assert out["status"] == out["summary_status"] == "interrupted"
     assert out["n"] > 0 and out["seconds"] < 30, out
+
+
+def test_ctrl_c_ends_a_fit_with_its_summary_and_files(tmp_path):
+    # The fit stops at the end of its decade: summary.json's dict says interrupted, no fitted
+    # drape, and write() leaves the command's files of an interrupted fit (no drape/).
+    script = """
+import json, os, signal, threading
+import knitsim
+ex = os.path.join(%r, "docs", "examples")
+threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT)).start()
+try:
+    knitsim.fit(os.path.join(ex, "lab_targets.csv"), os.path.join(ex, "my_fabric.toml"),
+                decades=100000, countries=10, seed=1)
+    print(json.dumps({"raised": None}))
+except KeyboardInterrupt as e:
+    r = e.result
+    r.write(%r)
+    print(json.dumps({"raised": "KeyboardInterrupt", "status": r.status, "drape": r.drape is None,
+                      "summary": r.summary}))
+""" % (ROOT, str(tmp_path / "fit"))
+    p = run_python(script, timeout=120)
+    assert p.returncode == 0, p.stderr
+    out = json.loads(p.stdout.strip().splitlines()[-1])
+    assert out["raised"] == "KeyboardInterrupt", out
+    s = out["summary"]
+    assert out["status"] == s["status"] == "interrupted" and out["drape"]
+    assert s["fitted_drape_status"] == "not_run" and "units" in s
+    assert len(s["history"]) < 100000
+    written = tmp_path / "fit"
+    assert sorted(os.listdir(written)) == ["history.csv", "manifest.json", "summary.json"]
+    assert json.loads((written / "summary.json").read_text()) == s
