@@ -9,10 +9,12 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <vector>
 
 namespace knitsim {
 
 struct IcaState;  // the ICA's whole state at the end of a decade (src/fit/ica.hpp)
+struct Key;       // a row of the parameter table (src/scene/scene.hpp)
 
 struct IcaOptions {
   // Most countries validate() accepts (the paper's levels are 15..25): each holds a point of
@@ -49,7 +51,7 @@ struct IcaOptions {
   // or the step-9 rule stops it anyway. knitsim fit sets it to "SIGINT or SIGTERM received".
   std::function<bool()> stop_requested;
 
-  // Throws std::invalid_argument naming the bad field and its accepted range.
+  // Throws InvalidField naming the bad field and its accepted range.
   void validate() const;
 };
 
@@ -60,7 +62,7 @@ struct LmOptions {
   double step_tol = 1e-6;        // stop when |delta|_inf (unit box) <= step_tol (>= 0)
   double cost_tol = 1e-6;        // stop when an accepted step lowers |r|^2 by <= cost_tol
                                  // relative (>= 0)
-  void validate() const;         // std::invalid_argument "lm.<field> = value: range"
+  void validate() const;         // InvalidField "lm.<field> = value: range"
 };
 
 // The drape LM fit's starts (src/fit/lm_fit.hpp, DrapeLmOptions): how many are screened and how
@@ -78,9 +80,16 @@ struct SyntheticOptions {
   double noise_mm = 0.5;  // sigma of the Gaussian noise per point and photo, mm (>= 0)
   int photos = 5;         // photos averaged per point (1..max_photos)
   unsigned seed = 2017;   // base seed; each (sample, set, scene) draws from its own stream
-  // Throws std::invalid_argument "noise_mm = X: must be finite and >= 0 (mm)" or
+  // Throws InvalidField "noise_mm = X: must be finite and >= 0 mm" or
   // "photos = P: must be in 1..10000".
   void validate() const;
 };
+
+// The rows of the fitting commands' flags, appended to key_table() (src/scene/scene.hpp) in
+// `knitsim list keys` order: the ICA's (--jobs, --decades, ... --stop-one-empire), the LM fit's
+// (--lm-starts, --lm-refine, --lm-evaluations) and the synthetic targets' (--noise-mm,
+// --photos). Each row's validator field is the struct's, so a bad value is refused under the flag
+// (rethrow_as_typed), and its meaning is the flag's --help text.
+void append_fit_option_rows(std::vector<Key>& rows);
 
 }  // namespace knitsim

@@ -29,6 +29,7 @@
 #include <variant>
 
 #include "models/mirror_reduced.hpp"
+#include "src/scene/fit_options.hpp"
 #include "solvers/equilibrium_check.hpp"
 #include "src/base/files.hpp"
 #include "src/base/text.hpp"
@@ -332,6 +333,7 @@ std::vector<Key> make_table() {
   option("", "--eps-lin", "krylov_eps_lin", &IO::krylov_eps_lin, "1",
          "cvode-bdf-gmres: linear tolerance factor (CVodeSetEpsLin); with block-jacobi the "
          "residual a run can reach is proportional to it");
+  append_fit_option_rows(k);  // the fitting commands' flags (src/scene/fit_options.cpp)
   // Fields no user sets, for summary.json (IntegratorOptions documents them).
   option("", "", "dt_safety", &IO::dt_safety, "1", "");
   option("", "", "check_every", &IO::check_every, "1", "");
@@ -381,9 +383,13 @@ std::string validated_range(const Key& key) {
   else if (const auto* l = std::get_if<long IntegratorOptions::*>(&key.option))
     probe.options.*(*l) = -1;
   try {
-    probe.params.validate();
-    probe.options.validate();
-    probe.knit.validate();
+    if (key.probe_range) {
+      key.probe_range();
+    } else {
+      probe.params.validate();
+      probe.options.validate();
+      probe.knit.validate();
+    }
   } catch (const InvalidField& e) {
     const std::string must = "must be ";
     if (e.field() == key.field && e.accepted().rfind(must, 0) == 0)
@@ -526,7 +532,17 @@ void apply_toml(Scene& scene, KeyModel model, const std::string& text, const std
 }  // namespace
 
 const char* to_string(KeyModel model) {
-  return model == KeyModel::Drape ? "drape" : model == KeyModel::Knit ? "knit" : "both";
+  switch (model) {
+    case KeyModel::Drape:
+      return "drape";
+    case KeyModel::Knit:
+      return "knit";
+    case KeyModel::Both:
+      return "both";
+    case KeyModel::Fit:
+      return "fit";
+  }
+  return "?";
 }
 
 const std::vector<Key>& key_table() {
@@ -539,6 +555,8 @@ const Key& key_of_flag(const std::string& flag) {
     if (k.flag == flag) return k;
   throw std::logic_error("no parameter has the flag " + flag);
 }
+
+std::string key_range(const Key& key) { return validated_range(key); }
 
 void rethrow_as_typed(const std::invalid_argument& e, const Scene* scene) {
   const auto* bad = dynamic_cast<const InvalidField*>(&e);
@@ -665,6 +683,9 @@ Table scene_key_table() {
     } else if (const auto* l = std::get_if<long IntegratorOptions::*>(&k.option)) {
       value = std::to_string(defaults.options.*(*l));
       range = validated_range(k);
+    } else if (k.default_value) {
+      value = k.default_value();
+      range = k.probe_range ? validated_range(k) : k.accepted;
     } else {
       value = k.get_option ? k.get_option(defaults.options) : k.get(defaults);
       range = k.accepted;
