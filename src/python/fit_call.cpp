@@ -44,7 +44,7 @@ const std::vector<FitOption>& fit_options() {
   using I = IcaOptions;
   using T = const std::string&;
   static const std::vector<FitOption> table = [] {
-    std::vector<FitOption> t = {
+    std::vector<FitOption> all = {
         {"rtol", "--rtol", [](S& s, I&, T t) { return to_double(t, s.options.rtol); }, "a number"},
         {"atol", "--atol", [](S& s, I&, T t) { return to_double(t, s.options.atol); }, "a number"},
         {"velocity_atol", "--velocity-atol",
@@ -52,28 +52,29 @@ const std::vector<FitOption>& fit_options() {
         {"seed", "--seed", [](S&, I& o, T t) { return to_integer(t, o.seed); },
          "a decimal integer >= 0"}};
     for (const Key& key : key_table()) {
+      if (key.flag.empty()) continue;
       std::string name = key.flag.substr(2);
       std::replace(name.begin(), name.end(), '-', '_');
       if (const auto* i = std::any_cast<int I::*>(&key.member)) {
         const auto m = *i;
-        t.push_back({name, key.flag, [m](S&, I& o, T text) { return to_integer(text, o.*m); },
-                     "an integer"});
+        all.push_back({name, key.flag, [m](S&, I& o, T text) { return to_integer(text, o.*m); },
+                       "an integer"});
       } else if (const auto* d = std::any_cast<double I::*>(&key.member)) {
         const auto m = *d;
-        t.push_back({name, key.flag, [m](S&, I& o, T text) { return to_double(text, o.*m); },
-                     "a number"});
+        all.push_back(
+            {name, key.flag, [m](S&, I& o, T text) { return to_double(text, o.*m); }, "a number"});
       } else if (const auto* b = std::any_cast<bool I::*>(&key.member)) {
         const auto m = *b;
-        t.push_back({name, key.flag,
-                     [m](S&, I& o, T text) {
-                       if (text != "True" && text != "False") return false;
-                       o.*m = text == "True";
-                       return true;
-                     },
-                     "True or False"});
+        all.push_back({name, key.flag,
+                       [m](S&, I& o, T text) {
+                         if (text != "True" && text != "False") return false;
+                         o.*m = text == "True";
+                         return true;
+                       },
+                       "True or False"});
       }
     }
-    return t;
+    return all;
   }();
   return table;
 }
