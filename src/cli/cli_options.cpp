@@ -193,7 +193,8 @@ void rethrow_with_flag_names(const std::invalid_argument& e,
                              const std::vector<std::pair<std::string, std::string>>& names) {
   const std::string msg = e.what();
   for (const auto& [field, flag] : names)
-    if (msg.rfind(field + " = ", 0) == 0) throw std::invalid_argument(flag + msg.substr(field.size()));
+    if (msg.rfind(field + " = ", 0) == 0)
+      throw std::invalid_argument(flag + msg.substr(field.size()));
   rethrow_as_typed(e);
 }
 

@@ -22,8 +22,8 @@ void IcaOptions::validate() const {
   if (imperialists < 1) bad_field("imperialists", imperialists, "must be >= 1");
   if (countries <= imperialists || countries > max_countries)
     bad_field("countries", countries,
-              "must be > imperialists (" + std::to_string(imperialists) + ") and <= " +
-                  std::to_string(max_countries));
+              "must be > imperialists (" + std::to_string(imperialists) +
+                  ") and <= " + std::to_string(max_countries));
   if (decades < 1) bad_field("decades", decades, "must be >= 1");
   if (!(beta > 0.0) || !std::isfinite(beta)) bad_field("beta", beta, "must be > 0");
   if (!(gamma >= 0.0 && gamma <= kPi)) bad_field("gamma", gamma, "must be in [0, pi] rad");
@@ -109,25 +109,24 @@ void append_fit_option_rows(std::vector<Key>& rows) {
       fit_row("--imperialists", "imperialists", &I::imperialists, "1", "number of imperialists"));
   rows.push_back(fit_row("--beta", "beta", &I::beta, "1", "assimilation coefficient"));
   rows.push_back(fit_row("--gamma", "gamma", &I::gamma, "rad", "assimilation angle bound"));
-  rows.push_back(fit_row("--revolution", "revolution_rate", &I::revolution_rate, "1",
-                         "revolution rate"));
+  rows.push_back(
+      fit_row("--revolution", "revolution_rate", &I::revolution_rate, "1", "revolution rate"));
   rows.push_back(fit_row("--xi", "xi", &I::xi, "1", "colonies' share of the empire cost"));
-  rows.push_back(fit_row("--stop-one-empire", "stop_when_one_empire", &I::stop_when_one_empire,
-                         "1",
+  rows.push_back(fit_row("--stop-one-empire", "stop_when_one_empire", &I::stop_when_one_empire, "1",
                          "stop as soon as one empire is left (paper's literal step 9; default: "
                          "run all decades)"));
-  rows.push_back(fit_row("--lm-starts", "lm.starts_per_bracket", &LmStartOptions::starts_per_bracket,
-                         "1",
+  rows.push_back(fit_row("--lm-starts", "lm.starts_per_bracket",
+                         &LmStartOptions::starts_per_bracket, "1",
                          "lm: screened starts per topology and grid-size bracket (k at the box "
                          "centre, then seeded random k)"));
   rows.push_back(fit_row("--lm-refine", "lm.refine", &LmStartOptions::refine, "1",
                          "lm: best screened starts refined by LM"));
-  rows.push_back(fit_row("--lm-evaluations", "lm.max_evaluations", &LmOptions::max_evaluations,
-                         "1", "lm: drape evaluations per refined start at most"));
+  rows.push_back(fit_row("--lm-evaluations", "lm.max_evaluations", &LmOptions::max_evaluations, "1",
+                         "lm: drape evaluations per refined start at most"));
   rows.push_back(fit_row("--noise-mm", "noise_mm", &SyntheticOptions::noise_mm, "mm",
                          "Noise sigma per camera coordinate and photo"));
-  rows.push_back(fit_row("--photos", "photos", &SyntheticOptions::photos, "1",
-                         "Photos averaged per point"));
+  rows.push_back(
+      fit_row("--photos", "photos", &SyntheticOptions::photos, "1", "Photos averaged per point"));
 }
 
 }  // namespace knitsim

@@ -198,9 +198,11 @@ std::vector<Key> make_table() {
   number(
       "pins.span", [](Scene& s) -> double& { return s.params.pin_span; }, "1",
       "two_corner: final pin distance / model width; below 1 the pins move inward");
+  k.back().summary = "pin_span";
   number(
       "pins.move_time", [](Scene& s) -> double& { return s.params.pin_move_time; }, "s",
       "duration of that pin move");
+  k.back().summary = "pin_move_time";
   // The knit's keys (models/knit_loops.hpp, docs/knit.md).
   auto knit = [&number](const char* name, double KnitParams::*field, const char* unit,
                         const char* meaning) {
@@ -220,12 +222,15 @@ std::vector<Key> make_table() {
   knit("knit.stabiliser", &KnitParams::stabiliser_ratio, "1",
        "stabiliser's shear and bending springs relative to k_w, k_c (0 = off: paper 2's "
        "network)");
+  k.back().summary = "stabiliser_ratio";
   knit("knit.bending", &KnitParams::bending_ratio, "1",
        "out-of-plane bending rigidity as a multiple of the yarn's (0 = off: the chart stays in "
        "its plane; needs knit.contact = 0)");
+  k.back().summary = "bending_ratio";
   knit("knit.contact", &KnitParams::contact_ratio, "1",
        "yarn contact's barrier stiffness relative to k_w (0 = off: yarns may pass through each "
        "other)");
+  k.back().summary = "contact_ratio";
   // A knit key naming one of a few values of the KnitParams member `field`: (name, value) pairs;
   // `accepted` says what it takes in messages ("" = "one of" the names).
   auto knit_choice = [&k](const char* name, auto field, auto values, std::string accepted,
@@ -655,6 +660,30 @@ std::string scene_key_value(const Scene& scene, const std::string& name) {
   if (key.kind != Kind::Number) return key.get(scene);
   const double v = key.number(const_cast<Scene&>(scene));  // read only
   return format_number(v, 6) + (key.unit.empty() || key.unit == "1" ? "" : " " + key.unit);
+}
+
+std::string summary_name(const Key& key) {
+  if (!key.summary.empty()) return key.summary;
+  if (key.option.index() != 0 || key.set_option) return key.field;
+  return key.name.substr(key.name.rfind('.') + 1);
+}
+
+std::string units_text(KeyModel model, const std::vector<std::string>& fields) {
+  std::vector<std::pair<std::string, std::string>> groups;  // (unit, "name, name")
+  for (const Key& k : key_table()) {
+    if (k.model != model || k.unit.empty()) continue;
+    const std::string name = summary_name(k);
+    if (std::find(fields.begin(), fields.end(), name) == fields.end()) continue;
+    const auto group = std::find_if(groups.begin(), groups.end(),
+                                    [&k](const auto& g) { return g.first == k.unit; });
+    if (group == groups.end())
+      groups.emplace_back(k.unit, name);
+    else
+      group->second += ", " + name;
+  }
+  std::string text;
+  for (const auto& [unit, names] : groups) text += (text.empty() ? "" : "; ") + names + " " + unit;
+  return text;
 }
 
 std::vector<std::string> keys_not_given(const Scene& scene,

@@ -95,6 +95,9 @@ struct Key {
   Kind kind = Kind::Number;
   std::string unit;     // "" for text keys and pure numbers ("1" shown for ratios)
   std::string meaning;  // one sentence (`knitsim list keys`); a flag's --help text
+  // summary.json's name of the value where it is not the key's last part (pins.span: pin_span)
+  // or, for an IntegratorOptions row, its field; "" otherwise (summary_name()).
+  std::string summary;
   // Number keys: the field in a Scene (its accepted range is stated once, by the validators).
   std::function<double&(Scene&)> number;
   // Integer and Text keys: parse and store (false = not accepted), read back, what is accepted.
@@ -168,6 +171,15 @@ std::vector<std::string> scene_keys(KeyModel model = KeyModel::Drape);
 Table scene_key_table();
 // The value of scene key `name` in `scene` as text, with its unit ("852 N/m", "a").
 std::string scene_key_value(const Scene& scene, const std::string& name);
+// summary.json's name of a row's value: Key::summary if set, an IntegratorOptions row's field
+// (t_max, krylov_eps_lin), else the key's last part (model.stiffness: stiffness).
+std::string summary_name(const Key& key);
+// summary.json's `units` text of a block of values written under the rows' summary names
+// (`fields`: params' or options' names), from the rows of `model` exactly (Drape, Knit: the
+// params; Both: the run options): every field with a unit, grouped by unit in the table's order,
+// "width, natural_length, perturbation m; areal_density g/m^2; ...". Fields of text rows, and
+// names no row of `model` has, are left out.
+std::string units_text(KeyModel model, const std::vector<std::string>& fields);
 // The keys of `among` that neither the scene file nor a --set gave (Scene::keys_given).
 std::vector<std::string> keys_not_given(const Scene& scene, const std::vector<std::string>& among);
 
