@@ -59,7 +59,8 @@ void SyntheticOptions::validate() const {
 namespace {
 
 // A row of a fitting command's flag, bound to `member` of its options struct S (the value the
-// struct's validate() names `field`), of `unit` ("1" for counts and ratios), with its --help text.
+// struct's validate() names `field`), of `unit` ("1" for counts and ratios, "" for a flag that
+// takes no value), with its --help text.
 template <class S, class T>
 Key fit_row(const char* flag, const char* field, T S::*member, const char* unit,
             const char* meaning) {
@@ -112,7 +113,7 @@ void append_fit_option_rows(std::vector<Key>& rows) {
   rows.push_back(
       fit_row("--revolution", "revolution_rate", &I::revolution_rate, "1", "revolution rate"));
   rows.push_back(fit_row("--xi", "xi", &I::xi, "1", "colonies' share of the empire cost"));
-  rows.push_back(fit_row("--stop-one-empire", "stop_when_one_empire", &I::stop_when_one_empire, "1",
+  rows.push_back(fit_row("--stop-one-empire", "stop_when_one_empire", &I::stop_when_one_empire, "",
                          "stop as soon as one empire is left (paper's literal step 9; default: "
                          "run all decades)"));
   rows.push_back(fit_row("--lm-starts", "lm.starts_per_bracket",
