@@ -12,7 +12,7 @@ What is generated:
   <command>.md     `knitsim <command> --help`, every flag with its default (and `knitsim --help`
                    in knitsim.md)
   scene_keys.md    `knitsim list keys --format markdown`: every parameter (scene key, or the
-                   flag of a run option), the model it applies to, unit, default, accepted
+                   flag of a run or fitting option), the model it applies to, unit, default, accepted
                    values, meaning
   integrators.md   `knitsim list integrators --format markdown`
   outputs.md       the files quick runs of drape, knit, fit (ICA and LM) and targets write: each

@@ -23,6 +23,20 @@ using namespace knitsim;
 using namespace knitsim::test;
 namespace fs = std::filesystem;
 
+namespace {
+
+// Whether summary.json's units text `units` ("a, b m; c N/m") lists `name` with a unit.
+bool names_a_unit(const std::string& units, const std::string& name) {
+  for (std::size_t at = units.find(name); at != std::string::npos; at = units.find(name, at + 1)) {
+    const bool starts = at == 0 || units[at - 1] == ' ';
+    const char after = at + name.size() < units.size() ? units[at + name.size()] : '\0';
+    if (starts && (after == ',' || after == ' ')) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
 TEST_CASE("bad input: exit 2, one stderr line naming the field, --out not created") {
   TempDir tmp("bad");
   const fs::path out = tmp.path / "should-not-exist";
@@ -95,6 +109,19 @@ TEST_CASE("a settled drape: exit 0, summary, nodes, VTK, PNG and manifest agree"
   CHECK(summary["status"] == "equilibrium");
   CHECK(summary["scene"] == "four_corner");
   CHECK(summary["params"]["natural_length"] == 0.1);
+  // The units of params and options come from the key table's rows: every number has one, in
+  // the unit `knitsim list keys` shows (pins.span's pin_span: 1).
+  for (const char* block : {"params", "options"}) {
+    const std::string units = summary["units"][block];
+    for (const auto& item : summary[block].items())
+      if (item.value().is_number() && item.key() != "seed")  // an integer key, no unit
+        CHECK(names_a_unit(units, item.key()));
+  }
+  CHECK(summary["units"]["params"] ==
+        "width, natural_length, perturbation m; areal_density g/m^2; stiffness N/m; damping N s/m; "
+        "elongation_limit %; pin_span 1; pin_move_time s");
+  CHECK(units_text(KeyModel::Drape, {"pin_span", "width", "damping", "stiffness"}) ==
+        "width m; stiffness N/m; damping N s/m; pin_span 1");  // the table's order, by unit
   const int n = summary["grid"]["n"];
   REQUIRE(n == 5);  // floor(0.5 / 0.1 + 0.5)
   CHECK(summary["grid"]["particles"] == 36);

@@ -19,6 +19,16 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// Whether summary.json's units text `units` ("a, b m; c N/m") lists `name` with a unit.
+bool names_a_unit(const std::string& units, const std::string& name) {
+  for (std::size_t at = units.find(name); at != std::string::npos; at = units.find(name, at + 1)) {
+    const bool starts = at == 0 || units[at - 1] == ' ';
+    const char after = at + name.size() < units.size() ? units[at + name.size()] : '\0';
+    if (starts && (after == ',' || after == ' ')) return true;
+  }
+  return false;
+}
+
 int count_lines(const std::string& text) {
   int n = 0;
   for (char c : text) n += c == '\n';
@@ -148,6 +158,16 @@ TEST_CASE("knitsim knit: a small tuck chart settles and its outputs agree with t
   CHECK(summary["options"]["newton_solver"] == "ldl");
   CHECK(summary["units"]["residual, residual_floor"].get<std::string>().find("(k_w r)") !=
         std::string::npos);
+  // The units of params and options come from the key table's rows: every number has one (a row
+  // without its summary.json name, e.g. knit.contact's contact_ratio, would leave it out).
+  for (const char* block : {"params", "options"}) {
+    const std::string units = summary["units"][block];
+    for (const auto& item : summary[block].items())
+      if (item.value().is_number()) CHECK(names_a_unit(units, item.key()));
+  }
+  CHECK(summary["units"]["params"] ==
+        "loop_radius m; wale_stiffness, course_stiffness N/m; damping N s/m; areal_density g/m^2; "
+        "stabiliser_ratio, bending_ratio, contact_ratio 1");
   CHECK(summary["units"]["params"].get<std::string>().find("loop_radius m") != std::string::npos);
   CHECK(summary["options"]["max_order"] == 3);
   CHECK(summary["options"]["velocity_atol"] == 1e-3);  // the stabilised chart's default

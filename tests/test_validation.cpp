@@ -168,13 +168,44 @@ TEST_CASE("seeds, dimensions, countries and photos: refused outside their ranges
   expect_bad_input("optimize --problem sphere --dim 2000000000",
                    "--dim = 2000000000: must be in 1..10000", tmp);
   expect_bad_input("optimize --problem sphere --dim 2 --countries 20000",
-                   "--countries = 20000: must be <= 10000", tmp);
+                   "--countries = 20000: must be > imperialists (2) and <= 10000", tmp);
   expect_bad_input("targets --photos 100000" + out, "--photos = 100000: must be in 1..10000", tmp);
   CHECK(!fs::exists(tmp.path / "out"));
   // The largest values are accepted, and the seed is the one typed.
   const Run r = run_knitsim(opt + " --seed 18446744073709551615", tmp);
   CHECK(r.status == 0);
   CHECK(r.out.find("seed 18446744073709551615,") != std::string::npos);
+}
+
+TEST_CASE("every flag of the fitting commands' rows is refused under its flag, with its range") {
+  // The ICA, LM and synthetic-target flags are rows of the parameter table: a value out of range
+  // is one line naming the flag (not the struct's field: revolution_rate, lm.starts_per_bracket,
+  // noise_mm) with the range `knitsim list keys` shows, exit 2, nothing written.
+  TempDir tmp("validation-fit-rows");
+  const std::string out = " --out '" + (tmp.path / "out").string() + "'";
+  const fs::path target = fs::path(KNITSIM_FUZZ_CORPUS) / "target" / "points_four_corner.csv";
+  const Table keys = scene_key_table();
+  int checked = 0;
+  for (const Key& key : key_table()) {
+    if (key.model != KeyModel::Fit || !key.probe_range) continue;
+    std::string range;
+    for (const auto& row : keys.rows)
+      if (row[0] == key.flag) range = row[4];
+    REQUIRE(!range.empty());
+    const std::string command =
+        key.flag.rfind("--lm-", 0) == 0
+            ? "fit --scene four_corner --optimizer lm --target '" + target.string() + "'" + out
+        : key.flag == "--noise-mm" || key.flag == "--photos" ? "targets" + out
+                                                              : "optimize --problem sphere --dim 2";
+    const Run r = run_knitsim(command + " " + key.flag + "=-1", tmp);
+    CAPTURE(key.flag);
+    CHECK(r.status == 2);
+    CHECK(r.err == "knitsim: error: " + key.flag + " = -1: must be " + range + "\n");
+    CHECK(r.out.empty());
+    ++checked;
+  }
+  CHECK(checked == 13);  // 8 ICA flags, 3 LM, 2 of the targets
+  CHECK(!fs::exists(tmp.path / "out"));
 }
 
 TEST_CASE("target CSV: a number with trailing bytes after a NUL is not a number") {

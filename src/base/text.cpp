@@ -77,12 +77,4 @@ std::string unknown_key_message(const std::string& key, const std::vector<std::s
   return msg;
 }
 
-void rethrow_renamed(const std::invalid_argument& e,
-                     const std::vector<std::pair<std::string, std::string>>& names) {
-  const std::string msg = e.what();
-  for (const auto& [field, name] : names)
-    if (msg.rfind(field + " = ", 0) == 0) throw std::invalid_argument(name + msg.substr(field.size()));
-  throw e;
-}
-
 }  // namespace knitsim

@@ -1,6 +1,5 @@
 // Text for people: numbers as short or lossless decimals, input echoed safely in one-line
-// messages, the "unknown key" message with its nearest valid key, and field names renamed to the
-// flags and keys the user typed.
+// messages, and the "unknown key" message with its nearest valid key.
 #pragma once
 
 #include <stdexcept>
@@ -29,11 +28,5 @@ std::string printable(const std::string& text);
 // mean NEAREST?" when the nearest valid key is within max(3, |KEY| / 3) edits (Levenshtein), else
 // "KEY: unknown key; valid keys: K1 K2 ...".
 std::string unknown_key_message(const std::string& key, const std::vector<std::string>& valid);
-
-// Validation messages name struct fields ("rtol = -1: ..."); the user typed a flag or a key.
-// Rethrows `e` with the field replaced by the name the user wrote ("--rtol = -1: ...") for the
-// first (field, name) pair whose "field = " starts the message; rethrows `e` unchanged if none.
-[[noreturn]] void rethrow_renamed(const std::invalid_argument& e,
-                                  const std::vector<std::pair<std::string, std::string>>& names);
 
 }  // namespace knitsim

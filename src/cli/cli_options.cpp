@@ -2,6 +2,7 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <any>
 #include <cerrno>
 #include <cstdint>
 #include <cstdlib>
@@ -93,39 +94,6 @@ void require_well_formed_values(CLI::App& app) {
     }
 }
 
-void add_ica_options(CLI::App* cmd, IcaOptions& o) {
-  add_seed_option(cmd, o.seed, "random seed")->capture_default_str();
-  cmd->add_option("--jobs", o.jobs, "threads evaluating costs (same result for any value)")
-      ->capture_default_str();
-  cmd->add_option("--decades", o.decades, "MaxIt, number of decades (>= 1)")
-      ->capture_default_str()
-      ->group(kIcaOptionGroup);
-  cmd->add_option("--countries", o.countries,
-                  "number of countries (> imperialists, <= " +
-                      std::to_string(IcaOptions::max_countries) + ")")
-      ->capture_default_str()
-      ->group(kIcaOptionGroup);
-  cmd->add_option("--imperialists", o.imperialists, "number of imperialists (>= 1)")
-      ->capture_default_str()
-      ->group(kIcaOptionGroup);
-  cmd->add_option("--beta", o.beta, "assimilation coefficient (> 0)")
-      ->capture_default_str()
-      ->group(kIcaOptionGroup);
-  cmd->add_option("--gamma", o.gamma, "assimilation angle bound, rad (0 .. pi)")
-      ->capture_default_str()
-      ->group(kIcaOptionGroup);
-  cmd->add_option("--revolution", o.revolution_rate, "revolution rate (0 .. 1)")
-      ->capture_default_str()
-      ->group(kIcaOptionGroup);
-  cmd->add_option("--xi", o.xi, "colonies' share of the empire cost (>= 0)")
-      ->capture_default_str()
-      ->group(kIcaOptionGroup);
-  cmd->add_flag("--stop-one-empire", o.stop_when_one_empire,
-                "stop as soon as one empire is left (paper's literal step 9; default: run all "
-                "decades)")
-      ->group(kIcaOptionGroup);
-}
-
 namespace {
 
 // The flag of `key` (a row of key_table() with a flag), bound to `field`: CLI11 parses it as
@@ -152,6 +120,32 @@ CLI::Option* add_option_flag(CLI::App* cmd, const Key& key, IntegratorOptions& o
 }
 
 }  // namespace
+
+template <class S>
+std::vector<CLI::Option*> add_row_flags(CLI::App* cmd, S& o) {
+  std::vector<CLI::Option*> added;
+  for (const Key& key : key_table()) {
+    const std::string range = key_range(key);
+    const std::string help = key.meaning + (range.empty() ? "" : " (" + range + ")");
+    if (const auto* i = std::any_cast<int S::*>(&key.member))
+      added.push_back(cmd->add_option(key.flag, o.*(*i), help)->capture_default_str());
+    else if (const auto* d = std::any_cast<double S::*>(&key.member))
+      added.push_back(cmd->add_option(key.flag, o.*(*d), help)->capture_default_str());
+    else if (const auto* b = std::any_cast<bool S::*>(&key.member))
+      added.push_back(cmd->add_flag(key.flag, o.*(*b), help));
+  }
+  return added;
+}
+template std::vector<CLI::Option*> add_row_flags(CLI::App*, IcaOptions&);
+template std::vector<CLI::Option*> add_row_flags(CLI::App*, LmOptions&);
+template std::vector<CLI::Option*> add_row_flags(CLI::App*, LmStartOptions&);
+template std::vector<CLI::Option*> add_row_flags(CLI::App*, SyntheticOptions&);
+
+void add_ica_options(CLI::App* cmd, IcaOptions& o) {
+  add_seed_option(cmd, o.seed, "random seed")->capture_default_str();
+  for (CLI::Option* opt : add_row_flags(cmd, o))
+    if (opt->get_name() != "--jobs") opt->group(kIcaOptionGroup);  // other optimizers read it
+}
 
 CLI::Option* add_atol_options(CLI::App* cmd, double& atol, double& velocity_atol) {
   add_flag_of(cmd, key_of_flag("--atol"), atol);
@@ -196,19 +190,12 @@ void copy_run_flags(const IntegratorOptions& flags, IntegratorOptions& into) {
 }
 
 void rethrow_with_flag_names(const std::invalid_argument& e,
-                             const std::vector<std::pair<std::string, std::string>>& extra) {
-  static const std::vector<std::pair<std::string, std::string>> ica = {
-      {"countries", "--countries"},
-      {"imperialists", "--imperialists"},
-      {"decades", "--decades"},
-      {"beta", "--beta"},
-      {"gamma", "--gamma"},
-      {"revolution_rate", "--revolution"},
-      {"xi", "--xi"},
-      {"jobs", "--jobs"}};
-  std::vector<std::pair<std::string, std::string>> names = ica;
-  names.insert(names.end(), extra.begin(), extra.end());
-  rethrow_renamed(e, names);
+                             const std::vector<std::pair<std::string, std::string>>& names) {
+  const std::string msg = e.what();
+  for (const auto& [field, flag] : names)
+    if (msg.rfind(field + " = ", 0) == 0)
+      throw std::invalid_argument(flag + msg.substr(field.size()));
+  rethrow_as_typed(e);
 }
 
 void warn(const std::string& message) {

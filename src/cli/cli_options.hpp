@@ -12,7 +12,7 @@
 
 #include "solvers/integrator.hpp"
 #include "src/cli/interrupt.hpp"
-#include "src/fit/ica.hpp"
+#include "src/scene/fit_options.hpp"
 #include "src/scene/scene.hpp"
 
 namespace CLI {
@@ -34,9 +34,16 @@ void require_well_formed_values(CLI::App& app);
 // other optimizers read too): how `fit --optimizer lm` finds the ICA flags it ignores.
 inline constexpr const char* kIcaOptionGroup = "ICA options";
 
-// The ICA flags (docs/commands.md): --seed --jobs --decades --countries --imperialists --beta
-// --gamma --revolution --xi --stop-one-empire, bound to `o`.
+// The ICA flags (docs/commands.md): --seed, then the rows of key_table() bound to an IcaOptions
+// field (--jobs --decades --countries --imperialists --beta --gamma --revolution --xi
+// --stop-one-empire), bound to `o`, all but --seed and --jobs in kIcaOptionGroup.
 void add_ica_options(CLI::App* cmd, IcaOptions& o);
+
+// The flags of the rows of key_table() bound to a field of `o` (S: IcaOptions, LmOptions,
+// LmStartOptions, SyntheticOptions; src/scene/fit_options.hpp), in the table's order, each with
+// its row's meaning and range as --help text and its default shown. Returns them, to be grouped.
+template <class S>
+std::vector<CLI::Option*> add_row_flags(CLI::App* cmd, S& o);
 
 // --seed bound to `seed` (std::uint64_t or unsigned): a decimal integer from 0 to the type's
 // maximum. CLI11 alone reads "-1" as the maximum (wrapped) and a value past it as the maximum
@@ -66,12 +73,13 @@ void add_history_and_continue_options(CLI::App* cmd, bool& step_history, std::st
 // place.
 void copy_run_flags(const IntegratorOptions& flags, IntegratorOptions& into);
 
-// Validation messages name struct fields ("revolution_rate = 2: ..."); the user typed flags.
-// Rethrows `e` with the field replaced by its flag ("--revolution = 2: ..."), for the ICA
-// fields and the extra (field, flag) pairs given; unchanged if no name matches.
+// A validation error in the user's words: a message whose "FIELD = " is one of `names` (the
+// choices that are no parameter: --integrator, a registry's name; optimize's --problem and
+// --dim; repro's study selection) with FIELD replaced by its flag; otherwise rethrow_as_typed
+// (an InvalidField of a row of key_table() under the row's flag, anything else unchanged).
 [[noreturn]] void rethrow_with_flag_names(
     const std::invalid_argument& e,
-    const std::vector<std::pair<std::string, std::string>>& extra = {});
+    const std::vector<std::pair<std::string, std::string>>& names = {});
 
 // One line on stderr, "knitsim <command>: warning: <message>": input that is valid but will not
 // do what it seems to. The run goes on.

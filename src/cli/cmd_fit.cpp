@@ -362,9 +362,7 @@ void run(const FitArgs& args) {
   try {
     args.lm.validate();
   } catch (const std::invalid_argument& e) {
-    rethrow_with_flag_names(e, {{"lm.starts_per_bracket", "--lm-starts"},
-                                {"lm.refine", "--lm-refine"},
-                                {"lm.max_evaluations", "--lm-evaluations"}});
+    rethrow_as_typed(e);  // under the flags of the LM rows of key_table()
   }
   Scene base = load_scene(args.scene, args.sets);
   base.options.rtol = args.rtol;
@@ -431,18 +429,9 @@ void register_fit_command(CLI::App& app) {
                   "Optimiser: ica, or lm (multi-start Levenberg-Marquardt with analytic "
                   "equilibrium sensitivities; src/fit/lm_fit.hpp)")
       ->capture_default_str();
-  cmd->add_option("--lm-starts", args->lm.starts_per_bracket,
-                  "lm: screened starts per topology and grid-size bracket (k at the box "
-                  "centre, then seeded random k)")
-      ->capture_default_str()
-      ->group(kLmOptionGroup);
-  cmd->add_option("--lm-refine", args->lm.refine, "lm: best screened starts refined by LM")
-      ->capture_default_str()
-      ->group(kLmOptionGroup);
-  cmd->add_option("--lm-evaluations", args->lm.lm.max_evaluations,
-                  "lm: drape evaluations per refined start at most")
-      ->capture_default_str()
-      ->group(kLmOptionGroup);
+  for (CLI::Option* opt : add_row_flags(cmd, static_cast<LmStartOptions&>(args->lm)))
+    opt->group(kLmOptionGroup);
+  for (CLI::Option* opt : add_row_flags(cmd, args->lm.lm)) opt->group(kLmOptionGroup);
   cmd->add_option("--integrator", args->integrator,
                   "Integrator of every evaluation (knitsim list integrators); default equilibrium");
   cmd->add_option("--rtol", args->rtol, "Relative tolerance of every drape run (adaptive methods)")

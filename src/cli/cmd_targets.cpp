@@ -108,7 +108,7 @@ void run(const TargetsArgs& args) {
   try {
     args.options.validate();
   } catch (const std::invalid_argument& e) {
-    rethrow_with_flag_names(e, {{"noise_mm", "--noise-mm"}, {"photos", "--photos"}});
+    rethrow_as_typed(e);  // under the flags of their rows of key_table()
   }
   const std::filesystem::path dir = make_output_dir(args.out, "targets");
 
@@ -159,13 +159,7 @@ void register_targets_command(CLI::App& app) {
   cmd->add_option("--samples", args->samples, "Samples: list or ranges within 1..9, e.g. 2,5-7")
       ->capture_default_str();
   add_seed_option(cmd, args->options.seed, "Base seed of the noise")->capture_default_str();
-  cmd->add_option("--noise-mm", args->options.noise_mm,
-                  "Noise sigma per camera coordinate and photo, mm (>= 0)")
-      ->capture_default_str();
-  cmd->add_option(
-         "--photos", args->options.photos,
-         "Photos averaged per point (1.." + std::to_string(SyntheticOptions::max_photos) + ")")
-      ->capture_default_str();
+  add_row_flags(cmd, args->options);  // --noise-mm, --photos
   cmd->add_option("--out", args->out,
                   "Output folder (default: a fresh out/targets-<YYYYmmdd-HHMMSS>)");
   cmd->add_flag("--quiet", args->quiet, "No progress lines on stderr");

@@ -26,24 +26,6 @@ constexpr double kPi = 3.14159265358979323846;
 // ---------------------------------------------------------------------------------------
 // Options, Table 1, problem
 
-void IcaOptions::validate() const {
-  if (imperialists < 1) bad_field("imperialists", imperialists, "must be >= 1");
-  if (countries <= imperialists)
-    bad_field("countries", countries,
-              "must be > imperialists (" + std::to_string(imperialists) + ")");
-  if (countries > max_countries)
-    bad_field("countries", countries, "must be <= " + std::to_string(max_countries));
-  if (decades < 1) bad_field("decades", decades, "must be >= 1");
-  if (!(beta > 0.0) || !std::isfinite(beta)) bad_field("beta", beta, "must be > 0");
-  if (!(gamma >= 0.0 && gamma <= kPi)) bad_field("gamma", gamma, "must be in [0, pi] rad");
-  if (!(revolution_rate >= 0.0 && revolution_rate <= 1.0))
-    bad_field("revolution_rate", revolution_rate, "must be in [0, 1]");
-  if (!(xi >= 0.0) || !std::isfinite(xi)) bad_field("xi", xi, "must be >= 0");
-  if (jobs < 1) bad_field("jobs", jobs, "must be >= 1");
-  if (!(failure_cost > 0.0) || !std::isfinite(failure_cost))
-    bad_field("failure_cost", failure_cost, "must be finite and > 0");
-}
-
 const std::array<std::array<double, 3>, 7>& ica_table1_levels() {
   static const std::array<std::array<double, 3>, 7> levels = {{
       {10, 20, 40},      // A MaxIt (decades)

@@ -89,6 +89,7 @@
 #include <string>
 #include <vector>
 
+#include "src/scene/fit_options.hpp"
 
 namespace knitsim {
 
@@ -123,44 +124,6 @@ struct IcaState {
   double best_cost = 0.0;      // best successful cost so far (meaningful when found)
   std::vector<double> best_x;  // its point (the first failed point while !found)
   double wall_seconds = 0.0;   // wall time spent so far, over every process of a resumed run
-};
-
-struct IcaOptions {
-  // Most countries validate() accepts (the paper's levels are 15..25): each holds a point of
-  // the problem's dimension.
-  static constexpr int max_countries = 10000;
-  // Defaults: paper 1's Taguchi-best combination A3 B3 C1 D2 E1 F2 G2 of Table 1, with B and C
-  // read swapped (B = number of countries, C = number of imperialists; paper_repro/data/README.md).
-  int decades = 40;              // MaxIt, Table 1 factor A (levels 10 / 20 / 40)
-  int countries = 25;            // N_country, factor B (15 / 20 / 25); > imperialists, <= max
-  int imperialists = 2;          // N_imp, factor C (2 / 5 / 10); >= 1
-  double beta = 1.0;             // assimilation coefficient, factor D (0.5 / 1 / 2); > 0
-  double gamma = 0.1;            // assimilation angle bound, rad, factor E (0.1/0.3/0.5); [0, pi]
-  double revolution_rate = 0.3;  // fraction of colonies revolved per decade, factor F; [0, 1]
-  double xi = 0.15;              // colonies' share of the empire total cost, factor G; >= 0
-  std::uint64_t seed = 1;        // random seed
-  int jobs = 1;                  // threads evaluating costs (the result does not depend on it)
-  double failure_cost = 1e10;    // cost given to failed (non-finite) evaluations; finite, > 0
-  // Step 9's literal rule (paper 1: "When only one empire exists, the algorithm is
-  // terminated"). Off by default: with the Taguchi-best settings it ends a run after ~2
-  // decades, contradicting the ~950 evaluations per run of the paper's protocol (see step 9 above).
-  bool stop_when_one_empire = false;
-
-  // Checkpointing (knitsim fit --resume; not part of validate()). `on_decade`, when set, is
-  // called on the calling thread with the complete state after the initial empires (decade 0)
-  // and after every decade; an exception it throws ends the run and propagates. `resume_from`,
-  // when set, continues that state (from a run with the same problem and options but any
-  // `jobs`) instead of starting afresh: std::invalid_argument if it does not fit the options
-  // (dimension, decade, counts).
-  std::function<void(const IcaState&)> on_decade;
-  std::shared_ptr<const IcaState> resume_from;
-  // Asked after every decade's on_decade (never in the middle of one, so the saved state is
-  // whole): true ends the run there with status Interrupted, unless that was the last decade
-  // or the step-9 rule stops it anyway. knitsim fit sets it to "SIGINT or SIGTERM received".
-  std::function<bool()> stop_requested;
-
-  // Throws std::invalid_argument naming the bad field and its accepted range.
-  void validate() const;
 };
 
 // Paper 1 Table 1: the options of one level combination, levels 1..3 for the

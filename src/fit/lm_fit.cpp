@@ -29,14 +29,6 @@ const std::array<DrapeParameter, kDrapeContinuous> kParameters = {
 
 }  // namespace
 
-void LmOptions::validate() const {
-  if (max_evaluations < 1) bad_field("lm.max_evaluations", max_evaluations, "must be >= 1");
-  if (!(initial_lambda > 0.0) || !std::isfinite(initial_lambda))
-    bad_field("lm.initial_lambda", initial_lambda, "must be > 0");
-  if (!(step_tol >= 0.0)) bad_field("lm.step_tol", step_tol, "must be >= 0");
-  if (!(cost_tol >= 0.0)) bad_field("lm.cost_tol", cost_tol, "must be >= 0");
-}
-
 const char* to_string(LmStatus s) {
   switch (s) {
     case LmStatus::StepTolerance:
@@ -272,9 +264,7 @@ DrapeIdentifiability identifiability(const DrapeResiduals& at, const std::vector
 
 void DrapeLmOptions::validate() const {
   lm.validate();
-  if (starts_per_bracket < 1)
-    bad_field("lm.starts_per_bracket", starts_per_bracket, "must be >= 1");
-  if (refine < 1) bad_field("lm.refine", refine, "must be >= 1");
+  LmStartOptions::validate();
   polish.validate();
 }
 

@@ -56,17 +56,9 @@
 #include "src/fit/drape_fit.hpp"
 #include "src/fit/sensitivity.hpp"
 #include "src/measure/measurement.hpp"
+#include "src/scene/fit_options.hpp"
 
 namespace knitsim {
-
-struct LmOptions {
-  int max_evaluations = 15;      // residual + Jacobian evaluations per start (>= 1)
-  double initial_lambda = 1e-3;  // lambda_0 = initial_lambda x max diag(J_u^T J_u) (> 0)
-  double step_tol = 1e-6;        // stop when |delta|_inf (unit box) <= step_tol (>= 0)
-  double cost_tol = 1e-6;        // stop when an accepted step lowers |r|^2 by <= cost_tol
-                                 // relative (>= 0)
-  void validate() const;         // std::invalid_argument "lm.<field> = value: range"
-};
 
 // A box-bounded least-squares problem: evaluate(x, r, J) fills the residuals (m) and the
 // Jacobian dr/dx (m x p) and returns false for a failed evaluation.
@@ -131,10 +123,9 @@ struct DrapeIdentifiability {
 };
 DrapeIdentifiability identifiability(const DrapeResiduals& at, const std::vector<double>& x);
 
-struct DrapeLmOptions {
+// The starts' budget (starts_per_bracket, refine: LmStartOptions, src/scene/fit_options.hpp).
+struct DrapeLmOptions : LmStartOptions {
   LmOptions lm;
-  int starts_per_bracket = 1;  // >= 1: k at the box centre, then seeded uniform k
-  int refine = 2;              // >= 1: screened starts refined by LM
   std::uint64_t seed = 1;
   PolishOptions polish;
   // Optional: called on the calling thread after every drape evaluation, in order, with the

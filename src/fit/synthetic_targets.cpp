@@ -112,15 +112,6 @@ SyntheticSet synthetic_set_from_name(const std::string& name) {
   throw std::invalid_argument("set = " + name + ": accepted twin|cross");
 }
 
-void SyntheticOptions::validate() const {
-  if (!std::isfinite(noise_mm) || noise_mm < 0.0)
-    throw std::invalid_argument("noise_mm = " + std::to_string(noise_mm) +
-                                ": must be finite and >= 0 (mm)");
-  if (photos < 1 || photos > max_photos)
-    throw std::invalid_argument("photos = " + std::to_string(photos) + ": must be in 1.." +
-                                std::to_string(max_photos));
-}
-
 const std::vector<std::string>& synthetic_scene_names() {
   static const std::vector<std::string> names = {"four_corner", "two_corner"};
   return names;

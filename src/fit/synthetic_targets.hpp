@@ -53,6 +53,7 @@
 #include "src/paper/paper_data.hpp"
 #include "src/scene/scene.hpp"
 #include "src/fit/targets.hpp"
+#include "src/scene/fit_options.hpp"
 
 namespace knitsim {
 
@@ -60,17 +61,6 @@ enum class SyntheticSet { Twin, Cross };
 const char* to_string(SyntheticSet set);  // "twin" | "cross"
 // "twin" | "cross"; throws std::invalid_argument "set = X: accepted twin|cross".
 SyntheticSet synthetic_set_from_name(const std::string& name);
-
-struct SyntheticOptions {
-  // Most photos per point: 2 x photos normal draws per point, ~1e7 per sample at the most.
-  static constexpr int max_photos = 10000;
-  double noise_mm = 0.5;  // sigma of the Gaussian noise per point and photo, mm (>= 0)
-  int photos = 5;         // photos averaged per point (1..max_photos)
-  unsigned seed = 2017;   // base seed; each (sample, set, scene) draws from its own stream
-  // Throws std::invalid_argument "noise_mm = X: must be finite and >= 0 (mm)" or
-  // "photos = P: must be in 1..10000".
-  void validate() const;
-};
 
 // The scenes of every synthetic target, in file order: four_corner, two_corner.
 const std::vector<std::string>& synthetic_scene_names();

@@ -63,6 +63,18 @@ nlohmann::json summary_units(const nlohmann::json& model) {
   return units;
 }
 
+std::vector<std::string> field_names(const nlohmann::json& object) {
+  std::vector<std::string> names;
+  for (const auto& item : object.items()) names.push_back(item.key());
+  return names;
+}
+
+nlohmann::json parameter_units(KeyModel model, const nlohmann::json& params,
+                               const nlohmann::json& options, const std::string& options_name) {
+  return {{"params", units_text(model, field_names(params))},
+          {options_name, units_text(KeyModel::Both, field_names(options))}};
+}
+
 nlohmann::json drape_summary(const Scene& scene, const DrapeResult& r) {
   const SpringNetwork& net = r.grid.network;
   nlohmann::json j = to_json(r.stats);
@@ -99,11 +111,8 @@ nlohmann::json drape_summary(const Scene& scene, const DrapeResult& r) {
        {"objective", "%: the Eq. 5 error against --target"},
        {"edge_coefficients",
         "1: p0..p4 of d(s) = sum p_i s^i, s and d lengths divided by the "
-        "edge's reference length (edges.csv; src/measure/measurement.hpp)"},
-       {"params",
-        "width, natural_length, perturbation m; areal_density g/m^2; stiffness N/m; "
-        "damping N s/m; elongation_limit %; pin_span a fraction of the width; "
-        "pin_move_time s"}});
+        "edge's reference length (edges.csv; src/measure/measurement.hpp)"}});
+  j["units"].update(parameter_units(KeyModel::Drape, j["params"], j["options"]));
   return j;
 }
 

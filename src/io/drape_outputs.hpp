@@ -35,6 +35,14 @@ std::string residual_summary(const RunStats& s, double position_tol);
 // without the source. `model` maps the model's own numbers (drape or knit: the residual's
 // scale, centre_sag_m, params, ...) to their units; times, steps and cost figures are shared.
 nlohmann::json summary_units(const nlohmann::json& model);
+// The units of a summary's parameter blocks, from the rows of the parameter table (units_text,
+// src/scene/scene.hpp): {"params": of `params`' fields, by the rows of `model` (drape or knit),
+// "options": of `options`' fields (IntegratorOptions), or under `options_name`}.
+nlohmann::json parameter_units(KeyModel model, const nlohmann::json& params,
+                               const nlohmann::json& options,
+                               const std::string& options_name = "options");
+// The field names of a JSON object, in its order.
+std::vector<std::string> field_names(const nlohmann::json& object);
 
 // summary.json: scene, source, status, message, integrator, t_final, residual, wall time, all
 // RunStats counters, grid size and counts, max strain, centre sag, params, options.

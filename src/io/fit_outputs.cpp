@@ -6,14 +6,18 @@
 #include "src/base/text.hpp"
 #include "src/io/json.hpp"
 #include "src/io/manifest.hpp"
+#include "src/scene/scene.hpp"
 
 namespace knitsim {
 
 nlohmann::json fit_units(bool lm) {
+  const std::vector<std::string> genes(drape_gene_names().begin(),
+                                       drape_gene_names().begin() + kDrapeContinuous);
   nlohmann::json u = {
       {"params, base_params, bounds, best_country",
-       "stiffness N/m; damping N s/m; elongation_limit %; natural_length m; the topology gene u "
-       "in [0, 3) (best_country's last entry, bounds.topology)"},
+       units_text(KeyModel::Drape, genes) +
+           "; the topology gene u in [0, 3) (best_country's last entry, bounds.topology)"},
+      {"run_options", units_text(KeyModel::Both, field_names(to_json(IntegratorOptions{})))},
       {"objective", "%: the Eq. 5 error of the fitted drape's edges against the target"},
       {"wall_seconds, cpu_seconds", "s"},
       {"evaluations, failed_evaluations", "counts of drapes"}};

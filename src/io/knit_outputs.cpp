@@ -145,9 +145,10 @@ nlohmann::json contact_json(const KnitModel& m, double t, const std::vector<doub
           {"list_sweeps", c.list_sweeps()}};
 }
 
-// summary.json's `units` for a knit run's own numbers (summary_units adds the shared ones).
-nlohmann::json knit_units() {
-  return summary_units(
+// summary.json's `units` for a knit run's own numbers (summary_units adds the shared ones; those
+// of its params and options come from the parameter table's rows).
+nlohmann::json knit_units(const nlohmann::json& params, const nlohmann::json& options) {
+  nlohmann::json units = summary_units(
       {{"residual, residual_floor",
         "1: the static residual (docs/equilibrium.md), max over free points of |net force| / "
         "(k_w r), a wale spring stretched by one loop radius (with gravity: or the mean point "
@@ -166,10 +167,9 @@ nlohmann::json knit_units() {
         "null without yarn contact; min_point_distance_over_r 1: the closest two contact points "
         "at the end / loop radius (null: no pair within reach); pairs_in_contact: pairs closer "
         "than the touching distance r; renewed_yarns, renewals_cut, pattern_misses, "
-        "list_rebuilds, list_sweeps: counts over the run (docs/knit.md, Yarn contact)"},
-       {"params",
-        "loop_radius m; wale_stiffness, course_stiffness N/m; damping N s/m; areal_density "
-        "g/m^2; stabiliser_ratio 1"}});
+        "list_rebuilds, list_sweeps: counts over the run (docs/knit.md, Yarn contact)"}});
+  units.update(parameter_units(KeyModel::Knit, params, options));
+  return units;
 }
 
 // The centrelines of each distinct state, computed once (the first frame is the rest state, the
@@ -302,7 +302,7 @@ nlohmann::json knit_summary(const KnitScene& scene, const KnitResult& r,
           {"frames", frames},
           {"params", params_json(m.params)},
           {"options", to_json(scene.options)},
-          {"units", knit_units()}};
+          {"units", knit_units(params_json(m.params), to_json(scene.options))}};
 }
 
 void write_knit_outputs(const fs::path& dir, const KnitScene& scene, const KnitResult& r,

@@ -1,11 +1,14 @@
 #include "src/python/fit_call.hpp"
 
+#include <algorithm>
+#include <any>
 #include <cerrno>
 #include <cstdlib>
 #include <stdexcept>
 
 #include "src/base/files.hpp"
 #include "src/base/text.hpp"
+#include "src/scene/scene.hpp"
 
 namespace knitsim {
 
@@ -13,7 +16,7 @@ namespace {
 
 struct FitOption {
   std::string name, flag;
-  bool (*set)(Scene&, IcaOptions&, const std::string&);
+  std::function<bool(Scene&, IcaOptions&, const std::string&)> set;
   const char* type;
 };
 
@@ -34,48 +37,47 @@ bool to_integer(const std::string& text, I& out) {
   return static_cast<long long>(out) == v && (v >= 0 || I(-1) < I(0));
 }
 
+// The keyword arguments of knitsim.fit: the run tolerances and --seed of `knitsim fit`, then the
+// flags of the rows of key_table() bound to an IcaOptions field, each named as its flag without
+// "--" and with "_" for "-" (--stop-one-empire: stop_one_empire).
 const std::vector<FitOption>& fit_options() {
   using S = Scene;
   using I = IcaOptions;
   using T = const std::string&;
-  static const std::vector<FitOption> table = {
-      {"rtol", "--rtol", [](S& s, I&, T t) { return to_double(t, s.options.rtol); }, "a number"},
-      {"atol", "--atol", [](S& s, I&, T t) { return to_double(t, s.options.atol); }, "a number"},
-      {"velocity_atol", "--velocity-atol",
-       [](S& s, I&, T t) { return to_double(t, s.options.velocity_atol); }, "a number"},
-      {"seed", "--seed", [](S&, I& o, T t) { return to_integer(t, o.seed); },
-       "a decimal integer >= 0"},
-      {"jobs", "--jobs", [](S&, I& o, T t) { return to_integer(t, o.jobs); }, "an integer"},
-      {"decades", "--decades", [](S&, I& o, T t) { return to_integer(t, o.decades); },
-       "an integer"},
-      {"countries", "--countries", [](S&, I& o, T t) { return to_integer(t, o.countries); },
-       "an integer"},
-      {"imperialists", "--imperialists",
-       [](S&, I& o, T t) { return to_integer(t, o.imperialists); }, "an integer"},
-      {"beta", "--beta", [](S&, I& o, T t) { return to_double(t, o.beta); }, "a number"},
-      {"gamma", "--gamma", [](S&, I& o, T t) { return to_double(t, o.gamma); }, "a number"},
-      {"revolution", "--revolution",
-       [](S&, I& o, T t) { return to_double(t, o.revolution_rate); }, "a number"},
-      {"xi", "--xi", [](S&, I& o, T t) { return to_double(t, o.xi); }, "a number"},
-      {"stop_one_empire", "--stop-one-empire",
-       [](S&, I& o, T t) {
-         if (t != "True" && t != "False") return false;
-         o.stop_when_one_empire = t == "True";
-         return true;
-       },
-       "True or False"}};
+  static const std::vector<FitOption> table = [] {
+    std::vector<FitOption> all = {
+        {"rtol", "--rtol", [](S& s, I&, T t) { return to_double(t, s.options.rtol); }, "a number"},
+        {"atol", "--atol", [](S& s, I&, T t) { return to_double(t, s.options.atol); }, "a number"},
+        {"velocity_atol", "--velocity-atol",
+         [](S& s, I&, T t) { return to_double(t, s.options.velocity_atol); }, "a number"},
+        {"seed", "--seed", [](S&, I& o, T t) { return to_integer(t, o.seed); },
+         "a decimal integer >= 0"}};
+    for (const Key& key : key_table()) {
+      if (key.flag.empty()) continue;
+      std::string name = key.flag.substr(2);
+      std::replace(name.begin(), name.end(), '-', '_');
+      if (const auto* i = std::any_cast<int I::*>(&key.member)) {
+        const auto m = *i;
+        all.push_back({name, key.flag, [m](S&, I& o, T text) { return to_integer(text, o.*m); },
+                       "an integer"});
+      } else if (const auto* d = std::any_cast<double I::*>(&key.member)) {
+        const auto m = *d;
+        all.push_back(
+            {name, key.flag, [m](S&, I& o, T text) { return to_double(text, o.*m); }, "a number"});
+      } else if (const auto* b = std::any_cast<bool I::*>(&key.member)) {
+        const auto m = *b;
+        all.push_back({name, key.flag,
+                       [m](S&, I& o, T text) {
+                         if (text != "True" && text != "False") return false;
+                         o.*m = text == "True";
+                         return true;
+                       },
+                       "True or False"});
+      }
+    }
+    return all;
+  }();
   return table;
-}
-
-// The ICA's field names as `knitsim fit` shows them (its flags).
-const std::vector<std::pair<std::string, std::string>>& ica_flag_names() {
-  static const std::vector<std::pair<std::string, std::string>> names = {
-      {"countries", "--countries"}, {"imperialists", "--imperialists"},
-      {"decades", "--decades"},     {"beta", "--beta"},
-      {"gamma", "--gamma"},         {"revolution_rate", "--revolution"},
-      {"xi", "--xi"},               {"jobs", "--jobs"},
-      {"integrator", "--integrator"}};
-  return names;
 }
 
 }  // namespace
@@ -126,7 +128,11 @@ FitCall fit_call(const FitRequest& request, const std::function<bool()>& stop) {
   try {
     problem = std::make_unique<DrapeFitProblem>(base, target, options);
   } catch (const std::invalid_argument& e) {
-    rethrow_renamed(e, ica_flag_names());
+    // The integrator registry names its choice "integrator" (as knitsim fit does: --integrator);
+    // the ICA's fields are refused under their flags (rows of key_table()).
+    if (std::string(e.what()).rfind("integrator = ", 0) == 0)
+      throw std::invalid_argument(std::string("--") + e.what());
+    rethrow_as_typed(e);
   }
 
   FitCall call{fit_drape(*problem), problem->integrator(), problem->target_scene(), nullptr, {}};

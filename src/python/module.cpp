@@ -305,7 +305,8 @@ py::dict stitches_columns(const std::string& csv) {
 }
 
 // The key table's rows as help lines "  key (unit; default D; accepted): meaning", by column name
-// (the table's columns: key, model, unit, default, accepted, meaning); `keep` picks the rows.
+// (the table's columns: key, model, unit, default, accepted, meaning); `keep(key, model)` picks
+// the rows.
 template <typename Keep>
 std::string key_lines(Keep keep) {
   const Table keys = scene_key_table();
@@ -314,11 +315,11 @@ std::string key_lines(Keep keep) {
       if (keys.columns[c] == name) return c;
     throw std::logic_error(std::string("scene_key_table has no column ") + name);
   };
-  const std::size_t key = col("key"), unit = col("unit"), def = col("default"),
-                    accepted = col("accepted"), meaning = col("meaning");
+  const std::size_t key = col("key"), model = col("model"), unit = col("unit"),
+                    def = col("default"), accepted = col("accepted"), meaning = col("meaning");
   std::string doc;
   for (const auto& row : keys.rows)
-    if (keep(row[key]))
+    if (keep(row[key], row[model]))
       doc += "  " + row[key] + " (" + row[unit] + "; default " + row[def] + "; " +
              row[accepted] + "): " + row[meaning] + "\n";
   return doc;
@@ -352,8 +353,9 @@ std::string knit_doc() {
       "result as .result.\n"
       "\n"
       "Knit and run keys (unit; default; accepted values; meaning):\n";
-  doc += key_lines([](const std::string& key) {
-    return key.rfind("knit.", 0) == 0 || key.rfind("run.", 0) == 0 || key.rfind("--", 0) == 0;
+  doc += key_lines([](const std::string& key, const std::string& model) {
+    return model != "fit" &&
+           (key.rfind("knit.", 0) == 0 || key.rfind("run.", 0) == 0 || key.rfind("--", 0) == 0);
   });
   return doc;
 }
@@ -426,7 +428,15 @@ std::string fit_doc() {
   doc +=
       " (rtol defaults to 1e-8, as for the command).\n\n"
       "Ctrl-C ends the fit at the end of its current decade (status interrupted) and raises "
-      "KeyboardInterrupt with the result so far as .result.\n";
+      "KeyboardInterrupt with the result so far as .result.\n"
+      "\n"
+      "The ICA's options (unit; default; accepted values; meaning):\n";
+  doc += key_lines([](const std::string& key, const std::string& model) {
+    if (model != "fit") return false;
+    for (const auto& [name, flag] : fit_option_flags())
+      if (flag == key) return true;
+    return false;
+  });
   return doc;
 }
 
@@ -457,7 +467,7 @@ std::string drape_doc() {
       "raises KeyboardInterrupt with the partial result as .result.\n"
       "\n"
       "Scene keys (unit; default; accepted values; meaning):\n";
-  doc += key_lines([](const std::string&) { return true; });
+  doc += key_lines([](const std::string&, const std::string& model) { return model != "fit"; });
   return doc;
 }
 

@@ -29,6 +29,7 @@
 #include <variant>
 
 #include "models/mirror_reduced.hpp"
+#include "src/scene/fit_options.hpp"
 #include "solvers/equilibrium_check.hpp"
 #include "src/base/files.hpp"
 #include "src/base/text.hpp"
@@ -197,9 +198,11 @@ std::vector<Key> make_table() {
   number(
       "pins.span", [](Scene& s) -> double& { return s.params.pin_span; }, "1",
       "two_corner: final pin distance / model width; below 1 the pins move inward");
+  k.back().summary = "pin_span";
   number(
       "pins.move_time", [](Scene& s) -> double& { return s.params.pin_move_time; }, "s",
       "duration of that pin move");
+  k.back().summary = "pin_move_time";
   // The knit's keys (models/knit_loops.hpp, docs/knit.md).
   auto knit = [&number](const char* name, double KnitParams::*field, const char* unit,
                         const char* meaning) {
@@ -219,12 +222,15 @@ std::vector<Key> make_table() {
   knit("knit.stabiliser", &KnitParams::stabiliser_ratio, "1",
        "stabiliser's shear and bending springs relative to k_w, k_c (0 = off: paper 2's "
        "network)");
+  k.back().summary = "stabiliser_ratio";
   knit("knit.bending", &KnitParams::bending_ratio, "1",
        "out-of-plane bending rigidity as a multiple of the yarn's (0 = off: the chart stays in "
        "its plane; needs knit.contact = 0)");
+  k.back().summary = "bending_ratio";
   knit("knit.contact", &KnitParams::contact_ratio, "1",
        "yarn contact's barrier stiffness relative to k_w (0 = off: yarns may pass through each "
        "other)");
+  k.back().summary = "contact_ratio";
   // A knit key naming one of a few values of the KnitParams member `field`: (name, value) pairs;
   // `accepted` says what it takes in messages ("" = "one of" the names).
   auto knit_choice = [&k](const char* name, auto field, auto values, std::string accepted,
@@ -332,6 +338,7 @@ std::vector<Key> make_table() {
   option("", "--eps-lin", "krylov_eps_lin", &IO::krylov_eps_lin, "1",
          "cvode-bdf-gmres: linear tolerance factor (CVodeSetEpsLin); with block-jacobi the "
          "residual a run can reach is proportional to it");
+  append_fit_option_rows(k);  // the fitting commands' flags (src/scene/fit_options.cpp)
   // Fields no user sets, for summary.json (IntegratorOptions documents them).
   option("", "", "dt_safety", &IO::dt_safety, "1", "");
   option("", "", "check_every", &IO::check_every, "1", "");
@@ -381,9 +388,13 @@ std::string validated_range(const Key& key) {
   else if (const auto* l = std::get_if<long IntegratorOptions::*>(&key.option))
     probe.options.*(*l) = -1;
   try {
-    probe.params.validate();
-    probe.options.validate();
-    probe.knit.validate();
+    if (key.probe_range) {
+      key.probe_range();
+    } else {
+      probe.params.validate();
+      probe.options.validate();
+      probe.knit.validate();
+    }
   } catch (const InvalidField& e) {
     const std::string must = "must be ";
     if (e.field() == key.field && e.accepted().rfind(must, 0) == 0)
@@ -526,7 +537,17 @@ void apply_toml(Scene& scene, KeyModel model, const std::string& text, const std
 }  // namespace
 
 const char* to_string(KeyModel model) {
-  return model == KeyModel::Drape ? "drape" : model == KeyModel::Knit ? "knit" : "both";
+  switch (model) {
+    case KeyModel::Drape:
+      return "drape";
+    case KeyModel::Knit:
+      return "knit";
+    case KeyModel::Both:
+      return "both";
+    case KeyModel::Fit:
+      return "fit";
+  }
+  return "?";
 }
 
 const std::vector<Key>& key_table() {
@@ -539,6 +560,8 @@ const Key& key_of_flag(const std::string& flag) {
     if (k.flag == flag) return k;
   throw std::logic_error("no parameter has the flag " + flag);
 }
+
+std::string key_range(const Key& key) { return validated_range(key); }
 
 void rethrow_as_typed(const std::invalid_argument& e, const Scene* scene) {
   const auto* bad = dynamic_cast<const InvalidField*>(&e);
@@ -639,6 +662,30 @@ std::string scene_key_value(const Scene& scene, const std::string& name) {
   return format_number(v, 6) + (key.unit.empty() || key.unit == "1" ? "" : " " + key.unit);
 }
 
+std::string summary_name(const Key& key) {
+  if (!key.summary.empty()) return key.summary;
+  if (key.option.index() != 0 || key.set_option) return key.field;
+  return key.name.substr(key.name.rfind('.') + 1);
+}
+
+std::string units_text(KeyModel model, const std::vector<std::string>& fields) {
+  std::vector<std::pair<std::string, std::string>> groups;  // (unit, "name, name")
+  for (const Key& k : key_table()) {
+    if (k.model != model || k.unit.empty()) continue;
+    const std::string name = summary_name(k);
+    if (std::find(fields.begin(), fields.end(), name) == fields.end()) continue;
+    const auto group = std::find_if(groups.begin(), groups.end(),
+                                    [&k](const auto& g) { return g.first == k.unit; });
+    if (group == groups.end())
+      groups.emplace_back(k.unit, name);
+    else
+      group->second += ", " + name;
+  }
+  std::string text;
+  for (const auto& [unit, names] : groups) text += (text.empty() ? "" : "; ") + names + " " + unit;
+  return text;
+}
+
 std::vector<std::string> keys_not_given(const Scene& scene,
                                         const std::vector<std::string>& among) {
   std::vector<std::string> missing;
@@ -665,6 +712,9 @@ Table scene_key_table() {
     } else if (const auto* l = std::get_if<long IntegratorOptions::*>(&k.option)) {
       value = std::to_string(defaults.options.*(*l));
       range = validated_range(k);
+    } else if (k.default_value) {
+      value = k.default_value();
+      range = k.probe_range ? validated_range(k) : k.accepted;
     } else {
       value = k.get_option ? k.get_option(defaults.options) : k.get(defaults);
       range = k.accepted;

@@ -31,6 +31,7 @@
 //   "scene: cannot read FILE: <reason>",  "scene FILE: TOML syntax error at line L, column C: ..."
 #pragma once
 
+#include <any>
 #include <cstddef>
 #include <functional>
 #include <map>
@@ -78,9 +79,10 @@ struct Scene {
   void validate() const;
 };
 
-// Which model a key applies to: the drape (paper 1), the knit (paper 2), or both (the run).
-enum class KeyModel { Drape, Knit, Both };
-const char* to_string(KeyModel model);  // "drape", "knit", "both"
+// Which model a key applies to: the drape (paper 1), the knit (paper 2), both (the run), or the
+// fitting commands (fit, optimize, repro, targets: their flags only).
+enum class KeyModel { Drape, Knit, Both, Fit };
+const char* to_string(KeyModel model);  // "drape", "knit", "both", "fit"
 
 // One row of the parameter table: everything the program says or does about one parameter.
 struct Key {
@@ -93,6 +95,9 @@ struct Key {
   Kind kind = Kind::Number;
   std::string unit;     // "" for text keys and pure numbers ("1" shown for ratios)
   std::string meaning;  // one sentence (`knitsim list keys`); a flag's --help text
+  // summary.json's name of the value where it is not the key's last part (pins.span: pin_span)
+  // or, for an IntegratorOptions row, its field; "" otherwise (summary_name()).
+  std::string summary;
   // Number keys: the field in a Scene (its accepted range is stated once, by the validators).
   std::function<double&(Scene&)> number;
   // Integer and Text keys: parse and store (false = not accepted), read back, what is accepted.
@@ -106,15 +111,26 @@ struct Key {
   std::vector<std::string> choices;  // named IntegratorOptions values (--factorization ...)
   std::function<bool(IntegratorOptions&, const std::string&)> set_option;
   std::function<std::string(const IntegratorOptions&)> get_option;
+  // Rows of the fitting commands' flags (src/scene/fit_options.hpp): the field as a pointer to
+  // member `T S::*` of its options struct S (the commands bind the flag to it), its default as
+  // text, and S::validate() run with the field out of every range (NaN; -1 for an integer),
+  // from which the range is read as for the other rows.
+  std::any member;
+  std::function<std::string()> default_value;
+  std::function<void()> probe_range;
 
   const std::string& label() const { return name.empty() ? flag : name; }  // as messages name it
 };
 
 // The table, in `knitsim list keys` order. Rows with neither key nor flag are IntegratorOptions
 // fields no user sets (dt_safety, check_every, runaway_position): summary.json still shows them.
+// The fitting commands' rows are appended by append_fit_option_rows (src/scene/fit_options.hpp).
 const std::vector<Key>& key_table();
 // The row with this flag (std::logic_error if none: a programming error).
 const Key& key_of_flag(const std::string& flag);
+// What the validators accept for a number or integer row, "must be" dropped ("in [0, 1]",
+// ">= 1"), asked from them with the field out of every range; "" where they state none.
+std::string key_range(const Key& key);
 
 // Rethrows a validation error in the user's words: the field renamed to its key or flag, and the
 // value as `scene` records it typed (when it still reads back as the value refused). Anything
@@ -155,6 +171,15 @@ std::vector<std::string> scene_keys(KeyModel model = KeyModel::Drape);
 Table scene_key_table();
 // The value of scene key `name` in `scene` as text, with its unit ("852 N/m", "a").
 std::string scene_key_value(const Scene& scene, const std::string& name);
+// summary.json's name of a row's value: Key::summary if set, an IntegratorOptions row's field
+// (t_max, krylov_eps_lin), else the key's last part (model.stiffness: stiffness).
+std::string summary_name(const Key& key);
+// summary.json's `units` text of a block of values written under the rows' summary names
+// (`fields`: params' or options' names), from the rows of `model` exactly (Drape, Knit: the
+// params; Both: the run options): every field with a unit, grouped by unit in the table's order,
+// "width, natural_length, perturbation m; areal_density g/m^2; ...". Fields of text rows, and
+// names no row of `model` has, are left out.
+std::string units_text(KeyModel model, const std::vector<std::string>& fields);
 // The keys of `among` that neither the scene file nor a --set gave (Scene::keys_given).
 std::vector<std::string> keys_not_given(const Scene& scene, const std::vector<std::string>& among);
 
