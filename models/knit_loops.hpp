@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "models/knit_clamps.hpp"
 #include "models/spring_network.hpp"
 #include "models/yarn_contact.hpp"
 #include "src/core/vec3.hpp"
@@ -67,7 +68,9 @@ struct KnitParams {
   double damping = 5e-4;
   double areal_density = 41.65;  // rho_A, g/m^2 (paper 1 Table 2, sample 1)
   bool gravity = false;          // paper 2 ignores external forces; on: g = 9.81 m/s^2 along -y
-  KnitPins pins = KnitPins::None;
+  KnitPins pins = KnitPins::None;  // shorthand for the common clamps: held before `clamps`
+  // Clamps (knit.clamps; models/knit_clamps.hpp, docs/knit.md "Under load").
+  std::vector<KnitClampSpec> clamps;
   // Which network (docs/knit.md, "Networks"): the stabilised default, or paper 2's bare network.
   KnitNetwork network = KnitNetwork::Stabilised;
   // s, dimensionless, in [0, 1]: stiffness of the stabiliser's shear and bending springs
@@ -130,11 +133,20 @@ struct KnitModel {
   // One run of the contact's model (models/yarn_contact.hpp): a second run of the same model,
   // e.g. on another thread, is ContactNetwork(contact->shared_model()).
   std::shared_ptr<ContactNetwork> contact;
+  // The clamps (knit.pins' edges, then knit.clamps): their points are the network's pins, in
+  // this order (Clamp::held indexes system().held_points()).
+  std::vector<Clamp> clamps;
   const MechanicalSystem& system() const {
     return contact ? static_cast<const MechanicalSystem&>(*contact) : network;
   }
   MechanicalSystem& system() {
     return contact ? static_cast<MechanicalSystem&>(*contact) : network;
+  }
+
+  // All points at (t, x), m: the free ones from x, the held ones where the running system holds
+  // them (its held points are run state: src/core/held_points.hpp).
+  void all_positions(double t, const double* x, std::vector<Vec3>& out) const {
+    (contact ? contact->network() : network).all_positions(t, x, out);
   }
 
   int point(int wale, int level) const { return point_at[level * chart.wales + wale]; }
