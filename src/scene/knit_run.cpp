@@ -106,7 +106,9 @@ KnitStart start_knit(const KnitScene& scene) {
                                  [](const Clamp& c) { return !c.path.fixed(); });
   if (moves) {
     HeldPoints& held = *s.model.system().held_points();
-    move_clamps(held, s.model.clamps, held.held_positions(0.0), 1.0);
+    std::vector<Vec3> rest(held.held_count());
+    for (int k = 0; k < held.held_count(); ++k) rest[k] = s.model.points[held.held_particle(k)].rest;
+    move_clamps(held, s.model.clamps, rest, 1.0);
   }
   return s;
 }

@@ -124,7 +124,10 @@ TensileResult run_tensile(const KnitScene& scene, const TensileOptions& o, RunOb
   KnitModel& m = r.model;
   MechanicalSystem& sys = m.system();
   HeldPoints& held = *sys.held_points();
-  const std::vector<Vec3> held_rest = held.held_positions(0.0);
+  // start_knit stood the moving clamp at its path's end: the test starts from rest.
+  std::vector<Vec3> held_rest(held.held_count());
+  for (int k = 0; k < held.held_count(); ++k) held_rest[k] = m.points[held.held_particle(k)].rest;
+  move_clamps(held, m.clamps, held_rest, 0.0);
   std::vector<double> x = std::move(start.x), v = std::move(start.v);
   const int n = sys.dof();
   // Along-pull rest coordinate of every dof's particle, for the affine predictor: xi in [0, 1].
