@@ -47,6 +47,8 @@ nlohmann::json tensile_summary(const KnitScene& scene, const TensileOptions& o,
                      {"status", s.status},
                      {"newton_steps", s.stats.steps},
                      {"factorisations", s.stats.factorisations},
+                     {"stop_factorisations", s.stats.stop_factorisations},
+                     {"cpu_seconds", s.stats.cpu_seconds},
                      {"certificate", s.stats.certificate},
                      {"saddle_escapes", s.stats.saddle_escapes},
                      {"reactions_N", reactions}});
