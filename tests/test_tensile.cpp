@@ -144,7 +144,7 @@ TEST_CASE("tensile with the contact off: the clamp's work is the stored energy's
 // springs of k (dy^2 / L)^2 (dx for the courses). By the principle of minimum potential energy
 // the clamped strip's true stiffness is at most that (Voigt's bound, exact), and in a strip
 // 2:1 long the lateral contraction the bound ignores is weak here (nu ~ 0.06) and the free
-// edges' missing bending springs a few percent: measured within 6 % below the count.
+// edges' missing bending springs little: measured 0.5-0.7 % below the count (checked to 2 %).
 //   wale:   W C k_w h^2 + 2 (W-1) C k_s h^4/d^2 + W (C-1) s k_w (2h)^2, over G^2 = (C h)^2
 //   course: (W-1) C k_c w^2 + 2 (W-1) C k_s w^4/d^2 + (W-2)(C+1) s k_c (2w)^2, over ((W-1) w)^2
 TEST_CASE("plain jersey's small-strain stiffness against a hand count of its springs",
@@ -176,7 +176,7 @@ TEST_CASE("plain jersey's small-strain stiffness against a hand count of its spr
     INFO(direction << ": " << W << " x " << C << ", measured " << measured << " N/m, count "
                    << count << " N/m");
     CHECK(measured <= count * (1.0 + 1e-6));
-    CHECK(measured >= 0.94 * count);
+    CHECK(measured >= 0.98 * count);
   }
 }
 
