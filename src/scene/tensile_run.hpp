@@ -24,6 +24,10 @@
 // last equilibrium plus the last step's change (a secant predictor), each dropped for the last
 // equilibrium as it is if its energy is not finite (a contact pair inside its core).
 //
+// Energy check: a step whose end lies above its start's energy after renewals of the contact's
+// maps (which change E(x) itself) is solved again from there with the renewed energy as the
+// reference (at most 3 times); its status is then the second solve's.
+//
 // Failure modes: bad options throw std::invalid_argument naming the flag and its range (before
 // anything is built or written); a step that does not reach equilibrium ends the test with its
 // status, the steps so far kept.
