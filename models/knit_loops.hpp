@@ -55,10 +55,11 @@ KnitNetwork parse_knit_network(const std::string& name);
 struct KnitParams {
   // r, m: 14 wales/cm -> w = 8r = 1/14 cm -> r = 1/1120 cm ~ 8.93e-5 m.
   double loop_radius = 1e-2 / 14.0 / 8.0;
-  // k_w, k_c, N/m: a documented choice (paper 2 gives no values). With springs in series
-  // along each wale and course, the fabric's tensile stiffness per unit width is
-  // k_w h/w ~ 88 N/m along the wales and k_c w/h ~ 114 N/m along the courses. Without
-  // external forces only the ratio k_w/k_c shapes the steady state; k sets the time scale.
+  // k_w, k_c, N/m: a documented choice (paper 2 gives no values). The network's tensile
+  // stiffness per unit width (knitsim tensile; docs/knit.md, "Under load") is 128 N/m along the
+  // wales and 173 N/m along the courses with the default stabiliser (k_w h/w = 87.5 and
+  // k_c w/h = 114 N/m without it). Without external forces only the ratio k_w/k_c shapes the
+  // steady state; k sets the time scale.
   double wale_stiffness = 100.0;
   double course_stiffness = 100.0;
   // c, N s/m per point (paper 2: F_d = -K_d V; no value given). Default ~0.2 x the
