@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <ctime>
+#include <functional>
 #include <memory>
 #include <set>
 #include <stdexcept>
@@ -181,6 +182,7 @@ TensileResult run_tensile(const KnitScene& scene, const TensileOptions& o, RunOb
       RunStats part = run_to_equilibrium(sys, *integ, scene.options, xs, vs, observer, 0.0);
       add_counters(part, total);
       part.cpu_seconds += total.cpu_seconds, part.wall_seconds += total.wall_seconds;
+      part.saddle_escapes += total.saddle_escapes;
       part.message += " (the energy check restarted after the contact's renewal)";
       total = part;
     }
@@ -199,16 +201,19 @@ TensileResult run_tensile(const KnitScene& scene, const TensileOptions& o, RunOb
   std::vector<double> previous = x, trial(n);
   double load = 0.0, last_change = 0.0;
   r.complete = true;
-  for (std::size_t k = 0; k < loads.size(); ++k) {
-    const double change = loads[k] - load;
-    move_clamps(held, m.clamps, held_rest, loads[k]);
-    // Warm start: the secant predictor, else the affine stretch from the last equilibrium, else
-    // that equilibrium as it is (see the header).
-    auto admissible = [&](const std::vector<double>& y) {
-      return std::isfinite(sys.potential_energy(0.0, y.data()));
-    };
+  auto admissible = [&](const std::vector<double>& y) {
+    return std::isfinite(sys.potential_energy(0.0, y.data()));
+  };
+  // The clamps moved from `load` to `target` and the state solved there. Warm start: the secant
+  // predictor, else the affine stretch from the last equilibrium, else that equilibrium as it
+  // is (see the header); where none is admissible (the moved clamp's yarn lands inside another's
+  // contact core) the move is halved and each half solved in turn, up to kMaxHalvings deep.
+  constexpr int kMaxHalvings = 6;
+  std::function<RunStats(double, int)> advance = [&](double target, int depth) -> RunStats {
+    const double change = target - load;
+    move_clamps(held, m.clamps, held_rest, target);
     bool predicted = false;
-    if (k > 0 && last_change != 0.0) {
+    if (last_change != 0.0) {
       for (int i = 0; i < n; ++i) trial[i] = x[i] + (change / last_change) * (x[i] - previous[i]);
       predicted = admissible(trial);
     }
@@ -217,11 +222,25 @@ TensileResult run_tensile(const KnitScene& scene, const TensileOptions& o, RunOb
         trial[i] = x[i] + change * u_max * xi[i] * (i % 3 == (wale ? 1 : 0) ? 1.0 : 0.0);
       predicted = admissible(trial);
     }
+    if (!predicted && !admissible(x) && depth < kMaxHalvings) {
+      move_clamps(held, m.clamps, held_rest, load);
+      RunStats first = advance(load + 0.5 * change, depth + 1);
+      if (first.status != RunStatus::Equilibrium) return first;
+      RunStats second = advance(target, depth + 1);
+      add_counters(second, first);
+      second.cpu_seconds += first.cpu_seconds, second.wall_seconds += first.wall_seconds;
+      second.saddle_escapes += first.saddle_escapes;
+      return second;
+    }
     previous = x;
     if (predicted) x = trial;
     std::fill(v.begin(), v.end(), 0.0);
     const RunStats stats = solve(x, v);
-    load = loads[k], last_change = change;
+    load = target, last_change = change;
+    return stats;
+  };
+  for (std::size_t k = 0; k < loads.size(); ++k) {
+    const RunStats stats = advance(loads[k], 0);
     r.steps.push_back(measure(static_cast<int>(k) + 1, load, stats));
     const bool ok = stats.status == RunStatus::Equilibrium;
     if (ok && kept.count(static_cast<int>(k) + 1)) {

@@ -22,7 +22,10 @@
 // the network: the clamps may hold a force there already, the curve's offset).
 // Warm start: step 1 from step 0 stretched affinely to its clamp positions, later steps from the
 // last equilibrium plus the last step's change (a secant predictor), each dropped for the last
-// equilibrium as it is if its energy is not finite (a contact pair inside its core).
+// equilibrium as it is if its energy is not finite (a contact pair inside its core); where even
+// that is not finite (the moved clamp's yarn lands inside another's contact core) the step's
+// move is halved, each half solved in turn (up to 6 halvings; the row is the step's end, its
+// counters the halves' sum).
 //
 // Energy check: a step whose end lies above its start's energy after renewals of the contact's
 // maps (which change E(x) itself) is solved again from there with the renewed energy as the
