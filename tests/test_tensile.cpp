@@ -5,6 +5,8 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -225,4 +227,45 @@ TEST_CASE("bad clamps and tensile options: one line, exit 2, nothing written", "
     CHECK(std::count(run.err.begin(), run.err.end(), '\n') == 1);
     CHECK(!fs::exists(out));
   }
+}
+
+// knitsim tensile's files: tensile.csv with the issue's columns, one row per step; a step that
+// does not reach equilibrium (here cut by --max-steps) is its last row's status, exit 3, with
+// the curve so far and the summary written.
+TEST_CASE("knitsim tensile writes the curve, and the curve so far when a step fails",
+          "[tensile]") {
+  TempDir tmp("tensile-cli");
+  const fs::path chart = tmp.path / "plain.chart";
+  std::ofstream(chart) << plain(6, 8);
+  const fs::path out = tmp.path / "out";
+  Run run = run_knitsim("tensile --chart '" + chart.string() +
+                            "' --steps 3 --strain 0.06 --unload --set knit.contact=0 --quiet "
+                            "--no-pictures --out '" + out.string() + "'",
+                        tmp);
+  INFO(run.err);
+  REQUIRE(run.status == 0);
+  std::vector<std::string> rows = lines(slurp(out / "tensile.csv"));
+  REQUIRE(rows.size() == 8u);  // header, step 0, 3 up, 3 down
+  CHECK(rows[0].rfind("step,strain,displacement_m,force_N,force_per_width_N_per_m,"
+                      "lateral_strain,energy_J,status,",
+                      0) == 0);
+  CHECK(rows[4].rfind("3,0.0", 0) == 0);
+  CHECK(rows[7].find(",equilibrium,") != std::string::npos);
+  CHECK(fs::exists(out / "step_006" / "points.csv"));  // --outputs 3 of 6: steps 2, 4, 6
+  CHECK(fs::exists(out / "manifest.json"));
+
+  // A flow step cap of 1: step 1 (2 flow steps with the contact on) ends step_limit.
+  const fs::path cut = tmp.path / "cut";
+  run = run_knitsim("tensile --chart '" + chart.string() +
+                        "' --steps 3 --strain 0.06 --max-steps 1 --quiet --no-pictures --out '" +
+                        cut.string() + "'",
+                    tmp);
+  CHECK(run.status == 3);
+  CHECK(run.err.find("ended step_limit") != std::string::npos);
+  rows = lines(slurp(cut / "tensile.csv"));
+  REQUIRE(rows.size() >= 2u);
+  CHECK(rows.back().find(",step_limit,") != std::string::npos);
+  const nlohmann::json summary = nlohmann::json::parse(slurp(cut / "summary.json"));
+  CHECK(summary["status"] == "step_limit");
+  CHECK(fs::exists(cut / "manifest.json"));
 }
