@@ -91,6 +91,15 @@ void run(const TensileArgs& args) {
     KnitScene at = scene;
     at.chart = r.specimen;
     KnitResult kr{r.model, kept.stats, 0.0, kept.x, v, kept.positions, {}, {}};
+    // The yarn measures of this state alone (a knit run's are over its whole run).
+    const YarnPolylines rest_lines = yarn_polylines(r.model, r.model.rest_positions());
+    const YarnPolylines lines = yarn_polylines(r.model, kept.positions);
+    KnitMeasures& ms = kr.measures;
+    ms.rest_clearance = yarn_clearance(r.model, rest_lines).over_r;
+    ms.min_clearance = yarn_clearance(r.model, lines);
+    ms.end_clearance = ms.min_clearance.over_r;
+    ms.measured_states = 1;
+    ms.crossings = check_crossings(designed_crossings(r.model, rest_lines), lines);
     write_knit_outputs(dir / name, at, kr, keys, !args.no_pictures);
   };
   const TensileResult result = [&]() -> TensileResult {
