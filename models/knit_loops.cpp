@@ -546,8 +546,7 @@ void add_stabiliser(const KnitChart& chart, const KnitParams& p,
 // pins, at rest: each clamp's points not held by an earlier one, in point order. Throws
 // InvalidField of knit.clamps for a selection the chart does not have.
 std::vector<Clamp> hold_points(const KnitChart& chart, const KnitParams& p,
-                               const std::vector<KnitPoint>& points,
-                               const std::vector<int>& point_at, SpringNetworkSpec& spec) {
+                               const std::vector<KnitPoint>& points, SpringNetworkSpec& spec) {
   const int W = chart.wales, C = chart.courses;
   using Where = KnitClampSpec::Where;
   std::vector<KnitClampSpec> specs;
@@ -603,7 +602,6 @@ std::vector<Clamp> hold_points(const KnitChart& chart, const KnitParams& p,
   if (spec.pinned.size() == points.size())
     throw InvalidField("knit.clamps", knit_clamps_text(p.clamps),
                        "the clamps hold every point of the chart; leave some free");
-  (void)point_at;
   return clamps;
 }
 
@@ -692,7 +690,7 @@ KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
   // (MechanicalSystem::free_floating, planar). Paper 2's mechanism has more.
   spec.free_floating = !p.mechanism();
   set_masses_and_loads(chart, p, spec, points);
-  std::vector<Clamp> clamps = hold_points(chart, p, points, point_at, spec);
+  std::vector<Clamp> clamps = hold_points(chart, p, points, spec);
 
   KnitModel m{chart,
               p,
