@@ -377,7 +377,12 @@ std::vector<Vec3> KnitModel::rest_positions() const {
   return x;
 }
 
-KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
+namespace {
+
+// build_knit's steps (docs/knit.md, "The model as built"), in order.
+
+// The chart and parameters checked, and what the model would need refused before allocating.
+void check_buildable(const KnitChart& chart, const KnitParams& p) {
   p.validate();
   chart.validate();
   if (p.yarn_contact())  // floats longer than the contact can hold: refused up front
@@ -399,36 +404,43 @@ KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
        << " points, over the cap of " << p.max_points;
     throw std::invalid_argument(os.str());
   }
-  {  // refused before any of it is allocated (docs/knit.md, "Memory")
-    const double need = knit_memory_estimate(W, C, p.yarn_contact());
-    const MemoryCap cap = knit_memory_cap();
-    if (need > cap.bytes) {
-      std::ostringstream os;
-      os << "chart: " << W << " wales x " << C << " courses needs about "
-         << std::llround(need / 1048576.0) << " MB"
-         << (p.yarn_contact() ? " with yarn contact" : "") << ", more than the "
-         << std::llround(cap.bytes / 1048576.0) << " MB available (" << cap.source
-         << "; docs/knit.md, \"Memory\")";
-      if (p.yarn_contact())
-        os << "; with knit.contact = 0 about "
-           << std::llround(knit_memory_estimate(W, C, false) / 1048576.0) << " MB";
-      throw std::invalid_argument(os.str());
-    }
+  // refused before any of it is allocated (docs/knit.md, "Memory")
+  const double need = knit_memory_estimate(W, C, p.yarn_contact());
+  const MemoryCap cap = knit_memory_cap();
+  if (need > cap.bytes) {
+    std::ostringstream os;
+    os << "chart: " << W << " wales x " << C << " courses needs about "
+       << std::llround(need / 1048576.0) << " MB" << (p.yarn_contact() ? " with yarn contact" : "")
+       << ", more than the " << std::llround(cap.bytes / 1048576.0) << " MB available ("
+       << cap.source << "; docs/knit.md, \"Memory\")";
+    if (p.yarn_contact())
+      os << "; with knit.contact = 0 about "
+         << std::llround(knit_memory_estimate(W, C, false) / 1048576.0) << " MB";
+    throw std::invalid_argument(os.str());
   }
-  const double r = p.loop_radius, w = p.wale_spacing(), h = p.course_spacing();
+}
 
-  std::vector<KnitPoint> points;
-  std::vector<int> point_at(static_cast<size_t>(W) * (C + 1), -1);
+// The interlacing points: every point of the edge levels, and a knit's lower point inside.
+void make_points(const KnitChart& chart, const KnitParams& p, std::vector<KnitPoint>& points,
+                 std::vector<int>& point_at) {
+  const int W = chart.wales, C = chart.courses;
+  const double w = p.wale_spacing(), h = p.course_spacing();
+  point_at.assign(static_cast<size_t>(W) * (C + 1), -1);
   for (int L = 0; L <= C; ++L)
     for (int i = 0; i < W; ++i)
       if (L == 0 || L == C || chart.at(i, L) == Stitch::Knit) {
         point_at[static_cast<size_t>(L) * W + i] = static_cast<int>(points.size());
         points.push_back({i, L, Vec3{i * w, L * h, 0.0}});
       }
-  auto point = [&](int i, int L) { return point_at[static_cast<size_t>(L) * W + i]; };
+}
 
-  std::vector<KnitLoop> loops;
-  std::vector<int> loop_at(static_cast<size_t>(W) * C, -1);
+// The loops: one per knit or tuck, from its lower point (a knit's) to the next level that has
+// a point on its wale (a held loop's upper point lies above the next level).
+void make_loops(const KnitChart& chart, const std::vector<int>& point_at,
+                std::vector<KnitLoop>& loops, std::vector<int>& loop_at) {
+  const int W = chart.wales, C = chart.courses;
+  auto point = [&](int i, int L) { return point_at[static_cast<size_t>(L) * W + i]; };
+  loop_at.assign(static_cast<size_t>(W) * C, -1);
   for (int j = 0; j < C; ++j)
     for (int i = 0; i < W; ++i) {
       const Stitch s = chart.at(i, j);
@@ -438,13 +450,25 @@ KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
       loop_at[static_cast<size_t>(j) * W + i] = static_cast<int>(loops.size());
       loops.push_back({i, j, s, s == Stitch::Knit ? point(i, j) : -1, point(i, L)});
     }
+}
 
-  SpringNetworkSpec spec;
-  std::vector<KnitSpringKind> kinds;
-  auto add = [&](int a, int b, double rest, double k, KnitSpringKind kind) {
+// A spring of the network and its family.
+struct SpringsBuilder {
+  SpringNetworkSpec& spec;
+  std::vector<KnitSpringKind>& kinds;
+  void add(int a, int b, double rest, double k, KnitSpringKind kind) {
     spec.springs.push_back({a, b, rest, k});
     kinds.push_back(kind);
-  };
+  }
+};
+
+// Paper 2's springs: a wale spring per knit loop, and along each course a course, tuck or float
+// spring between neighbouring loops' anchors.
+void add_yarn_springs(const KnitChart& chart, const KnitParams& p,
+                      const std::vector<KnitLoop>& loops, const std::vector<int>& loop_at,
+                      SpringsBuilder& net) {
+  const int W = chart.wales, C = chart.courses;
+  const double w = p.wale_spacing(), h = p.course_spacing();
   const double k_tuck = 1.0 / (1.0 / p.wale_stiffness + 1.0 / p.course_stiffness);
   for (int j = 0; j < C; ++j) {
     const KnitLoop* prev = nullptr;
@@ -453,7 +477,7 @@ KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
       if (l < 0) continue;
       const KnitLoop& cur = loops[l];
       if (cur.kind == Stitch::Knit)
-        add(cur.lower, cur.upper, h, p.wale_stiffness, KnitSpringKind::Wale);
+        net.add(cur.lower, cur.upper, h, p.wale_stiffness, KnitSpringKind::Wale);
       if (prev != nullptr) {
         auto anchor = [](const KnitLoop& a) { return a.kind == Stitch::Knit ? a.lower : a.upper; };
         auto nominal_height = [&](const KnitLoop& a) {
@@ -463,75 +487,135 @@ KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
         const KnitSpringKind kind = cur.wale - prev->wale > 1 ? KnitSpringKind::Float
                                     : tuck                    ? KnitSpringKind::Tuck
                                                               : KnitSpringKind::Course;
-        add(anchor(*prev), anchor(cur), std::hypot(w, nominal_height(cur) - nominal_height(*prev)),
-            tuck ? k_tuck : p.course_stiffness, kind);
+        net.add(anchor(*prev), anchor(cur),
+                std::hypot(w, nominal_height(cur) - nominal_height(*prev)),
+                tuck ? k_tuck : p.course_stiffness, kind);
       }
       prev = &cur;
     }
   }
+}
 
-  if (!p.mechanism()) {
-    const double s = p.stabiliser_ratio;
-    auto link = [&](int a, int b, double k, KnitSpringKind kind) {
-      add(a, b, norm(points[b].rest - points[a].rest), k, kind);
-    };
-    // Out of the plane (knit.bending = b > 0): the yarn's bending rigidity B = b s k_w h^3 / 12
-    // (s's basis, above) as quadratic stencils on the same triples and quads, zero on every rigid
-    // motion of the flat rest lattice: second differences along wales (B / h^3) and levels
-    // (B / w^3), and each quad's twist, B (w + h) / (w h)^2 (a torsional rigidity of order B in
-    // the wale and course legs of one cell).
-    const double B =
-        p.out_of_plane_bending() ? p.bending_ratio * s * p.wale_stiffness * h * h * h / 12.0 : 0.0;
-    auto stencil = [&](std::array<int, 4> ids, std::array<double, 4> weights, double k) {
-      if (B > 0.0) spec.stencils.push_back({ids, weights, k});
-    };
-    for (int L = 0; L <= C; ++L)
-      for (int i = 0; i < W; ++i) {
-        const int a = point(i, L);
-        if (a < 0) continue;
-        if (i + 1 < W && L + 1 <= C) {
-          const int b = point(i + 1, L), c = point(i, L + 1), d = point(i + 1, L + 1);
-          if (b >= 0 && c >= 0 && d >= 0) {
-            const double k = s * 0.5 * (p.wale_stiffness + p.course_stiffness);
-            link(a, d, k, KnitSpringKind::Shear);
-            link(b, c, k, KnitSpringKind::Shear);
-            stencil({a, b, c, d}, {1.0, -1.0, -1.0, 1.0}, B * (w + h) / (w * h * w * h));
-          }
-        }
-        if (L + 2 <= C && point(i, L + 1) >= 0 && point(i, L + 2) >= 0) {
-          link(a, point(i, L + 2), s * p.wale_stiffness, KnitSpringKind::Bending);
-          stencil({a, point(i, L + 1), point(i, L + 2), -1}, {1.0, -2.0, 1.0, 0.0},
-                  B / (h * h * h));
-        }
-        if (i + 2 < W && point(i + 1, L) >= 0 && point(i + 2, L) >= 0) {
-          link(a, point(i + 2, L), s * p.course_stiffness, KnitSpringKind::Bending);
-          stencil({a, point(i + 1, L), point(i + 2, L), -1}, {1.0, -2.0, 1.0, 0.0},
-                  B / (w * w * w));
+// The stabiliser (docs/knit.md, "Networks"): shear springs across each cell, bending springs
+// over two levels and two wales, and with knit.bending > 0 the out-of-plane stencils.
+void add_stabiliser(const KnitChart& chart, const KnitParams& p,
+                    const std::vector<KnitPoint>& points, const std::vector<int>& point_at,
+                    SpringsBuilder& net) {
+  const int W = chart.wales, C = chart.courses;
+  const double w = p.wale_spacing(), h = p.course_spacing();
+  auto point = [&](int i, int L) { return point_at[static_cast<size_t>(L) * W + i]; };
+  const double s = p.stabiliser_ratio;
+  auto link = [&](int a, int b, double k, KnitSpringKind kind) {
+    net.add(a, b, norm(points[b].rest - points[a].rest), k, kind);
+  };
+  // Out of the plane (knit.bending = b > 0): the yarn's bending rigidity B = b s k_w h^3 / 12
+  // (s's basis, above) as quadratic stencils on the same triples and quads, zero on every rigid
+  // motion of the flat rest lattice: second differences along wales (B / h^3) and levels
+  // (B / w^3), and each quad's twist, B (w + h) / (w h)^2 (a torsional rigidity of order B in
+  // the wale and course legs of one cell).
+  const double B =
+      p.out_of_plane_bending() ? p.bending_ratio * s * p.wale_stiffness * h * h * h / 12.0 : 0.0;
+  auto stencil = [&](std::array<int, 4> ids, std::array<double, 4> weights, double k) {
+    if (B > 0.0) net.spec.stencils.push_back({ids, weights, k});
+  };
+  for (int L = 0; L <= C; ++L)
+    for (int i = 0; i < W; ++i) {
+      const int a = point(i, L);
+      if (a < 0) continue;
+      if (i + 1 < W && L + 1 <= C) {
+        const int b = point(i + 1, L), c = point(i, L + 1), d = point(i + 1, L + 1);
+        if (b >= 0 && c >= 0 && d >= 0) {
+          const double k = s * 0.5 * (p.wale_stiffness + p.course_stiffness);
+          link(a, d, k, KnitSpringKind::Shear);
+          link(b, c, k, KnitSpringKind::Shear);
+          stencil({a, b, c, d}, {1.0, -1.0, -1.0, 1.0}, B * (w + h) / (w * h * w * h));
         }
       }
-  }
-  // Without the bending stencils the model is planar: the plane holds the points with k_w
-  // (SpringNetwork's "Planar"; the value only sets the z block's scale, as z stays 0).
-  if (!p.out_of_plane_bending()) spec.plane_stiffness = p.wale_stiffness;
-  // The stabilised network's only zero-energy modes are its rigid motions (6 with the stencils,
-  // the 3 in the plane without): a chart without pins or gravity is certified on the rest
-  // (MechanicalSystem::free_floating, planar). Paper 2's mechanism has more.
-  spec.free_floating = !p.mechanism();
+      if (L + 2 <= C && point(i, L + 1) >= 0 && point(i, L + 2) >= 0) {
+        link(a, point(i, L + 2), s * p.wale_stiffness, KnitSpringKind::Bending);
+        stencil({a, point(i, L + 1), point(i, L + 2), -1}, {1.0, -2.0, 1.0, 0.0}, B / (h * h * h));
+      }
+      if (i + 2 < W && point(i + 1, L) >= 0 && point(i + 2, L) >= 0) {
+        link(a, point(i + 2, L), s * p.course_stiffness, KnitSpringKind::Bending);
+        stencil({a, point(i + 1, L), point(i + 2, L), -1}, {1.0, -2.0, 1.0, 0.0}, B / (w * w * w));
+      }
+    }
+}
 
+// The clamps (knit.pins' edges first, then knit.clamps; models/knit_clamps.hpp) as the network's
+// pins, at rest: each clamp's points not held by an earlier one, in point order. Throws
+// InvalidField of knit.clamps for a selection the chart does not have.
+std::vector<Clamp> hold_points(const KnitChart& chart, const KnitParams& p,
+                               const std::vector<KnitPoint>& points, SpringNetworkSpec& spec) {
+  const int W = chart.wales, C = chart.courses;
+  using Where = KnitClampSpec::Where;
+  std::vector<KnitClampSpec> specs;
+  auto edge = [](Where where, const char* name) {
+    KnitClampSpec c;
+    c.where = where;
+    c.text = name;
+    return c;
+  };
+  if (p.pins == KnitPins::Bottom || p.pins == KnitPins::BottomAndTop)
+    specs.push_back(edge(Where::Bottom, "bottom"));
+  if (p.pins == KnitPins::Top || p.pins == KnitPins::BottomAndTop)
+    specs.push_back(edge(Where::Top, "top"));
+  const size_t from_pins = specs.size();
+  specs.insert(specs.end(), p.clamps.begin(), p.clamps.end());
+  std::vector<char> held(points.size(), 0);
+  std::vector<Clamp> clamps;
+  for (size_t c = 0; c < specs.size(); ++c) {
+    const KnitClampSpec& k = specs[c];
+    const bool edge_clamp = k.where != Where::Wales && k.where != Where::Courses;
+    if (c >= from_pins && edge_clamp && C < 2)
+      throw InvalidField("knit.clamps", k.text,
+                         "a chart of one course has no edge apart from its loops: clamp a chart "
+                         "of 2 or more courses (this one has 1)");
+    if (k.where == Where::Wales && k.last >= W)
+      throw InvalidField("knit.clamps", k.text,
+                         "wales must be in 0 to " + std::to_string(W - 1) + " (the chart has " +
+                             std::to_string(W) + ")");
+    if (k.where == Where::Courses && k.last >= C)
+      throw InvalidField("knit.clamps", k.text,
+                         "courses must be in 0 to " + std::to_string(C - 1) + " (the chart has " +
+                             std::to_string(C) + ")");
+    Clamp clamp{k.text, {}, k.path};
+    for (size_t id = 0; id < points.size(); ++id) {
+      const KnitPoint& q = points[id];
+      const bool in = k.where == Where::Bottom    ? q.level == 0
+                      : k.where == Where::Top     ? q.level == C
+                      : k.where == Where::Left    ? q.wale == 0
+                      : k.where == Where::Right   ? q.wale == W - 1
+                      : k.where == Where::Wales   ? q.wale >= k.first && q.wale <= k.last
+                                                  : q.level >= k.first && q.level <= k.last + 1;
+      if (!in || held[id]) continue;
+      held[id] = 1;
+      clamp.held.push_back(static_cast<int>(spec.pinned.size()));
+      spec.pinned.push_back(static_cast<int>(id));
+      spec.pin_paths.push_back({points[id].rest, points[id].rest, 0.0});
+    }
+    if (clamp.held.empty())
+      throw InvalidField("knit.clamps", k.text,
+                         "selects no point that an earlier clamp does not hold already");
+    clamps.push_back(std::move(clamp));
+  }
+  if (spec.pinned.size() == points.size())
+    throw InvalidField("knit.clamps", knit_clamps_text(p.clamps),
+                       "the clamps hold every point of the chart; leave some free");
+  return clamps;
+}
+
+// Masses (the areal density spread evenly over the points), damping, gravity along -y, and the
+// static residual's force scale.
+void set_masses_and_loads(const KnitChart& chart, const KnitParams& p, SpringNetworkSpec& spec,
+                          const std::vector<KnitPoint>& points) {
+  const int W = chart.wales, C = chart.courses;
+  const double r = p.loop_radius, w = p.wale_spacing(), h = p.course_spacing();
   const int count = static_cast<int>(points.size());
   const double total_mass = p.areal_density * 1e-3 * (W * w) * (C * h);  // kg
   spec.positions.resize(count);
   for (int k = 0; k < count; ++k) spec.positions[k] = points[k].rest;
   spec.masses.assign(count, total_mass / count);
-  auto pin_level = [&](int L) {
-    for (int i = 0; i < W; ++i) {
-      const int id = point(i, L);
-      spec.pinned.push_back(id);
-      spec.pin_paths.push_back({points[id].rest, points[id].rest, 0.0});
-    }
-  };
-  if (p.pins == KnitPins::Bottom || p.pins == KnitPins::BottomAndTop) pin_level(0);
-  if (p.pins == KnitPins::Top || p.pins == KnitPins::BottomAndTop) pin_level(C);
   spec.damping = p.damping;
   spec.elongation_limit = 0.0;
   const double g = 9.81;
@@ -539,6 +623,74 @@ KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
   spec.residual_force_scale = p.wale_stiffness * r;
   if (p.gravity)
     spec.residual_force_scale = std::min(spec.residual_force_scale, total_mass / count * g);
+}
+
+// The yarn contact (docs/knit.md, "Yarn contact") on the built network.
+void attach_contact(KnitModel& m) {
+  const double r = m.params.loop_radius;
+  const KnitParams& p = m.params;
+  YarnContactSpec contact;
+  contact.points = knit_contact_points(m);
+  // Renewal: the points are re-linearised about the current state where they stray from the
+  // centreline's vertices by more than kContactRefreshTol r (models/yarn_contact.hpp).
+  // Renewed points keep the particles they have at rest, so their Jacobian blocks stay in the
+  // contact's fixed pattern.
+  auto geometry = std::make_shared<const KnitModel>(m);
+  using Particles = std::array<int, kContactParticles>;
+  auto rest_particles = std::make_shared<std::vector<Particles>>();
+  rest_particles->reserve(contact.points.size());
+  for (const ContactPoint& q : contact.points) rest_particles->push_back(q.particles);
+  auto course_start = std::make_shared<std::vector<std::size_t>>(m.chart.courses + 1, 0);
+  for (const ContactPoint& q : contact.points) ++(*course_start)[q.yarn + 1];
+  for (int j = 0; j < m.chart.courses; ++j) (*course_start)[j + 1] += (*course_start)[j];
+  contact.exact = [geometry](const std::vector<Vec3>& positions, std::vector<Vec3>& out) {
+    out.clear();
+    for (const std::vector<Vec3>& course :
+         yarn_polylines(*geometry, positions, kContactSamplesPerInterval).vertices)
+      out.insert(out.end(), course.begin(), course.end());
+  };
+  contact.linearise = [geometry, rest_particles, course_start](const std::vector<Vec3>& positions,
+                                                               int course) {
+    return knit_contact_points(*geometry, positions, course,
+                               rest_particles->data() + (*course_start)[course]);
+  };
+  // Linearised about the rest state (the network's initial one) they are these points: each
+  // run makes its own, and the model keeps none (models/yarn_contact.hpp).
+  contact.remake_at_start = true;
+  contact.refresh_tol = kContactRefreshTol * r;
+  contact.refresh_move = kContactRefreshMove * r;
+  contact.step_cap = kContactStepCap * r;
+  contact.touching = r;
+  contact.core = kContactCore * r;
+  contact.stiffness = p.contact_ratio * p.wale_stiffness;
+  contact.same_yarn_gap = kSameYarnGap * r;
+  m.contact = std::make_shared<ContactNetwork>(m.network, std::move(contact));
+}
+
+}  // namespace
+
+KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
+  check_buildable(chart, p);
+  std::vector<KnitPoint> points;
+  std::vector<int> point_at, loop_at;
+  std::vector<KnitLoop> loops;
+  make_points(chart, p, points, point_at);
+  make_loops(chart, point_at, loops, loop_at);
+
+  SpringNetworkSpec spec;
+  std::vector<KnitSpringKind> kinds;
+  SpringsBuilder net{spec, kinds};
+  add_yarn_springs(chart, p, loops, loop_at, net);
+  if (!p.mechanism()) add_stabiliser(chart, p, points, point_at, net);
+  // Without the bending stencils the model is planar: the plane holds the points with k_w
+  // (SpringNetwork's "Planar"; the value only sets the z block's scale, as z stays 0).
+  if (!p.out_of_plane_bending()) spec.plane_stiffness = p.wale_stiffness;
+  // The stabilised network's only zero-energy modes are its rigid motions (6 with the stencils,
+  // the 3 in the plane without): a chart without pins or gravity is certified on the rest
+  // (MechanicalSystem::free_floating, planar). Paper 2's mechanism has more.
+  spec.free_floating = !p.mechanism();
+  set_masses_and_loads(chart, p, spec, points);
+  std::vector<Clamp> clamps = hold_points(chart, p, points, spec);
 
   KnitModel m{chart,
               p,
@@ -548,45 +700,9 @@ KnitModel build_knit(const KnitChart& chart, const KnitParams& p) {
               std::move(point_at),
               std::move(loop_at),
               SpringNetwork(std::move(spec)),
-              nullptr};
-  if (p.yarn_contact()) {
-    YarnContactSpec contact;
-    contact.points = knit_contact_points(m);
-    // Renewal: the points are re-linearised about the current state where they stray from the
-    // centreline's vertices by more than kContactRefreshTol r (models/yarn_contact.hpp).
-    // Renewed points keep the particles they have at rest, so their Jacobian blocks stay in the
-    // contact's fixed pattern.
-    auto geometry = std::make_shared<const KnitModel>(m);
-    using Particles = std::array<int, kContactParticles>;
-    auto rest_particles = std::make_shared<std::vector<Particles>>();
-    rest_particles->reserve(contact.points.size());
-    for (const ContactPoint& q : contact.points) rest_particles->push_back(q.particles);
-    auto course_start = std::make_shared<std::vector<std::size_t>>(m.chart.courses + 1, 0);
-    for (const ContactPoint& q : contact.points) ++(*course_start)[q.yarn + 1];
-    for (int j = 0; j < m.chart.courses; ++j) (*course_start)[j + 1] += (*course_start)[j];
-    contact.exact = [geometry](const std::vector<Vec3>& positions, std::vector<Vec3>& out) {
-      out.clear();
-      for (const std::vector<Vec3>& course :
-           yarn_polylines(*geometry, positions, kContactSamplesPerInterval).vertices)
-        out.insert(out.end(), course.begin(), course.end());
-    };
-    contact.linearise = [geometry, rest_particles, course_start](const std::vector<Vec3>& positions,
-                                                                 int course) {
-      return knit_contact_points(*geometry, positions, course,
-                                 rest_particles->data() + (*course_start)[course]);
-    };
-    // Linearised about the rest state (the network's initial one) they are these points: each
-    // run makes its own, and the model keeps none (models/yarn_contact.hpp).
-    contact.remake_at_start = true;
-    contact.refresh_tol = kContactRefreshTol * r;
-    contact.refresh_move = kContactRefreshMove * r;
-    contact.step_cap = kContactStepCap * r;
-    contact.touching = r;
-    contact.core = kContactCore * r;
-    contact.stiffness = p.contact_ratio * p.wale_stiffness;
-    contact.same_yarn_gap = kSameYarnGap * r;
-    m.contact = std::make_shared<ContactNetwork>(m.network, std::move(contact));
-  }
+              nullptr,
+              std::move(clamps)};
+  if (p.yarn_contact()) attach_contact(m);
   return m;
 }
 

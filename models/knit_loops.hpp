@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "models/knit_clamps.hpp"
 #include "models/spring_network.hpp"
 #include "models/yarn_contact.hpp"
 #include "src/core/vec3.hpp"
@@ -54,10 +55,11 @@ KnitNetwork parse_knit_network(const std::string& name);
 struct KnitParams {
   // r, m: 14 wales/cm -> w = 8r = 1/14 cm -> r = 1/1120 cm ~ 8.93e-5 m.
   double loop_radius = 1e-2 / 14.0 / 8.0;
-  // k_w, k_c, N/m: a documented choice (paper 2 gives no values). With springs in series
-  // along each wale and course, the fabric's tensile stiffness per unit width is
-  // k_w h/w ~ 88 N/m along the wales and k_c w/h ~ 114 N/m along the courses. Without
-  // external forces only the ratio k_w/k_c shapes the steady state; k sets the time scale.
+  // k_w, k_c, N/m: a documented choice (paper 2 gives no values). The network's tensile
+  // stiffness per unit width (knitsim tensile; docs/knit.md, "Under load") is 128 N/m along the
+  // wales and 173 N/m along the courses with the default stabiliser (k_w h/w = 87.5 and
+  // k_c w/h = 114 N/m without it). Without external forces only the ratio k_w/k_c shapes the
+  // steady state; k sets the time scale.
   double wale_stiffness = 100.0;
   double course_stiffness = 100.0;
   // c, N s/m per point (paper 2: F_d = -K_d V; no value given). Default ~0.2 x the
@@ -67,7 +69,9 @@ struct KnitParams {
   double damping = 5e-4;
   double areal_density = 41.65;  // rho_A, g/m^2 (paper 1 Table 2, sample 1)
   bool gravity = false;          // paper 2 ignores external forces; on: g = 9.81 m/s^2 along -y
-  KnitPins pins = KnitPins::None;
+  KnitPins pins = KnitPins::None;  // shorthand for the common clamps: held before `clamps`
+  // Clamps (knit.clamps; models/knit_clamps.hpp, docs/knit.md "Under load").
+  std::vector<KnitClampSpec> clamps;
   // Which network (docs/knit.md, "Networks"): the stabilised default, or paper 2's bare network.
   KnitNetwork network = KnitNetwork::Stabilised;
   // s, dimensionless, in [0, 1]: stiffness of the stabiliser's shear and bending springs
@@ -130,11 +134,20 @@ struct KnitModel {
   // One run of the contact's model (models/yarn_contact.hpp): a second run of the same model,
   // e.g. on another thread, is ContactNetwork(contact->shared_model()).
   std::shared_ptr<ContactNetwork> contact;
+  // The clamps (knit.pins' edges, then knit.clamps): their points are the network's pins, in
+  // this order (Clamp::held indexes system().held_points()).
+  std::vector<Clamp> clamps;
   const MechanicalSystem& system() const {
     return contact ? static_cast<const MechanicalSystem&>(*contact) : network;
   }
   MechanicalSystem& system() {
     return contact ? static_cast<MechanicalSystem&>(*contact) : network;
+  }
+
+  // All points at (t, x), m: the free ones from x, the held ones where the running system holds
+  // them (its held points are run state: src/core/held_points.hpp).
+  void all_positions(double t, const double* x, std::vector<Vec3>& out) const {
+    (contact ? contact->network() : network).all_positions(t, x, out);
   }
 
   int point(int wale, int level) const { return point_at[level * chart.wales + wale]; }

@@ -531,6 +531,47 @@ double SpringNetwork::potential_energy(double t, const double* x) const {
   return e;
 }
 
+void SpringNetwork::set_held_positions(const std::vector<Vec3>& p) {
+  if (p.size() != spec_.pinned.size())
+    throw std::invalid_argument("spring network: " + std::to_string(p.size()) +
+                                " held positions for " + std::to_string(spec_.pinned.size()) +
+                                " pins");
+  for (const Vec3& q : p)
+    if (!is_finite(q)) throw std::invalid_argument("spring network: non-finite held position");
+  for (size_t k = 0; k < p.size(); ++k) spec_.pin_paths[k] = {p[k], p[k], 0.0};
+  pin_move_time_ = 0.0;
+}
+
+void SpringNetwork::held_reactions(double t, const double* x, std::vector<Vec3>& out) const {
+  const std::vector<Vec3> pins = pins_at(t);
+  out.assign(pins.size(), Vec3{});
+  // The model's forces on each held point: its weight, the plane's hold, springs and stencils.
+  for (size_t k = 0; k < pins.size(); ++k) {
+    const double m = spec_.masses[spec_.pinned[k]];
+    out[k] = m * spec_.gravity;
+    out[k].z -= spec_.plane_stiffness * pins[k].z;
+  }
+  for (const Spring& s : spec_.springs) {
+    const int ha = pin_slot_[s.a], hb = pin_slot_[s.b];
+    if (ha < 0 && hb < 0) continue;
+    const Vec3 d = spring_vector(s, x, pins);
+    const double L = norm(d);
+    double f, df;
+    spring_force_law(s, L, f, df);
+    const Vec3 F = (f / L) * d;  // on a
+    if (ha >= 0) out[ha] = out[ha] + F;
+    if (hb >= 0) out[hb] = out[hb] - F;
+  }
+  for (const Stencil& st : spec_.stencils) {
+    const Vec3 kv = st.stiffness * stencil_vector(st, x, pins);
+    for (int i = 0; i < 4 && st.particles[i] >= 0; ++i) {
+      const int h = pin_slot_[st.particles[i]];
+      if (h >= 0) out[h] = out[h] - st.weights[i] * kv;
+    }
+  }
+  for (Vec3& r : out) r = -1.0 * r;  // the hold's force balances them
+}
+
 void SpringNetwork::all_positions(double t, const double* x, std::vector<Vec3>& out) const {
   const std::vector<Vec3> pins = pins_at(t);
   out.resize(particle_count());

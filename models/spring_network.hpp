@@ -51,6 +51,7 @@
 #include <string>
 #include <vector>
 
+#include "src/core/held_points.hpp"
 #include "src/core/mechanical_system.hpp"
 #include "src/core/vec3.hpp"
 
@@ -111,7 +112,7 @@ struct SpringNetworkTangent {
   double elongation_limit = 0.0;   // d eps_max/dp, fraction per unit of p
 };
 
-class SpringNetwork final : public MechanicalSystem {
+class SpringNetwork final : public MechanicalSystem, public HeldPoints {
  public:
   explicit SpringNetwork(SpringNetworkSpec spec);
 
@@ -132,6 +133,18 @@ class SpringNetwork final : public MechanicalSystem {
   bool project(double t, double* x, double* v) const override;
   double potential_energy(double t, const double* x) const override;
   std::string describe() const override;
+  HeldPoints* held_points() override { return this; }
+  const HeldPoints* held_points() const override { return this; }
+
+  // HeldPoints: the pinned particles, in spec().pinned order. set_held_positions makes every pin
+  // a fixed one at its new position (equilibrium_start_time() becomes 0).
+  int held_count() const override { return static_cast<int>(spec_.pinned.size()); }
+  int held_particle(int k) const override { return spec_.pinned[k]; }
+  std::vector<Vec3> held_positions(double t) const override { return pins_at(t); }
+  void set_held_positions(const std::vector<Vec3>& p) override;
+  void held_reactions(double t, const double* x, std::vector<Vec3>& out) const override;
+  // The held point a particle is (index into held_positions), or -1 if it is free.
+  int held_index(int particle) const { return pin_slot_[particle]; }
 
   // Topology and bookkeeping.
   const SpringNetworkSpec& spec() const { return spec_; }

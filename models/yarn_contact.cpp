@@ -577,6 +577,34 @@ bool ContactNetwork::add_contact_forces(double t, const double* x, double* out,
   });
 }
 
+void ContactNetwork::set_held_positions(const std::vector<Vec3>& p) {
+  net_.set_held_positions(p);
+  cached_ = false;  // the particles' positions at a given (t, x) changed
+}
+
+void ContactNetwork::held_reactions(double t, const double* x, std::vector<Vec3>& out) const {
+  net_.held_reactions(t, x, out);
+  // The contact's forces on held particles (spread() keeps the free ones'): -(dp/dx_i)^T F.
+  const bool finite = for_each_contact(t, x, [&](const Pair& pr, Vec3 d, double D, double de,
+                                                 double) {
+    const Vec3 F = (-de / D) * d;  // on point a; b gets the opposite
+    for (int side = 0; side < 2; ++side) {
+      const ContactPoint& p = points_[side == 0 ? pr.a : pr.b];
+      const PointTurn& turn = turns_[side == 0 ? pr.a : pr.b];
+      const Vec3 G = side == 0 ? F : -1.0 * F;
+      for (int i = 0; i < kContactParticles && p.particles[i] >= 0; ++i) {
+        const int h = net_.held_index(p.particles[i]);
+        if (h < 0) continue;
+        const std::array<double, 6> W = jacobian(p, turn, i);
+        out[h].x -= W[0] * G.x + W[2] * G.y + W[4] * G.z;
+        out[h].y -= W[1] * G.x + W[3] * G.y + W[5] * G.z;
+      }
+    }
+  });
+  if (!finite)
+    for (Vec3& r : out) r = Vec3{std::nan(""), std::nan(""), std::nan("")};
+}
+
 void ContactNetwork::conservative_acceleration(double t, const double* x, double* a) const {
   net_.conservative_acceleration(t, x, a);
   if (!add_contact_forces(t, x, a, &net_.mass())) std::fill(a, a + dof(), std::nan(""));

@@ -124,7 +124,7 @@ class ContactModel {
 };
 
 // One run of a ContactModel (see above): a MechanicalSystem that owns the points' current maps.
-class ContactNetwork final : public MechanicalSystem {
+class ContactNetwork final : public MechanicalSystem, public HeldPoints {
  public:
   explicit ContactNetwork(std::shared_ptr<const ContactModel> model);
   // A run of a model of its own.
@@ -157,6 +157,15 @@ class ContactNetwork final : public MechanicalSystem {
   bool update(double t, const double* x) override;
   bool has_run_state() const override { return true; }
   std::string describe() const override;
+  HeldPoints* held_points() override { return this; }
+  const HeldPoints* held_points() const override { return this; }
+  // HeldPoints: the network's pins (SpringNetwork's), moved in this run's copy of the network;
+  // the reactions include the contact's forces on held points.
+  int held_count() const override { return net_.held_count(); }
+  int held_particle(int k) const override { return net_.held_particle(k); }
+  std::vector<Vec3> held_positions(double t) const override { return net_.held_positions(t); }
+  void set_held_positions(const std::vector<Vec3>& p) override;
+  void held_reactions(double t, const double* x, std::vector<Vec3>& out) const override;
   // Every yarn's points re-linearised about (t, x), whole (no step filter): for a run that
   // starts from a saved state (--continue), whose points at rest would not stand for the yarn
   // there. False, with the points left as they were, if the state is not finite, renewal is
@@ -218,7 +227,9 @@ class ContactNetwork final : public MechanicalSystem {
   static constexpr int kMaxChords = 64;
 
   std::shared_ptr<const ContactModel> model_;
-  const SpringNetwork& net_;     // model_'s
+  // A copy of model_'s network (its structure shared): its held positions are this run's state,
+  // changed only by set_held_positions().
+  SpringNetwork net_;
   const YarnContactSpec& spec_;  // model_'s parameters (not its points)
   double reach_ = 0.0;           // d + skin
 

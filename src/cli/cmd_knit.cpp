@@ -89,8 +89,20 @@ std::string human_summary(const KnitScene& scene, const KnitResult& r, const std
                          format_number(m.rest_clearance, 3) + " r"},
        {"crossings", std::to_string(m.crossings.designed) + " designed, " +
                          std::to_string(m.crossings.changed) + " changed over/under"},
-       {"wall", format_number(1e3 * s.wall_seconds, 4) + " ms"},
-       {"outputs", dir + "/"}});
+       {"wall", format_number(1e3 * s.wall_seconds, 4) + " ms"}});
+  if (!r.model.clamps.empty()) {  // each clamp's reaction, and their balance with the weight
+    std::string text;
+    Vec3 balance = knit_weight(r.model);
+    for (const ClampReaction& c : knit_clamp_reactions(r.model, s.t_final, r.x)) {
+      text += (text.empty() ? "" : "; ") + c.name + " (" + format_number(c.reaction.x, 4) + ", " +
+              format_number(c.reaction.y, 4) + ") N";
+      balance = balance + c.reaction;
+    }
+    t.rows.push_back({"reactions", text + "; with the weight they sum to (" +
+                                       format_number(balance.x, 3) + ", " +
+                                       format_number(balance.y, 3) + ") N"});
+  }
+  t.rows.push_back({"outputs", dir + "/"});
   return t.text();
 }
 

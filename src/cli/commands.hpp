@@ -24,5 +24,6 @@ void register_taguchi_command(CLI::App& app);
 void register_fit_command(CLI::App& app);
 void register_targets_command(CLI::App& app);
 void register_repro_command(CLI::App& app);
+void register_tensile_command(CLI::App& app);
 
 }  // namespace knitsim

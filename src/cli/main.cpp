@@ -59,7 +59,8 @@ constexpr Command kCommands[] = {{"drape", knitsim::register_drape_command},
                                  {"taguchi", knitsim::register_taguchi_command},
                                  {"fit", knitsim::register_fit_command},
                                  {"targets", knitsim::register_targets_command},
-                                 {"repro", knitsim::register_repro_command}};
+                                 {"repro", knitsim::register_repro_command},
+                                 {"tensile", knitsim::register_tensile_command}};
 
 // The application with every subcommand, or only with those `wanted` says. CLI11 builds every
 // option, default and validator of every subcommand it is given (~10 % of a four_corner drape's

@@ -35,6 +35,8 @@
 
 namespace knitsim {
 
+class HeldPoints;  // src/core/held_points.hpp
+
 class MechanicalSystem {
  public:
   virtual ~MechanicalSystem() = default;
@@ -121,6 +123,11 @@ class MechanicalSystem {
 
   // Human-readable description for summaries.
   virtual std::string describe() const = 0;
+
+  // The points the model holds (pins, clamps) as run state a driver may move, and the forces
+  // that hold them (src/core/held_points.hpp); null for a model that offers none. Default: null.
+  virtual HeldPoints* held_points() { return nullptr; }
+  virtual const HeldPoints* held_points() const { return nullptr; }
 };
 
 }  // namespace knitsim

@@ -145,6 +145,23 @@ nlohmann::json contact_json(const KnitModel& m, double t, const std::vector<doub
           {"list_sweeps", c.list_sweeps()}};
 }
 
+// summary.json's `clamps` (a chart with clamps only): each clamp's name, points, displacement
+// from rest (m) and reaction (N, the force it exerts on the fabric), and the balance of the
+// reactions and the weight (N; zero at an equilibrium, to the residual).
+nlohmann::json clamps_json(const KnitModel& m, double t, const std::vector<double>& x) {
+  nlohmann::json list = nlohmann::json::array();
+  Vec3 sum = knit_weight(m);
+  auto vec = [](Vec3 v) { return nlohmann::json::array({v.x, v.y, v.z}); };
+  for (const ClampReaction& c : knit_clamp_reactions(m, t, x)) {
+    list.push_back({{"name", c.name},
+                    {"points", c.points},
+                    {"displacement_m", vec(c.displacement)},
+                    {"reaction_N", vec(c.reaction)}});
+    sum = sum + c.reaction;
+  }
+  return {{"each", list}, {"weight_N", vec(knit_weight(m))}, {"balance_N", vec(sum)}};
+}
+
 // summary.json's `units` for a knit run's own numbers (summary_units adds the shared ones; those
 // of its params and options come from the parameter table's rows).
 nlohmann::json knit_units(const nlohmann::json& params, const nlohmann::json& options) {
@@ -278,7 +295,7 @@ nlohmann::json knit_summary(const KnitScene& scene, const KnitResult& r,
        {KnitSpringKind::Wale, KnitSpringKind::Course, KnitSpringKind::Tuck, KnitSpringKind::Float,
         KnitSpringKind::Shear, KnitSpringKind::Bending})
     springs[to_string(kind)] = m.count(kind);
-  return {{"chart", scene.name},
+  nlohmann::json summary = {{"chart", scene.name},
           {"chart_file", scene.chart_file},
           {"status", to_string(stats.status)},
           {"message", stats.message},
@@ -303,6 +320,8 @@ nlohmann::json knit_summary(const KnitScene& scene, const KnitResult& r,
           {"params", params_json(m.params)},
           {"options", to_json(scene.options)},
           {"units", knit_units(params_json(m.params), to_json(scene.options))}};
+  if (!m.clamps.empty()) summary["clamps"] = clamps_json(m, stats.t_final, r.x);
+  return summary;
 }
 
 void write_knit_outputs(const fs::path& dir, const KnitScene& scene, const KnitResult& r,

@@ -260,7 +260,7 @@ ClearanceOverRun::ClearanceOverRun(const KnitModel& m, RunObserver* next, double
 
 void ClearanceOverRun::observe(double t, const double* x, bool force) {
   const double r = m_.params.loop_radius;
-  m_.network.all_positions(t, x, pos_);
+  m_.all_positions(t, x, pos_);
   double moved = 0.0;  // interlacing points, since the last measured state, m
   if (!last_.empty()) {
     for (size_t k = 0; k < pos_.size(); ++k) moved = std::max(moved, norm(pos_[k] - last_[k]));

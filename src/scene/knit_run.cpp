@@ -100,6 +100,16 @@ KnitStart start_knit(const KnitScene& scene) {
   s.x.resize(s.model.network.dof());
   s.v.resize(s.model.network.dof());
   s.model.network.initial_state(s.x.data(), s.v.data());
+  // Moving clamps stand at their path's end (load fraction 1): a knit run is one load step
+  // (knitsim tensile steps through them).
+  const bool moves = std::any_of(s.model.clamps.begin(), s.model.clamps.end(),
+                                 [](const Clamp& c) { return !c.path.fixed(); });
+  if (moves) {
+    HeldPoints& held = *s.model.system().held_points();
+    std::vector<Vec3> rest(held.held_count());
+    for (int k = 0; k < held.held_count(); ++k) rest[k] = s.model.points[held.held_particle(k)].rest;
+    move_clamps(held, s.model.clamps, rest, 1.0);
+  }
   return s;
 }
 
@@ -155,9 +165,31 @@ KnitResult run_knit(const KnitScene& scene, const std::string& integrator, RunOb
   return run_knit(std::move(start), scene, integrator, observer);
 }
 
+std::vector<ClampReaction> knit_clamp_reactions(const KnitModel& m, double t,
+                                                const std::vector<double>& x) {
+  const HeldPoints& held = *m.system().held_points();
+  const std::vector<Vec3> each = clamp_reactions(held, m.clamps, t, x.data());
+  const std::vector<Vec3> at = held.held_positions(t);
+  std::vector<ClampReaction> out;
+  for (std::size_t c = 0; c < m.clamps.size(); ++c) {
+    const Clamp& clamp = m.clamps[c];
+    const int first = clamp.held.front();
+    out.push_back({clamp.name, static_cast<int>(clamp.held.size()),
+                   at[first] - m.points[held.held_particle(first)].rest, each[c]});
+  }
+  return out;
+}
+
+Vec3 knit_weight(const KnitModel& m) {
+  const SpringNetworkSpec& spec = m.network.spec();
+  double mass = 0.0;
+  for (double q : spec.masses) mass += q;
+  return mass * spec.gravity;
+}
+
 std::vector<Vec3> knit_positions(const KnitModel& m, double t, const std::vector<double>& x) {
   std::vector<Vec3> pos;
-  m.network.all_positions(t, x.data(), pos);
+  m.all_positions(t, x.data(), pos);
   return pos;
 }
 

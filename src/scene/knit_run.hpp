@@ -101,6 +101,20 @@ KnitResult run_knit(KnitStart start, const KnitScene& scene, const std::string& 
 KnitResult run_knit(const KnitScene& scene, const std::string& integrator,
                     RunObserver* observer = nullptr, const RunState* from = nullptr);
 
+// Each clamp's reaction at (t, x) (src/core/held_points.hpp): the force the clamp exerts on the
+// fabric, N, its points, and its displacement from rest, m.
+struct ClampReaction {
+  std::string name;
+  int points = 0;
+  Vec3 displacement;
+  Vec3 reaction;
+};
+std::vector<ClampReaction> knit_clamp_reactions(const KnitModel& m, double t,
+                                                const std::vector<double>& x);
+// The whole chart's weight, N (zero without gravity): at an equilibrium the clamps' reactions
+// sum to minus it.
+Vec3 knit_weight(const KnitModel& m);
+
 // All points at (t, x), m.
 std::vector<Vec3> knit_positions(const KnitModel& m, double t, const std::vector<double>& x);
 // The largest displacement from rest of `positions` (all points), in loop radii.

@@ -276,6 +276,15 @@ std::vector<Key> make_table() {
                   {"off", false}, {"on", true}, {"0", false}, {"1", true}},
               "", "gravity, g = 9.81 m/s^2 along -y (off: paper 2 has no external force)");
   other(
+      "knit.clamps", Kind::Text,
+      [](Scene& s, const std::string& v) { return (s.knit.clamps = parse_knit_clamps(v), true); },
+      "clamps separated by ';': bottom|top|left|right|wales A-B|courses A-B, then fixed, move "
+      "DX,DY (m) or path S:DX,DY ... (0 < S <= 1)",
+      [](const Scene& s) { return knit_clamps_text(s.knit.clamps); },
+      "held points beside knit.pins, fixed or moved along a path in the load fraction "
+      "(docs/knit.md, \"Under load\"); \"\" = none",
+      KeyModel::Knit);
+  other(
       "knit.chart", Kind::Text,
       [](Scene& s, const std::string& v) { return v.empty() ? false : (s.chart = v, true); },
       "a chart file's path", [](const Scene& s) { return s.chart; },
