@@ -62,6 +62,13 @@ struct SheetClamp {
   double length = 0.0;  // m, how far into the sheet the clamp reaches (>= one cell)
 };
 
+// A clamped rectangle of the rest sheet (a corner patch, a jaw): every vertex whose rest position
+// lies in [x0, x1] x [y0, y1] (to 1e-9 of a cell) is held. To hold the slope it must hold at
+// least 2 x 2 vertices (docs/material_drape.md, "Clamps").
+struct SheetPatch {
+  double x0 = 0.0, y0 = 0.0, x1 = 0.0, y1 = 0.0;  // m
+};
+
 struct SheetEdgeLoad {
   SheetEdge edge = SheetEdge::XMax;
   Vec3 force_per_length;  // q, N/m of edge
@@ -71,6 +78,7 @@ struct MaterialSheetParams {
   double width = 0.5;              // W, m along x (courses), (0, 100]
   double length = 0.5;             // L, m along y (wales), (0, 100]
   int cells = 20;                  // nx, cells along the width, [1, 2000]
+  int cells_length = 0;            // ny, cells along the length; 0 = max(1, round(nx L / W))
   double areal_density = 200.0;    // rho_A, g/m^2, >= 0
   double membrane_wale = 500.0;    // A_w, N/m, tensile stiffness per unit width along y, > 0
   double membrane_course = 500.0;  // A_c, N/m, along x, > 0
@@ -81,11 +89,12 @@ struct MaterialSheetParams {
   double damping_rate = 10.0;      // gamma, 1/s, >= 0
   Vec3 gravity{0.0, 0.0, -9.81};   // m/s^2
   std::vector<SheetClamp> clamps;
+  std::vector<SheetPatch> patches;
   std::vector<SheetEdgeLoad> loads;
 
   void validate() const;  // throws std::invalid_argument naming the field and range
   int cells_x() const { return cells; }
-  int cells_y() const;  // max(1, round(cells L / W))
+  int cells_y() const;  // cells_length, or max(1, round(cells L / W)) where it is 0
 };
 
 class MaterialSheet final : public MechanicalSystem {

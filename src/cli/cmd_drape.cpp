@@ -18,6 +18,7 @@
 #include "src/base/table.hpp"
 #include "src/base/text.hpp"
 #include "src/cli/cli_options.hpp"
+#include "src/cli/cmd_drape_material.hpp"
 #include "src/cli/commands.hpp"
 #include "src/cli/interrupt.hpp"
 #include "src/core/stop_request.hpp"
@@ -90,6 +91,11 @@ void run(const DrapeArgs& args) {
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(std::string("--") + e.what());  // "--integrator = X: ..."
   }
+
+  if (scene.material.kind == DrapeModelKind::Material)  // its own run and outputs
+    return run_material_drape_command(
+        scene, integrator,
+        {args.out, args.target, args.continue_from, args.step_history, args.quiet, args.options});
 
   std::optional<RunState> from;
   if (!args.continue_from.empty())
