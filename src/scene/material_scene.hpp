@@ -35,7 +35,7 @@ struct MaterialScene {
   double poisson = 0.3;           // material.poisson, nu_cw
   double bending_wale = 1e-5;     // material.bending_wale, N m (B_w)
   double bending_course = 1e-5;   // material.bending_course, N m (B_c)
-  double damping = 10.0;          // material.damping, 1/s (mass-proportional rate)
+  double damping = 1e5;           // material.damping, 1/s (mass-proportional rate)
   ClampLayout clamps = ClampLayout::Corners;  // clamps.layout
   double clamp_size = 0.05;       // clamps.size, m
   double overhang = 0.04;         // clamps.overhang, m (edge)
