@@ -338,3 +338,38 @@ TEST_CASE("run_drape: a small four_corner drape is mirror-symmetric and its sag 
   CHECK(error_of([&] { run_drape(s, "no-such-method"); }).rfind("integrator = no-such-method", 0) ==
         0);
 }
+
+TEST_CASE("model.kind = material: its keys reach the sheet, and no mirror is assumed") {
+  const Scene s = load_scene("four_corner_material",
+                             {"mesh.cells=30", "material.bending_wale=2e-5",
+                              "material.membrane_course=700", "material.poisson=0.4",
+                              "fabric.length=0.4", "clamps.size=0.04"});
+  const MaterialSheetParams p = s.material.sheet(s.params);
+  CHECK(p.cells == 30);
+  CHECK(p.cells_y() == 24);
+  CHECK(p.bending_wale == 2e-5);
+  CHECK(p.membrane_course == 700.0);
+  CHECK(p.poisson_cw == 0.4);
+  CHECK(p.areal_density == 41.65);
+  REQUIRE(p.patches.size() == 4);
+  CHECK(p.patches[3].x0 == Approx(0.46));
+  CHECK(p.patches[3].y1 == 0.4);
+  // The cantilever's jaw line falls on a row: the overhang is exactly clamps.overhang.
+  const Scene c = load_scene("cantilever", {"clamps.overhang=0.0371", "mesh.cells=5"});
+  const MaterialSheetParams q = c.material.sheet(c.params);
+  const MaterialSheet sheet(q);
+  const double hy = sheet.hy();
+  int jaw = 0;
+  while (sheet.free_index(sheet.vertex(jaw + 1, 0)) < 0) ++jaw;
+  CHECK(q.length - jaw * hy == Approx(0.0371).epsilon(1e-12));
+  CHECK(jaw >= 1);
+  // An anisotropic sheet has no diagonal mirror: the material model runs whole, so only auto
+  // and none are taken.
+  for (const char* mirror : {"half", "quarter", "eighth"})
+    CHECK_THROWS_WITH(load_scene("four_corner_material", {std::string("model.symmetry=") + mirror}),
+                      Catch::Matchers::Contains("must be auto or none with model.kind = material"));
+  CHECK_THROWS_WITH(load_scene("cantilever", {"mesh.cells=1"}),
+                    "mesh.cells = 1: must be in [2, 2000]");
+  // Paper 1's scenes do not see the material keys.
+  CHECK(load_scene("four_corner").material.kind == DrapeModelKind::Paper);
+}

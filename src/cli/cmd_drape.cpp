@@ -166,7 +166,8 @@ void register_drape_command(CLI::App& app) {
       "nodes.csv, edges.csv, drape.vtk, drape.png, state.json and manifest.json into "
       "--out");
   cmd->add_option("--scene", args->scene,
-                  "Built-in scene (four_corner, two_corner, two_corner_slack) or a TOML file")
+                  "Built-in scene (four_corner, two_corner, two_corner_slack; cantilever, "
+                  "four_corner_material: model.kind = material) or a TOML file")
       ->capture_default_str();
   cmd->add_option("--set", args->sets,
                   "Override a scene key, e.g. model.stiffness=900 (repeatable: one key=value "
