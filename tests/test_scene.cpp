@@ -105,7 +105,7 @@ TEST_CASE("--set overrides change the parameters, in order, parsed by the key's 
   // Untouched keys keep the scene's values.
   CHECK(s.params.damping == 12.0);
   CHECK(s.params.natural_length == 0.049);
-  CHECK(scene_keys().size() == 17);
+  CHECK(scene_keys().size() == 30);
 }
 
 TEST_CASE("unknown keys name the key and suggest the nearest valid one") {
@@ -205,7 +205,7 @@ TEST_CASE("scene files: partial files, types, missing files and TOML syntax erro
   CHECK(missing == "scene: cannot read /nonexistent/scene.toml: No such file or directory");
   CHECK(load_error("four_cornr") ==
         "scene: cannot read four_cornr: No such file or directory (built-in scenes: four_corner "
-        "two_corner two_corner_slack)");
+        "two_corner two_corner_slack cantilever four_corner_material)");
   CHECK(load_error(fs::temp_directory_path().string()) ==
         "scene: cannot read " + fs::temp_directory_path().string() + ": is a directory");
 }
