@@ -1,5 +1,6 @@
 #include "src/cli/cmd_drape_material.hpp"
 
+#include <CLI/CLI.hpp>
 #include <iostream>
 #include <stdexcept>
 
@@ -97,7 +98,19 @@ void run_material_drape_command(Scene& scene, const std::string& integrator,
     remove_stale_output(dir / "steps.csv");
   write_material_outputs(dir, scene, result);
   if (!args.quiet) std::cout << human_summary(scene, result, dir.string()) << std::flush;
-  exit_with_run_status("drape", result.stats, interrupt, dir.string());
+  const RunStatus status = result.stats.status;
+  if (status == RunStatus::Equilibrium) return;
+  // As exit_with_run_status, without its --continue hint (not available on this model).
+  if (status == RunStatus::Interrupted || status == RunStatus::StepLimit ||
+      status == RunStatus::WallLimit)
+    std::cerr << "knitsim drape: "
+              << (status == RunStatus::Interrupted ? std::string("interrupted by ") +
+                                                         interrupt.signal_name()
+                  : status == RunStatus::StepLimit ? std::string("stopped by --max-steps")
+                                                   : std::string("stopped by --max-wall"))
+              << " at t = " << result.stats.t_final << " s; outputs written to " << dir.string()
+              << "/" << std::endl;
+  throw CLI::RuntimeError(status == RunStatus::Interrupted ? interrupt.exit_code() : 3);
 }
 
 }  // namespace knitsim
