@@ -44,7 +44,9 @@ std::string human_summary(const Scene& scene, const MaterialDrapeResult& r,
     t.rows.push_back({"chord angle", format_number(r.chord_angle_deg, 5) + " deg (tip slope " +
                                          format_number(r.tip_slope_deg, 4) + " deg)"});
   }
-  t.rows.insert(t.rows.end(), {{"max strain", format_number(100 * r.max_strain, 3) + " %"},
+  t.rows.insert(t.rows.end(), {{"max strain", format_number(100 * r.max_strain, 3) + " % (" +
+                                                  format_number(100 * r.max_strain_away, 3) +
+                                                  " % away from the clamps)"},
                                {"energy", format_number(r.energy, 6) + " J"},
                                {"wall", format_number(1e3 * s.wall_seconds, 4) + " ms"},
                                {"outputs", dir + "/"}});

@@ -32,6 +32,7 @@ nlohmann::json material_summary(const Scene& scene, const MaterialDrapeResult& r
   };
   j["energy_J"] = figure(r.energy);
   j["max_strain"] = figure(r.max_strain);
+  j["max_strain_away_from_clamps"] = figure(r.max_strain_away);
   if (scene.material.clamps == ClampLayout::Corners) {
     j["centre_sag_m"] = figure(r.centre_sag);
   } else {
@@ -49,6 +50,8 @@ nlohmann::json material_summary(const Scene& scene, const MaterialDrapeResult& r
         "residual_floor: its round-off bound"},
        {"energy_J", "J: potential energy (membrane + bending + gravity) at t_final"},
        {"max_strain", "1: largest (l - h) / h of a grid-line segment, a fraction"},
+       {"max_strain_away_from_clamps",
+        "1: the same over segments at least clamps.size from every clamp"},
        {"centre_sag_m, tip_run_m, tip_drop_m", "m"},
        {"chord_angle_deg, tip_slope_deg", "degrees below the horizontal"},
        {"mesh", "cells, m (hx_m, hy_m), counts"},

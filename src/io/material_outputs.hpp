@@ -10,7 +10,7 @@
 namespace knitsim {
 
 // summary.json: the run's RunStats, scene, source, model "material", the mesh, the measures
-// (energy_J, max_strain; corners: centre_sag_m; edge: tip_run_m, tip_drop_m, chord_angle_deg,
+// (energy_J, max_strain, max_strain_away_from_clamps; corners: centre_sag_m; edge: tip_run_m, tip_drop_m, chord_angle_deg,
 // tip_slope_deg), params (material_params_json: overhang_m, bending_wale_Nm, ...), options,
 // units; and model_limits where a figure is outside them.
 nlohmann::json material_summary(const Scene& scene, const MaterialDrapeResult& r);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace knitsim {
@@ -27,15 +28,34 @@ MaterialDrapeResult run_material_drape(const Scene& scene, const std::string& in
   }
   r.energy = s.potential_energy(r.stats.t_final, x);
   const int nx = s.nx(), ny = s.ny();
-  double worst = 0.0;
+  // Distance of a rest point from the nearest clamp rectangle.
+  const auto from_clamps = [&s](double x0, double y0) {
+    double d = std::numeric_limits<double>::infinity();
+    for (const SheetPatch& c : s.params().patches) {
+      const double dx = std::max({c.x0 - x0, 0.0, x0 - c.x1});
+      const double dy = std::max({c.y0 - y0, 0.0, y0 - c.y1});
+      d = std::min(d, std::hypot(dx, dy));
+    }
+    return d;
+  };
+  const double away = scene.material.clamp_size;
+  double worst = 0.0, worst_away = 0.0;
+  auto segment = [&](int a, int b, double h) {
+    const double e = norm(r.positions[b] - r.positions[a]) / h - 1.0;
+    worst = std::max(worst, e);
+    const Vec3 m = 0.5 * (r.rest[a] + r.rest[b]);
+    if (from_clamps(m.x, m.y) >= away * (1.0 - 1e-9)) worst_away = std::max(worst_away, e);
+  };
+  bool finite = true;
   for (int i = 0; i <= ny; ++i)
     for (int j = 0; j <= nx; ++j) {
       const Vec3 p = r.positions[s.vertex(i, j)];
-      if (j < nx) worst = std::max(worst, norm(r.positions[s.vertex(i, j + 1)] - p) / s.hx() - 1.0);
-      if (i < ny) worst = std::max(worst, norm(r.positions[s.vertex(i + 1, j)] - p) / s.hy() - 1.0);
-      if (!std::isfinite(p.x + p.y + p.z)) worst = std::numeric_limits<double>::quiet_NaN();
+      if (j < nx) segment(s.vertex(i, j), s.vertex(i, j + 1), s.hx());
+      if (i < ny) segment(s.vertex(i, j), s.vertex(i + 1, j), s.hy());
+      finite = finite && std::isfinite(p.x + p.y + p.z);
     }
-  r.max_strain = worst;
+  r.max_strain = finite ? worst : std::numeric_limits<double>::quiet_NaN();
+  r.max_strain_away = finite ? worst_away : std::numeric_limits<double>::quiet_NaN();
   if (scene.material.clamps == ClampLayout::Corners) {
     double z = 0.0;
     int count = 0;

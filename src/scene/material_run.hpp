@@ -20,6 +20,9 @@ struct MaterialDrapeResult {
   std::vector<double> state_x, state_v;  // the integrated unknowns at t_final
   double energy = 0.0;      // J: the potential energy at t_final (membrane + bending + gravity)
   double max_strain = 0.0;  // largest (l - h) / h of a grid-line segment (rows and columns)
+  // The same over the segments whose rest midpoint is at least clamps.size from every clamp:
+  // the peak at a clamp's corner is a singularity of the continuum (docs/material_drape.md).
+  double max_strain_away = 0.0;
   // clamps.layout = corners: the clamps' height (0) minus the centre's (the mean of the 1, 2 or
   // 4 vertices nearest the sheet's centre), m.
   double centre_sag = 0.0;
