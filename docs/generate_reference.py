@@ -122,6 +122,7 @@ def outputs_page(knitsim):
         runs = [
             ("drape", ["drape", "--scene", "four_corner", "--target", lab, "--step-history",
                        "--quiet"]),
+            ("drape (model.kind = material)", ["drape", "--scene", "cantilever", "--quiet"]),
             ("knit", ["knit", "--chart", chart, "--frames", "2", "--quiet"]),
             ("fit (ICA)", ["fit", "--scene", fabric, "--target", lab, "--decades", "1",
                            "--countries", "4", "--imperialists", "1", "--quiet"]),
