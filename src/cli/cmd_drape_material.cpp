@@ -71,6 +71,19 @@ void run_material_drape_command(Scene& scene, const std::string& integrator,
   const std::filesystem::path dir = make_output_dir(args.out, "drape-" + scene.name, &created);
   warn_about_run("material.damping", scene.material.damping, integ->info(), args.flags,
                  scene.options.t_max);
+  // A scene file that leaves material keys out runs them at the defaults: illustrative values,
+  // not a measured fabric; say so once (as paper 1's scenes note sample 1's values).
+  const std::vector<std::string> missing = keys_not_given(
+      scene, {"fabric.width", "fabric.areal_density", "material.membrane_wale",
+              "material.membrane_course", "material.membrane_shear", "material.poisson",
+              "material.bending_wale", "material.bending_course", "clamps.layout", "clamps.size"});
+  if (scene.source != "built-in" && !missing.empty()) {
+    std::string list;
+    for (const std::string& key : missing)
+      list += (list.empty() ? "" : ", ") + key + " = " + scene_key_value(scene, key);
+    note(scene.source + " leaves " + list +
+         " at the defaults (illustrative, not a measured fabric; knitsim list keys)");
+  }
   std::string steps_csv;
   MaterialDrapeResult result = [&] {
     ProgressLine progress(scene.name + " " + integrator, scene.options.equilibrium_tol,
