@@ -3,6 +3,7 @@
 
     experiments/convergence/material_mesh.py [--quick] [--out DIR]   (KNITSIM: the binary,
                                                                      default build/knitsim)
+    experiments/convergence/material_mesh.py --table CSV --out DIR   (the table from a CSV)
 
 four_corner_material (a 50 x 50 cm sheet, four 5 cm corner clamps) at mesh.cells = n for
 n = 10, 20, 40, 50, 80, 100, 160, 200 (--quick: 10, 20, 40), each by the default `equilibrium`
@@ -59,6 +60,12 @@ def main():
     cells = [10, 20, 40] if quick else [10, 20, 40, 50, 80, 100, 160, 200]
     work = tempfile.mkdtemp(prefix="material_mesh_")
     rows = []
+    if "--table" in sys.argv:  # the table again from a material_mesh.csv, nothing run
+        with open(sys.argv[sys.argv.index("--table") + 1]) as f:
+            rows = [{k: (v if k in ("model", "status", "certificate") or v == ""
+                         else int(v) if k in ("n", "steps") else float(v))
+                     for k, v in r.items()} for r in csv.DictReader(f)]
+        cells = []
     for n in cells:
         m = run(knitsim, "four_corner_material", [f"mesh.cells={n}"], os.path.join(work, f"m{n}"))
         rows.append({"model": "material", "n": n, "h_m": 0.5 / n, "status": m["status"],
@@ -95,8 +102,10 @@ def main():
         for key, scale, unit in (("centre_sag_m", 1e3, "mm"), ("energy_J", 1e3, "mJ"),
                                  ("max_strain", 100, "%"), ("max_strain_away", 100, "%")):
             for n, p, lim in triples(sub, key):
-                # p <= 0: the differences do not shrink, there is no limit to extrapolate.
-                limit = f"{scale * lim:.6f} {unit}" if p > 0 else "none (does not converge)"
+                # No limit to extrapolate where the differences change sign or do not shrink.
+                limit = (f"{scale * lim:.6f} {unit}" if p > 0
+                         else "none (the differences change sign)" if math.isnan(p)
+                         else "none (the differences grow)")
                 lines.append(f"| {model} | {key} | {n}, {2 * n}, {4 * n} | {p:.3f} | {limit} |")
     with open(os.path.join(out, "material_mesh.md"), "w") as f:
         f.write("\n".join(lines) + "\n")
