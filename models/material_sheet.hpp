@@ -38,7 +38,9 @@
 //   checked against finite differences (tests/test_material_sheet.cpp).
 // Clamps: a clamped edge holds every vertex within `length` of that edge, k = 1 + round(length / h)
 //   rows (h the spacing across the edge), k >= 2 so the slope is held; clamped vertices are not
-//   degrees of freedom and stay at rest.
+//   degrees of freedom and stay at rest. A patch (SheetPatch) holds every vertex of a rest
+//   rectangle (corner clamps, a jaw), at least 2 x 2; the stencil rule at a clamp's boundary is
+//   the edge's (by vertex: centre and one neighbour held, the other free).
 // State: 3 dofs (x, y, z) per free vertex in vertex order (index i (nx + 1) + j).
 // Damping: gamma_i = damping_rate (1/s) on every dof (mass-proportional).
 // Static residual: max_i |F_i| / F_ref over free vertices, F_ref = mean free vertex weight (or,
