@@ -126,6 +126,7 @@ def outputs_page(knitsim):
         runs = [
             ("drape", ["drape", "--scene", "four_corner", "--target", lab, "--step-history",
                        "--quiet"]),
+            ("drape (model.kind = material)", ["drape", "--scene", "cantilever", "--quiet"]),
             ("knit", ["knit", "--chart", chart, "--frames", "2", "--quiet"]),
             ("tensile", ["tensile", "--chart", plain, "--steps", "2", "--outputs", "1",
                          "--set", "knit.contact=0", "--quiet"]),

@@ -153,6 +153,7 @@ double edge_weight(int k, int n) { return (k == 0 || k == n) ? 0.5 : 1.0; }
 }  // namespace
 
 int MaterialSheetParams::cells_y() const {
+  if (cells_length > 0) return cells_length;
   return std::max(1, static_cast<int>(std::lround(cells * length / width)));
 }
 
@@ -161,6 +162,8 @@ void MaterialSheetParams::validate() const {
   require(positive(width, 100.0), "material sheet: width must be in (0, 100] m");
   require(positive(length, 100.0), "material sheet: length must be in (0, 100] m");
   require(cells >= 1 && cells <= 2000, "material sheet: cells must be in [1, 2000]");
+  require(cells_length >= 0 && cells_length <= 20000,
+          "material sheet: cells_length must be in [0, 20000]");
   require(cells_y() <= 20000, "material sheet: cells x length / width must be <= 20000");
   require(std::isfinite(areal_density) && areal_density >= 0.0,
           "material sheet: areal_density must be >= 0 g/m^2");
@@ -182,6 +185,10 @@ void MaterialSheetParams::validate() const {
   for (const SheetClamp& c : clamps)
     require(std::isfinite(c.length) && c.length > 0.0,
             "material sheet: clamp length must be > 0 m");
+  for (const SheetPatch& p : patches)
+    require(std::isfinite(p.x0) && std::isfinite(p.x1) && std::isfinite(p.y0) &&
+                std::isfinite(p.y1) && p.x0 <= p.x1 && p.y0 <= p.y1,
+            "material sheet: a clamp patch must be a finite rectangle (x0 <= x1, y0 <= y1)");
 }
 
 MaterialSheet::MaterialSheet(MaterialSheetParams params) : params_(std::move(params)) {
@@ -217,6 +224,21 @@ MaterialSheet::MaterialSheet(MaterialSheetParams params) : params_(std::move(par
                                                   : ny_ - i;
         if (r < k) clamped[vertex(i, j)] = true;
       }
+  }
+  for (const SheetPatch& p : params_.patches) {
+    const double ex = 1e-9 * hx_, ey = 1e-9 * hy_;
+    int rows = 0, cols = 0;
+    for (int i = 0; i <= ny_; ++i) rows += (i * hy_ >= p.y0 - ey && i * hy_ <= p.y1 + ey);
+    for (int j = 0; j <= nx_; ++j) cols += (j * hx_ >= p.x0 - ex && j * hx_ <= p.x1 + ex);
+    if (rows < 2 || cols < 2)
+      throw std::invalid_argument(
+          "material sheet: a clamp patch must hold at least 2 x 2 vertices (at least one cell "
+          "in each direction)");
+    for (int i = 0; i <= ny_; ++i)
+      for (int j = 0; j <= nx_; ++j)
+        if (i * hy_ >= p.y0 - ey && i * hy_ <= p.y1 + ey && j * hx_ >= p.x0 - ex &&
+            j * hx_ <= p.x1 + ex)
+          clamped[vertex(i, j)] = true;
   }
   free_index_.assign(nv, -1);
   free_count_ = 0;

@@ -38,7 +38,9 @@
 //   checked against finite differences (tests/test_material_sheet.cpp).
 // Clamps: a clamped edge holds every vertex within `length` of that edge, k = 1 + round(length / h)
 //   rows (h the spacing across the edge), k >= 2 so the slope is held; clamped vertices are not
-//   degrees of freedom and stay at rest.
+//   degrees of freedom and stay at rest. A patch (SheetPatch) holds every vertex of a rest
+//   rectangle (corner clamps, a jaw), at least 2 x 2; the stencil rule at a clamp's boundary is
+//   the edge's (by vertex: centre and one neighbour held, the other free).
 // State: 3 dofs (x, y, z) per free vertex in vertex order (index i (nx + 1) + j).
 // Damping: gamma_i = damping_rate (1/s) on every dof (mass-proportional).
 // Static residual: max_i |F_i| / F_ref over free vertices, F_ref = mean free vertex weight (or,
@@ -62,6 +64,13 @@ struct SheetClamp {
   double length = 0.0;  // m, how far into the sheet the clamp reaches (>= one cell)
 };
 
+// A clamped rectangle of the rest sheet (a corner patch, a jaw): every vertex whose rest position
+// lies in [x0, x1] x [y0, y1] (to 1e-9 of a cell) is held. To hold the slope it must hold at
+// least 2 x 2 vertices (docs/material_drape.md, "Clamps").
+struct SheetPatch {
+  double x0 = 0.0, y0 = 0.0, x1 = 0.0, y1 = 0.0;  // m
+};
+
 struct SheetEdgeLoad {
   SheetEdge edge = SheetEdge::XMax;
   Vec3 force_per_length;  // q, N/m of edge
@@ -71,6 +80,7 @@ struct MaterialSheetParams {
   double width = 0.5;              // W, m along x (courses), (0, 100]
   double length = 0.5;             // L, m along y (wales), (0, 100]
   int cells = 20;                  // nx, cells along the width, [1, 2000]
+  int cells_length = 0;            // ny, cells along the length; 0 = max(1, round(nx L / W))
   double areal_density = 200.0;    // rho_A, g/m^2, >= 0
   double membrane_wale = 500.0;    // A_w, N/m, tensile stiffness per unit width along y, > 0
   double membrane_course = 500.0;  // A_c, N/m, along x, > 0
@@ -81,11 +91,12 @@ struct MaterialSheetParams {
   double damping_rate = 10.0;      // gamma, 1/s, >= 0
   Vec3 gravity{0.0, 0.0, -9.81};   // m/s^2
   std::vector<SheetClamp> clamps;
+  std::vector<SheetPatch> patches;
   std::vector<SheetEdgeLoad> loads;
 
   void validate() const;  // throws std::invalid_argument naming the field and range
   int cells_x() const { return cells; }
-  int cells_y() const;  // max(1, round(cells L / W))
+  int cells_y() const;  // cells_length, or max(1, round(cells L / W)) where it is 0
 };
 
 class MaterialSheet final : public MechanicalSystem {

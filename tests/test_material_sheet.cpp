@@ -426,3 +426,29 @@ TEST_CASE("material sheet: bad parameters name the field and its range", "[mater
   q.gravity = {0.0, 0.0, 0.0};
   CHECK_THAT(message(q), Catch::Contains("needs gravity or an edge load"));
 }
+
+TEST_CASE("material sheet: corner patches hold their vertices; derivatives with them",
+          "[material_sheet]") {
+  MaterialSheetParams p = small_sheet(false);
+  p.width = 0.04;
+  p.cells = 4;  // 4 x 4 cells of 1 cm
+  p.clamps.clear();
+  p.loads.clear();
+  const double a = 0.01;  // one cell: 2 x 2 vertices per corner
+  p.patches = {{0.0, 0.0, a, a}, {p.width - a, 0.0, p.width, a}, {0.0, p.length - a, a, p.length},
+               {p.width - a, p.length - a, p.width, p.length}};
+  const MaterialSheet sheet(p);
+  REQUIRE(sheet.nx() == 4);
+  REQUIRE(sheet.ny() == 4);
+  CHECK(sheet.dof() == 3 * (25 - 16));  // 4 corners x 2 x 2 vertices held
+  CHECK(sheet.free_index(sheet.vertex(1, 1)) < 0);
+  CHECK(sheet.free_index(sheet.vertex(1, 2)) >= 0);
+  CHECK(sheet.free_index(sheet.vertex(3, 3)) < 0);
+  for (unsigned seed : {1u, 2u}) {
+    const std::vector<double> x = perturbed(sheet, 0.004, seed);
+    CHECK(check_stiffness_jacobian(sheet, 0.0, x.data()).max_relative_error < 1e-6);
+  }
+  // A patch smaller than a cell holds one row: refused.
+  p.patches = {{0.0, 0.0, 0.004, 0.004}};
+  CHECK_THROWS_WITH(MaterialSheet(p), Catch::Matchers::Contains("at least 2 x 2 vertices"));
+}

@@ -47,9 +47,10 @@ struct TempScene {
 }  // namespace
 
 TEST_CASE("built-in scenes load with the paper's sample-1 parameters") {
-  REQUIRE(builtin_scenes().size() == 3);
+  REQUIRE(builtin_scenes().size() == 5);
   for (const auto& [name, text] : builtin_scenes()) {
     const Scene s = load_scene(name);
+    if (s.material.kind == DrapeModelKind::Material) continue;  // below
     CAPTURE(name);
     CHECK(s.name == name);
     CHECK(s.source == "built-in");
@@ -73,6 +74,16 @@ TEST_CASE("built-in scenes load with the paper's sample-1 parameters") {
   CHECK(slack.params.pin_span == 0.6);
   CHECK(slack.params.pin_move_time == 100.0);
   CHECK(slack.params.perturbation == 1e-6);
+  // The material model's scenes (docs/material_drape.md).
+  const Scene cantilever = load_scene("cantilever");
+  CHECK(cantilever.material.kind == DrapeModelKind::Material);
+  CHECK(cantilever.material.clamps == ClampLayout::Edge);
+  CHECK(cantilever.material.overhang == 0.04);
+  CHECK(cantilever.material.bending_wale == 1.5696e-5);
+  const Scene corners = load_scene("four_corner_material");
+  CHECK(corners.material.kind == DrapeModelKind::Material);
+  CHECK(corners.material.clamps == ClampLayout::Corners);
+  CHECK(corners.material.clamp_size == 0.05);
   CHECK(scene_description(builtin_scenes()[0].second) ==
         "Sample 1 (Tables 2 and 4) hung from its four corners (paper 1, Fig. 12).");
 }
@@ -94,7 +105,7 @@ TEST_CASE("--set overrides change the parameters, in order, parsed by the key's 
   // Untouched keys keep the scene's values.
   CHECK(s.params.damping == 12.0);
   CHECK(s.params.natural_length == 0.049);
-  CHECK(scene_keys().size() == 17);
+  CHECK(scene_keys().size() == 30);
 }
 
 TEST_CASE("unknown keys name the key and suggest the nearest valid one") {
@@ -194,7 +205,7 @@ TEST_CASE("scene files: partial files, types, missing files and TOML syntax erro
   CHECK(missing == "scene: cannot read /nonexistent/scene.toml: No such file or directory");
   CHECK(load_error("four_cornr") ==
         "scene: cannot read four_cornr: No such file or directory (built-in scenes: four_corner "
-        "two_corner two_corner_slack)");
+        "two_corner two_corner_slack cantilever four_corner_material)");
   CHECK(load_error(fs::temp_directory_path().string()) ==
         "scene: cannot read " + fs::temp_directory_path().string() + ": is a directory");
 }
@@ -326,4 +337,39 @@ TEST_CASE("run_drape: a small four_corner drape is mirror-symmetric and its sag 
 
   CHECK(error_of([&] { run_drape(s, "no-such-method"); }).rfind("integrator = no-such-method", 0) ==
         0);
+}
+
+TEST_CASE("model.kind = material: its keys reach the sheet, and no mirror is assumed") {
+  const Scene s = load_scene("four_corner_material",
+                             {"mesh.cells=30", "material.bending_wale=2e-5",
+                              "material.membrane_course=700", "material.poisson=0.4",
+                              "fabric.length=0.4", "clamps.size=0.04"});
+  const MaterialSheetParams p = s.material.sheet(s.params);
+  CHECK(p.cells == 30);
+  CHECK(p.cells_y() == 24);
+  CHECK(p.bending_wale == 2e-5);
+  CHECK(p.membrane_course == 700.0);
+  CHECK(p.poisson_cw == 0.4);
+  CHECK(p.areal_density == 41.65);
+  REQUIRE(p.patches.size() == 4);
+  CHECK(p.patches[3].x0 == Approx(0.46));
+  CHECK(p.patches[3].y1 == 0.4);
+  // The cantilever's jaw line falls on a row: the overhang is exactly clamps.overhang.
+  const Scene c = load_scene("cantilever", {"clamps.overhang=0.0371", "mesh.cells=5"});
+  const MaterialSheetParams q = c.material.sheet(c.params);
+  const MaterialSheet sheet(q);
+  const double hy = sheet.hy();
+  int jaw = 0;
+  while (sheet.free_index(sheet.vertex(jaw + 1, 0)) < 0) ++jaw;
+  CHECK(q.length - jaw * hy == Approx(0.0371).epsilon(1e-12));
+  CHECK(jaw >= 1);
+  // An anisotropic sheet has no diagonal mirror: the material model runs whole, so only auto
+  // and none are taken.
+  for (const char* mirror : {"half", "quarter", "eighth"})
+    CHECK_THROWS_WITH(load_scene("four_corner_material", {std::string("model.symmetry=") + mirror}),
+                      Catch::Matchers::Contains("must be auto or none with model.kind = material"));
+  CHECK_THROWS_WITH(load_scene("cantilever", {"mesh.cells=1"}),
+                    "mesh.cells = 1: must be in [2, 2000]");
+  // Paper 1's scenes do not see the material keys.
+  CHECK(load_scene("four_corner").material.kind == DrapeModelKind::Paper);
 }

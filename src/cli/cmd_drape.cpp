@@ -18,6 +18,7 @@
 #include "src/base/table.hpp"
 #include "src/base/text.hpp"
 #include "src/cli/cli_options.hpp"
+#include "src/cli/cmd_drape_material.hpp"
 #include "src/cli/commands.hpp"
 #include "src/cli/interrupt.hpp"
 #include "src/core/stop_request.hpp"
@@ -91,6 +92,11 @@ void run(const DrapeArgs& args) {
     throw std::invalid_argument(std::string("--") + e.what());  // "--integrator = X: ..."
   }
 
+  if (scene.material.kind == DrapeModelKind::Material)  // its own run and outputs
+    return run_material_drape_command(
+        scene, integrator,
+        {args.out, args.target, args.continue_from, args.step_history, args.quiet, args.options});
+
   std::optional<RunState> from;
   if (!args.continue_from.empty())
     from = continue_state(args.continue_from, "drape", drape_model_keys(scene.params),
@@ -160,7 +166,8 @@ void register_drape_command(CLI::App& app) {
       "nodes.csv, edges.csv, drape.vtk, drape.png, state.json and manifest.json into "
       "--out");
   cmd->add_option("--scene", args->scene,
-                  "Built-in scene (four_corner, two_corner, two_corner_slack) or a TOML file")
+                  "Built-in scene (four_corner, two_corner, two_corner_slack; cantilever, "
+                  "four_corner_material: model.kind = material) or a TOML file")
       ->capture_default_str();
   cmd->add_option("--set", args->sets,
                   "Override a scene key, e.g. model.stiffness=900 (repeatable: one key=value "

@@ -203,6 +203,79 @@ std::vector<Key> make_table() {
       "pins.move_time", [](Scene& s) -> double& { return s.params.pin_move_time; }, "s",
       "duration of that pin move");
   k.back().summary = "pin_move_time";
+  // The material model's keys (src/scene/material_scene.hpp, docs/material_drape.md).
+  auto material_choice = [&other](const char* name, auto field, auto values, const char* meaning) {
+    std::string accepted = "one of ";
+    for (std::size_t i = 0; i < values.size(); ++i)
+      accepted += (i > 0 ? ", " : "") + values[i].first;
+    other(
+        name, Kind::Text,
+        [field, values](Scene& s, const std::string& v) {
+          for (const auto& [text, value] : values)
+            if (v == text) return (s.material.*field = value, true);
+          return false;
+        },
+        accepted.c_str(),
+        [field, values](const Scene& s) {
+          for (const auto& [text, value] : values)
+            if (s.material.*field == value) return text;
+          return std::string("?");
+        },
+        meaning);
+  };
+  auto material = [&number](const char* name, double MaterialScene::*field, const char* unit,
+                            const char* meaning) {
+    number(
+        name, [field](Scene& s) -> double& { return s.material.*field; }, unit, meaning);
+  };
+  material_choice("model.kind", &MaterialScene::kind,
+                  std::vector<std::pair<std::string, DrapeModelKind>>{
+                      {"paper", DrapeModelKind::Paper}, {"material", DrapeModelKind::Material}},
+                  "paper: paper 1's spring grid (L0 is both material and mesh); material: a "
+                  "membrane and bending model in material units on a mesh of its own "
+                  "(mesh.cells, material.*, clamps.*; docs/material_drape.md)");
+  other(
+      "mesh.cells", Kind::Integer,
+      [](Scene& s, const std::string& v) {
+        auto digit = [](unsigned char c) { return std::isdigit(c) != 0; };
+        if (v.empty() || v.size() > 9 || !std::all_of(v.begin(), v.end(), digit)) return false;
+        s.material.cells = std::stoi(v);
+        return true;
+      },
+      "an integer in 2..2000", [](const Scene& s) { return std::to_string(s.material.cells); },
+      "material: cells along the width (x, the courses); along the length they follow, "
+      "near-square (round(cells L / W)); a numerical parameter, not the fabric's");
+  material("fabric.length", &MaterialScene::length, "m",
+           "material: the specimen's length along the wales (y); 0 = the width (a square); "
+           "not used by clamps.layout = edge");
+  material("material.membrane_wale", &MaterialScene::membrane_wale, "N/m",
+           "material: tensile stiffness per unit width along the wales (y), E t");
+  material("material.membrane_course", &MaterialScene::membrane_course, "N/m",
+           "material: tensile stiffness per unit width along the courses (x)");
+  material("material.membrane_shear", &MaterialScene::membrane_shear, "N/m",
+           "material: in-plane shear stiffness per unit width, G t");
+  material("material.poisson", &MaterialScene::poisson, "1",
+           "material: Poisson coupling nu_cw = -eps_wale / eps_course under a pull along the "
+           "courses");
+  material("material.bending_wale", &MaterialScene::bending_wale, "N m",
+           "material: bending rigidity per unit width for curvature along the wales (y): KES-F's "
+           "B, the cantilever's w c^3");
+  material("material.bending_course", &MaterialScene::bending_course, "N m",
+           "material: bending rigidity per unit width for curvature along the courses (x)");
+  material("material.damping", &MaterialScene::damping, "1/s",
+           "material: mass-proportional damping rate (per unit mass, the same on every mesh); "
+           "changes the path to equilibrium, not the equilibrium (docs/material_drape.md, "
+           "\"Damping\")");
+  material_choice("clamps.layout", &MaterialScene::clamps,
+                  std::vector<std::pair<std::string, ClampLayout>>{
+                      {"corners", ClampLayout::Corners}, {"edge", ClampLayout::Edge}},
+                  "material: corners = a square patch of side clamps.size held at each corner; "
+                  "edge = the y = 0 end held over a jaw clamps.size deep, clamps.overhang free "
+                  "(Peirce's cantilever)");
+  material("clamps.size", &MaterialScene::clamp_size, "m",
+           "material: side of a corner patch, or depth of the edge's jaw");
+  material("clamps.overhang", &MaterialScene::overhang, "m",
+           "material, clamps.layout = edge: the strip's free length beyond the jaw");
   // The knit's keys (models/knit_loops.hpp, docs/knit.md).
   auto knit = [&number](const char* name, double KnitParams::*field, const char* unit,
                         const char* meaning) {
@@ -403,6 +476,7 @@ std::string validated_range(const Key& key) {
       probe.params.validate();
       probe.options.validate();
       probe.knit.validate();
+      probe.material.validate(probe.params);
     }
   } catch (const InvalidField& e) {
     const std::string must = "must be ";
@@ -603,7 +677,16 @@ void Scene::validate() const {
         "--set knit.stabiliser, knit.bending or knit.contact with knit.network = paper: paper 2's "
         "network has no stabiliser, bending or contact (drop one of them)");
   try {
-    params.validate();
+    if (material.kind == DrapeModelKind::Material) {
+      // The material model shares fabric.width and fabric.areal_density with paper 1's; the
+      // paper's own keys are not used (its natural length need not fit this width).
+      DrapeParams shared = params;
+      shared.natural_length = std::min(shared.natural_length, shared.width / 2.0);
+      shared.validate();
+    } else {
+      params.validate();
+    }
+    material.validate(params);
     options.validate();
     knit.validate();
   } catch (const std::invalid_argument& e) {
@@ -818,6 +901,10 @@ void certify_whole_sheet(const Scene& scene, const SpringNetwork& net, Integrato
 DrapeResult run_drape(const Scene& scene, const std::string& integrator, RunObserver* observer,
                       const RunState* from) {
   scene.validate();
+  if (scene.material.kind == DrapeModelKind::Material)
+    throw std::invalid_argument(
+        "model.kind = material: only knitsim drape runs the material model so far (fit, repro "
+        "and the Python module run paper 1's)");
   auto integ = make_integrator(integrator);
   DrapeResult r{build_drape_grid(scene.params), 0, RunStats{}, {}, {}, 0.0, 0.0, {}, {}, 0.0};
   const SpringNetwork& net = r.grid.network;

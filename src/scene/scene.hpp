@@ -46,6 +46,7 @@
 #include "src/base/table.hpp"
 #include "src/core/invalid_field.hpp"
 #include "src/core/vec3.hpp"
+#include "src/scene/material_scene.hpp"
 
 namespace knitsim {
 
@@ -58,6 +59,9 @@ struct Scene {
   std::string name = "four_corner";  // scene.name
   std::string source = "built-in";   // "built-in" or the file path it was read from
   DrapeParams params;
+  // The material model's keys (model.kind = material; src/scene/material_scene.hpp): used
+  // with fabric.width and fabric.areal_density from `params` when kind is material.
+  MaterialScene material;
   // Run options: the scene sets t_max and equilibrium_tol ([run]); the command line may set
   // the integrator's tolerances, step and caps. Everything else keeps its default.
   IntegratorOptions options;

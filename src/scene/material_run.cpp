@@ -1,0 +1,96 @@
+#include "src/scene/material_run.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace knitsim {
+
+MaterialDrapeResult run_material_drape(const Scene& scene, const std::string& integrator,
+                                       RunObserver* observer) {
+  scene.validate();
+  if (scene.material.kind != DrapeModelKind::Material)
+    throw std::logic_error("run_material_drape: model.kind is not material");
+  auto integ = make_integrator(integrator);
+  MaterialDrapeResult r;
+  auto sheet = std::make_shared<const MaterialSheet>(scene.material.sheet(scene.params));
+  r.sheet = sheet;
+  const MaterialSheet& s = *sheet;
+  r.stats = run_to_equilibrium(s, *integ, scene.options, r.state_x, r.state_v, observer, 0.0);
+  const double* x = r.state_x.data();
+  const int nv = s.vertex_count();
+  r.positions.resize(nv);
+  r.rest.resize(nv);
+  for (int v = 0; v < nv; ++v) {
+    r.positions[v] = s.position(x, v);
+    r.rest[v] = s.rest_position(v);
+  }
+  r.energy = s.potential_energy(r.stats.t_final, x);
+  const int nx = s.nx(), ny = s.ny();
+  // Distance of a rest point from the nearest clamp rectangle.
+  const auto from_clamps = [&s](double x0, double y0) {
+    double d = std::numeric_limits<double>::infinity();
+    for (const SheetPatch& c : s.params().patches) {
+      const double dx = std::max({c.x0 - x0, 0.0, x0 - c.x1});
+      const double dy = std::max({c.y0 - y0, 0.0, y0 - c.y1});
+      d = std::min(d, std::hypot(dx, dy));
+    }
+    return d;
+  };
+  const double away = scene.material.clamp_size;
+  double worst = 0.0, worst_away = 0.0;
+  auto segment = [&](int a, int b, double h) {
+    const double e = norm(r.positions[b] - r.positions[a]) / h - 1.0;
+    worst = std::max(worst, e);
+    const Vec3 m = 0.5 * (r.rest[a] + r.rest[b]);
+    if (from_clamps(m.x, m.y) >= away * (1.0 - 1e-9)) worst_away = std::max(worst_away, e);
+  };
+  bool finite = true;
+  for (int i = 0; i <= ny; ++i)
+    for (int j = 0; j <= nx; ++j) {
+      const Vec3 p = r.positions[s.vertex(i, j)];
+      if (j < nx) segment(s.vertex(i, j), s.vertex(i, j + 1), s.hx());
+      if (i < ny) segment(s.vertex(i, j), s.vertex(i + 1, j), s.hy());
+      finite = finite && std::isfinite(p.x + p.y + p.z);
+    }
+  r.max_strain = finite ? worst : std::numeric_limits<double>::quiet_NaN();
+  r.max_strain_away = finite ? worst_away : std::numeric_limits<double>::quiet_NaN();
+  if (scene.material.clamps == ClampLayout::Corners) {
+    double z = 0.0;
+    int count = 0;
+    for (int i : {ny / 2, (ny + 1) / 2})
+      for (int j : {nx / 2, (nx + 1) / 2}) z += r.positions[s.vertex(i, j)].z, ++count;
+    r.centre_sag = -z / count;  // the clamps stay at z = 0
+  } else {
+    // The jaw's line: its last clamped row (the row nearest the tip whose vertices are held).
+    int jaw = 0;
+    while (jaw + 1 <= ny && s.free_index(s.vertex(jaw + 1, 0)) < 0) ++jaw;
+    Vec3 tip{}, before{};
+    for (int j = 0; j <= nx; ++j) {
+      tip = tip + r.positions[s.vertex(ny, j)];
+      before = before + r.positions[s.vertex(ny - 1, j)];
+    }
+    tip = (1.0 / (nx + 1)) * tip;
+    before = (1.0 / (nx + 1)) * before;
+    const double y0 = jaw * s.hy();
+    const double deg = 180.0 / M_PI;
+    r.tip_run = tip.y - y0;
+    r.tip_drop = -tip.z;
+    r.chord_angle_deg = std::atan2(r.tip_drop, r.tip_run) * deg;
+    r.tip_slope_deg = std::atan2(before.z - tip.z, tip.y - before.y) * deg;
+    r.centre_sag = r.tip_drop;
+  }
+  return r;
+}
+
+std::string material_limit_violation(const MaterialDrapeResult& r) {
+  const MaterialSheetParams& p = r.sheet->params();
+  if (!std::isfinite(r.max_strain) || !std::isfinite(r.centre_sag))
+    return "the final state is not finite";
+  if (r.centre_sag > std::max(p.width, p.length))
+    return "the sag exceeds the sheet's size (" + std::to_string(r.centre_sag) + " m)";
+  return "";
+}
+
+}  // namespace knitsim
