@@ -197,6 +197,9 @@ class ContactNetwork final : public MechanicalSystem {
   bool may_pair(int a, int b) const;
   // Yarn y's points linearised about the particles' positions (spec linearise, its count checked).
   std::vector<ContactPoint> linearised(const std::vector<Vec3>& particles, int y) const;
+  // Yarn y's current maps made again into points_ from their recipe (made_at_, cut_offsets_;
+  // the same bits): a renewal that fails its check restores the old maps so, not from a copy.
+  void remake(int y);
   // Calls on_contact(pair, p_a - p_b, D, dE/dD, d2E/dD2) for every pair closer than d at (t, x);
   // false (stopping) if the state is not finite or a pair is inside its core.
   template <class OnContact>
@@ -227,6 +230,11 @@ class ContactNetwork final : public MechanicalSystem {
   std::vector<int> yarn_of_;          // per point, its yarn (may_pair reads these, not points_)
   std::vector<double> arc_of_;        // per point, its arc length, m
   std::vector<Vec3> renewed_at_;      // every particle's position at the latest whole renewal
+  // Per yarn the recipe of its current maps: linearised about *made_at_[y] (null: the model's
+  // points), then, after a renewal cut short, these offsets (empty otherwise). The yarns renewed
+  // at one update share one vector of positions.
+  std::vector<std::shared_ptr<const std::vector<Vec3>>> made_at_;
+  std::vector<std::vector<Vec3>> cut_offsets_;
   long refreshes_ = 0, cut_renewals_ = 0;
 
   // Caches, functions of the state evaluated last and points_ (positions()), and of the list's
