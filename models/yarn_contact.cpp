@@ -315,7 +315,7 @@ bool ContactNetwork::update(double t, const double* x) {
   // The fresh maps are written over the old ones, one yarn at a time: a check that fails remakes
   // the old ones from their recipes (remake), so no second set of maps is held.
   const auto at = std::make_shared<const std::vector<Vec3>>(particles);
-  bool batch = !straying.empty() && sweep_fraction(pts_, move, spec_.renew_keep) >= 1.0;
+  bool batch = !straying.empty() && sweep_fraction(pts_, [&](std::size_t k) { return move[k]; }, spec_.renew_keep) >= 1.0;
   if (batch) {
     for (const int y : straying) {
       const std::vector<ContactPoint> fresh = linearised(particles, y);
@@ -337,7 +337,7 @@ bool ContactNetwork::update(double t, const double* x) {
     std::vector<ContactPoint> fresh = linearised(particles, y);
     std::fill(move.begin(), move.end(), Vec3{0.0, 0.0, 0.0});
     for (int k = begin; k < end; ++k) move[k] = exact_[k] - pts_[k];
-    const double s = sweep_fraction(pts_, move, spec_.renew_keep);
+    const double s = sweep_fraction(pts_, [&](std::size_t k) { return move[k]; }, spec_.renew_keep);
     if (s < 1.0) {
       ++cut_renewals_, ++cut;
       // Part way: the fresh map (its weights, the tangent here) moved to put each point s of the
@@ -480,8 +480,9 @@ void ContactNetwork::positions(double t, const double* x) const {
   pts_.resize(points_.size());
   turns_.resize(points_.size());
   for (std::size_t k = 0; k < points_.size(); ++k) {
-    turns_[k] = turned(points_[k], pos_);
-    pts_[k] = rotate(turns_[k].c, turns_[k].s, turns_[k].u);
+    const PointTurn tk = turned(points_[k], pos_);
+    turns_[k] = {tk.c, tk.s, tk.a, tk.gx, tk.gy};
+    pts_[k] = rotate(tk.c, tk.s, tk.u);
   }
   cached_x_.assign(x, x + dof());
   cached_t_ = t;
@@ -596,8 +597,8 @@ bool ContactNetwork::add_contact_forces(double t, const double* x, double* out,
                                         const std::vector<double>* mass) const {
   return for_each_contact(t, x, [&](const Pair& pr, Vec3 d, double D, double de, double) {
     const Vec3 F = (-de / D) * d;  // on a; b gets the opposite
-    spread(points_[pr.a], turns_[pr.a], net_, F, out, mass);
-    spread(points_[pr.b], turns_[pr.b], net_, -1.0 * F, out, mass);
+    spread(points_[pr.a], turn_of(pr.a), net_, F, out, mass);
+    spread(points_[pr.b], turn_of(pr.b), net_, -1.0 * F, out, mass);
   });
 }
 
@@ -653,7 +654,7 @@ void ContactNetwork::stiffness_values(double t, const double* x, double* values)
         const ContactPoint* pt[2] = {&points_[pr.a], &points_[pr.b]};
         const int index[2] = {pr.a, pr.b};
         for (int A = 0; A < 2; ++A) {
-          const PointTurn& tA = turns_[index[A]];
+          const PointTurn tA = turn_of(index[A]);
           for (int i = 0; i < kContactParticles && pt[A]->particles[i] >= 0; ++i)
             J[A][i] = jacobian(*pt[A], tA, i);
         }
@@ -688,7 +689,7 @@ void ContactNetwork::stiffness_values(double t, const double* x, double* values)
     const ContactPoint& pt = points_[k];
     const Vec3 g = grad_[k];
     if (pt.turn[0] < 0 || (g.x == 0.0 && g.y == 0.0 && g.z == 0.0)) continue;
-    const PointTurn& tk = turns_[k];
+    const PointTurn tk = turn_of(static_cast<int>(k));
     const Vec3 gt = rotate(tk.c, -tk.s, g);  // R^T g
     int count = 0;
     while (count < kContactParticles && pt.particles[count] >= 0) ++count;
@@ -734,22 +735,29 @@ double ContactNetwork::admissible_step(double t, const double* x, const double* 
   // (the points, and each point's (c, s) for its turn; not a copy of the caches).
   const std::size_t n = points_.size();
   std::vector<Vec3> particles, at(n);  // the particles and points at fraction `done`
-  std::vector<std::array<double, 2>> turn_at(n);  // per point (c, s) of R(phi) there
   std::vector<double> y(x, x + dof());
   double cap = 1.0, done = -1.0;
-  // The points at fraction s of the (capped) step, into `at`.
-  auto points_at = [&](double s) {
-    if (s == done) return;
+  // The points at fraction s of the (capped) step, into `at`; with `turn`, the largest turn of a
+  // point from x there (and `turning`: whether any point turns).
+  double turn = 0.0;
+  bool turning = false;
+  auto points_at = [&](double s, bool measure_turn) {
+    if (s == done && !measure_turn) return;
     for (int i = 0; i < dof(); ++i) y[i] = x[i] + s * cap * dx[i];
     net_.all_positions(t, y.data(), particles);
+    turn = 0.0;
     for (std::size_t k = 0; k < n; ++k) {
       const PointTurn tk = turned(points_[k], particles);
       at[k] = rotate(tk.c, tk.s, tk.u);
-      turn_at[k] = {tk.c, tk.s};
+      if (!measure_turn || points_[k].turn[0] < 0) continue;
+      turning = true;
+      turn = std::max(turn, std::abs(std::remainder(std::atan2(tk.s, tk.c) -
+                                                        turn_angle(static_cast<int>(k)),
+                                                    2.0 * 3.14159265358979323846)));
     }
     done = s;
   };
-  points_at(1.0);
+  points_at(1.0, true);
   double longest = 0.0;
   for (std::size_t k = 0; k < n; ++k) longest = std::max(longest, norm(at[k] - pts_[k]));
   if (!(longest < std::numeric_limits<double>::infinity())) return 0.0;
@@ -758,28 +766,18 @@ double ContactNetwork::admissible_step(double t, const double* x, const double* 
   // points stray less from their exact positions within one step).
   if (longest > spec_.step_cap) {
     cap = spec_.step_cap / longest;
-    done = -1.0;
-    points_at(1.0);
+    points_at(1.0, true);
   }
   // Co-rotated points move on curves: the step is swept as chords between exact states, each
   // turning no point more than kChordTurn (its path's sagitta ~ kChordTurn^2 / 8 of its reach).
-  double turn = 0.0;
-  bool turning = false;
-  for (std::size_t k = 0; k < n; ++k) {
-    if (points_[k].turn[0] < 0) continue;
-    turning = true;
-    const double phi = std::atan2(turn_at[k][1], turn_at[k][0]);
-    turn = std::max(turn, std::abs(std::remainder(phi - turn_angle(static_cast<int>(k)),
-                                                  2.0 * 3.14159265358979323846)));
-  }
   const int chords =
       std::min(kMaxChords, std::max(1, static_cast<int>(std::ceil(turn / kChordTurn))));
   double fraction = 1.0;
-  std::vector<Vec3> from = pts_, move(n);
+  std::vector<Vec3> from = pts_;
   for (int c = 0; c < chords; ++c) {
-    points_at(double(c + 1) / chords);
-    for (std::size_t k = 0; k < n; ++k) move[k] = at[k] - from[k];
-    const double f = sweep_fraction(from, move, spec_.filter_keep);
+    points_at(double(c + 1) / chords, false);
+    const double f = sweep_fraction(
+        from, [&](std::size_t k) { return at[k] - from[k]; }, spec_.filter_keep);
     if (f < 1.0) {
       fraction = (c + f) / chords;
       break;
@@ -790,7 +788,7 @@ double ContactNetwork::admissible_step(double t, const double* x, const double* 
   // had to move more than the skin, which the chords see): halved while a pair is inside a core.
   if (turning)
     for (int halve = 0; fraction > 0.0; ++halve) {
-      points_at(fraction);
+      points_at(fraction, false);
       bool clear = true;
       for (const Pair& pr : pairs_) clear = clear && norm(at[pr.a] - at[pr.b]) > spec_.core;
       if (clear) break;
@@ -801,12 +799,28 @@ double ContactNetwork::admissible_step(double t, const double* x, const double* 
 
 double ContactNetwork::turn_angle(int k) const { return std::atan2(turns_[k].s, turns_[k].c); }
 
-double ContactNetwork::sweep_fraction(const std::vector<Vec3>& start, const std::vector<Vec3>& move,
+PointTurn ContactNetwork::turn_of(int k) const {
+  const TurnCache& q = turns_[k];
+  const ContactPoint& point = points_[k];
+  PointTurn t;
+  t.c = q.c, t.s = q.s, t.a = q.a, t.gx = q.gx, t.gy = q.gy;
+  if (point.turn[0] >= 0) {  // v as turned() makes it, from the particles at the same state
+    const Vec3& xi = pos_[point.particles[point.turn[0]]];
+    const Vec3& xj = pos_[point.particles[point.turn[1]]];
+    t.vx = xj.x - xi.x, t.vy = xj.y - xi.y;
+    t.v2 = t.vx * t.vx + t.vy * t.vy;
+    t.turns = true;
+  }
+  return t;
+}
+
+template <class MoveOf>
+double ContactNetwork::sweep_fraction(const std::vector<Vec3>& start, MoveOf move,
                                       double keep) const {
   double fraction = 1.0;
   auto sweep_pair = [&](int a, int b) {
     const Vec3 d0 = start[a] - start[b];
-    const Vec3 dd = move[a] - move[b];
+    const Vec3 dd = move(a) - move(b);
     const double D0 = norm(d0);
     const double floor = spec_.core + keep * (std::min(D0, spec_.touching) - spec_.core);
     const double A = dot(dd, dd), B = dot(d0, dd), C = D0 * D0 - floor * floor;
@@ -823,7 +837,7 @@ double ContactNetwork::sweep_fraction(const std::vector<Vec3>& start, const std:
   if (listed_at_.size() == start.size()) {
     double furthest = 0.0;
     for (std::size_t k = 0; k < start.size(); ++k)
-      furthest = std::max(furthest, norm(start[k] - listed_at_[k]) + norm(move[k]));
+      furthest = std::max(furthest, norm(start[k] - listed_at_[k]) + norm(move(k)));
     if (2.0 * furthest <= spec_.skin) {
       for (const Pair& pr : pairs_) sweep_pair(pr.a, pr.b);
       ++list_sweeps_;
@@ -832,7 +846,7 @@ double ContactNetwork::sweep_fraction(const std::vector<Vec3>& start, const std:
   }
   std::vector<Box> boxes(start.size());
   for (std::size_t k = 0; k < start.size(); ++k) {
-    const Vec3 e = start[k] + move[k];
+    const Vec3 e = start[k] + move(k);
     boxes[k] = {std::min(start[k].x, e.x) - 0.5 * spec_.touching,
                 std::max(start[k].x, e.x) + 0.5 * spec_.touching,
                 std::min(start[k].y, e.y) - 0.5 * spec_.touching,

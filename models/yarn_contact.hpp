@@ -210,13 +210,15 @@ class ContactNetwork final : public MechanicalSystem {
                           const std::vector<double>* mass) const;
   // Barrier energy and its first two derivatives in D.
   void barrier(double D, double& e, double& de, double& d2e) const;
-  // The largest fraction in [0, 1] of the points' straight moves from start along which no pair
+  // The largest fraction in [0, 1] of the points' straight moves (move(k), a Vec3 per point k;
+  // computed where it is asked for, not an array of its own) from start along which no pair
   // comes closer than d0 + keep (min(D_start, d) - d0): exact (a quadratic per pair), pairs by
   // their swept boxes, or the near-pair list where it holds every pair the moves can bring
   // within d. The step filter keeps filter_keep, a renewal renew_keep.
-  double sweep_fraction(const std::vector<Vec3>& start, const std::vector<Vec3>& move,
-                        double keep) const;
+  template <class MoveOf>
+  double sweep_fraction(const std::vector<Vec3>& start, MoveOf move, double keep) const;
   double turn_angle(int k) const;  // point k's phi at pts_'s state (0 for a plain point), rad
+  PointTurn turn_of(int k) const;  // point k's PointTurn at pts_'s state (its u left unset)
   static constexpr double kChordTurn = 0.02;  // rad: the largest turn of a point per swept chord
   static constexpr int kMaxChords = 64;
 
@@ -241,7 +243,14 @@ class ContactNetwork final : public MechanicalSystem {
   // history (refresh_pairs()); evaluations at the same (t, x) give the same values whatever
   // they hold. Mutable as they are refilled by const evaluations.
   mutable std::vector<Vec3> pos_, pts_;   // particles and points at cached_x_
-  mutable std::vector<PointTurn> turns_;  // per point, at pts_'s state
+  // Per point the part of its PointTurn at pts_'s state that is kept (56 bytes, not 112: turn_of
+  // makes v from pos_ again, the same bits, and u is not needed).
+  struct TurnCache {
+    double c, s;
+    Vec3 a;
+    double gx, gy;
+  };
+  mutable std::vector<TurnCache> turns_;
   mutable std::vector<double> cached_x_;  // the state pos_, pts_ and turns_ describe, if cached_
   mutable double cached_t_ = 0.0;
   mutable bool cached_ = false;
