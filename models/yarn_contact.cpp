@@ -292,8 +292,9 @@ bool ContactNetwork::update(double t, const double* x) {
     moved = std::max({moved, std::abs(p.x - renewed_at_[i].x), std::abs(p.y - renewed_at_[i].y)});
   }
   if (moved < spec_.refresh_move) return false;
-  spec_.exact(particles, exact_);
-  if (exact_.size() != points_.size())
+  std::vector<Vec3> exact;  // every point's exact position
+  spec_.exact(particles, exact);
+  if (exact.size() != points_.size())
     throw std::logic_error("yarn contact: exact positions of another number of points");
   positions(t, x);
   // Each straying yarn is renewed: its points move from where they are to their exact positions,
@@ -305,17 +306,17 @@ bool ContactNetwork::update(double t, const double* x) {
   for (int y = 0; y + 1 < static_cast<int>(model_->yarn_begin_.size()); ++y) {
     double drift = 0.0;
     for (int k = model_->yarn_begin_[y]; k < model_->yarn_begin_[y + 1]; ++k)
-      drift = std::max(drift, norm(exact_[k] - pts_[k]));
+      drift = std::max(drift, norm(exact[k] - pts_[k]));
     if (drift > spec_.refresh_tol) straying.push_back(y);
   }
-  std::vector<Vec3> move(pts_.size());
-  for (const int y : straying)
-    for (int k = model_->yarn_begin_[y]; k < model_->yarn_begin_[y + 1]; ++k)
-      move[k] = exact_[k] - pts_[k];
+  // A point's move: to its exact position if its yarn is renewed, else none.
+  std::vector<char> renewing(model_->yarn_begin_.size(), 0);
+  for (const int y : straying) renewing[y] = 1;
+  auto move = [&](std::size_t k) { return renewing[yarn_of_[k]] ? exact[k] - pts_[k] : Vec3{}; };
   // The fresh maps are written over the old ones, one yarn at a time: a check that fails remakes
   // the old ones from their recipes (remake), so no second set of maps is held.
   const auto at = std::make_shared<const std::vector<Vec3>>(particles);
-  bool batch = !straying.empty() && sweep_fraction(pts_, [&](std::size_t k) { return move[k]; }, spec_.renew_keep) >= 1.0;
+  bool batch = !straying.empty() && sweep_fraction(pts_, move, spec_.renew_keep) >= 1.0;
   if (batch) {
     for (const int y : straying) {
       const std::vector<ContactPoint> fresh = linearised(particles, y);
@@ -335,15 +336,15 @@ bool ContactNetwork::update(double t, const double* x) {
   for (std::size_t i = 0; !batch && i < straying.size(); ++i) {
     const int y = straying[i], begin = model_->yarn_begin_[y], end = model_->yarn_begin_[y + 1];
     std::vector<ContactPoint> fresh = linearised(particles, y);
-    std::fill(move.begin(), move.end(), Vec3{0.0, 0.0, 0.0});
-    for (int k = begin; k < end; ++k) move[k] = exact_[k] - pts_[k];
-    const double s = sweep_fraction(pts_, [&](std::size_t k) { return move[k]; }, spec_.renew_keep);
+    std::fill(renewing.begin(), renewing.end(), 0);
+    renewing[y] = 1;
+    const double s = sweep_fraction(pts_, move, spec_.renew_keep);
     if (s < 1.0) {
       ++cut_renewals_, ++cut;
       // Part way: the fresh map (its weights, the tangent here) moved to put each point s of the
       // way from where it is to its exact position; the rest is taken up at later checks.
       for (int k = begin; k < end; ++k)
-        fresh[k - begin].offset = fresh[k - begin].offset - (1.0 - s) * move[k];
+        fresh[k - begin].offset = fresh[k - begin].offset - (1.0 - s) * move(k);
     }
     // Swapped in: fresh then holds the old maps, and swapping again restores them.
     std::swap_ranges(fresh.begin(), fresh.end(), points_.begin() + begin);

@@ -259,7 +259,6 @@ class ContactNetwork final : public MechanicalSystem {
   // Scratch of one evaluation.
   mutable std::vector<Vec3> grad_;  // per point, dE/dp summed over its pairs (stiffness_values)
   mutable std::vector<double> net_values_, force_;
-  std::vector<Vec3> exact_;  // update's exact positions
   // Counters of the const evaluations.
   mutable long pattern_misses_ = 0, rebuilds_ = 0, list_sweeps_ = 0;
 };
