@@ -84,8 +84,10 @@ struct YarnContactSpec {
   double step_cap = 0.0;        // m: a step moves no point further than this (0: 4 d)
   // Renewal (docs/knit.md, "Yarn contact"; both set, or the points are never renewed). `exact`
   // writes every point's exact position (points order) from every particle's position; `linearise`
-  // returns yarn y's points (as many as it has, in order) linearised about those positions. Points
-  // must be ordered by yarn.
+  // returns yarn y's points (as many as it has, in order) linearised about those positions; it must
+  // be a function of the positions alone (the same positions, the same bits): a renewal refused at
+  // its check makes the old maps again by calling it, as a run holds one set of maps. Points must be
+  // ordered by yarn.
   std::function<void(const std::vector<Vec3>&, std::vector<Vec3>&)> exact;
   std::function<std::vector<ContactPoint>(const std::vector<Vec3>&, int)> linearise;
   double refresh_tol = 0.0;   // m: a yarn is renewed when one of its points strays this far
