@@ -626,7 +626,8 @@ void ContactNetwork::stiffness_values(double t, const double* x, double* values)
   for (std::size_t k = 0; k < net_values_.size(); ++k)
     values[model_->net_entry_[k]] = net_values_[k];
   const std::vector<double>& m = net_.mass();
-  grad_.assign(points_.size(), Vec3{0.0, 0.0, 0.0});
+  // Per point, dE/dp summed over its pairs (a local: 24 bytes a point not held between calls).
+  std::vector<Vec3> grad(points_.size(), Vec3{0.0, 0.0, 0.0});
   bool missed = false;
   // Adds -block / m_r (2 x 2, row-major) to particle block (fr, fc): da/dx = -K / m.
   auto add_block = [&](int particle_r, int particle_c, const double block[4]) {
@@ -649,8 +650,8 @@ void ContactNetwork::stiffness_values(double t, const double* x, double* values)
         double H[3][3];
         for (int p = 0; p < 3; ++p)
           for (int q = 0; q < 3; ++q) H[p][q] = (d2e - s) * u[p] * u[q] + (p == q ? s : 0.0);
-        grad_[pr.a] = grad_[pr.a] + s * d;
-        grad_[pr.b] = grad_[pr.b] - s * d;
+        grad[pr.a] = grad[pr.a] + s * d;
+        grad[pr.b] = grad[pr.b] - s * d;
         missed = false;
         const ContactPoint* pt[2] = {&points_[pr.a], &points_[pr.b]};
         const int index[2] = {pr.a, pr.b};
@@ -688,7 +689,7 @@ void ContactNetwork::stiffness_values(double t, const double* x, double* values)
   // The maps' curvature (header, "Co-rotated points"): per turning point with a gradient g.
   for (std::size_t k = 0; k < points_.size(); ++k) {
     const ContactPoint& pt = points_[k];
-    const Vec3 g = grad_[k];
+    const Vec3 g = grad[k];
     if (pt.turn[0] < 0 || (g.x == 0.0 && g.y == 0.0 && g.z == 0.0)) continue;
     const PointTurn tk = turn_of(static_cast<int>(k));
     const Vec3 gt = rotate(tk.c, -tk.s, g);  // R^T g

@@ -259,7 +259,6 @@ class ContactNetwork final : public MechanicalSystem {
   mutable std::vector<Vec3> listed_at_;  // the points where the near-pair list was made
   mutable std::vector<Pair> pairs_;      // the near-pair list
   // Scratch of one evaluation.
-  mutable std::vector<Vec3> grad_;  // per point, dE/dp summed over its pairs (stiffness_values)
   mutable std::vector<double> net_values_, force_;
   // Counters of the const evaluations.
   mutable long pattern_misses_ = 0, rebuilds_ = 0, list_sweeps_ = 0;
