@@ -245,9 +245,14 @@ ContactModel::ContactModel(SpringNetwork network, YarnContactSpec contact)
 ContactNetwork::ContactNetwork(std::shared_ptr<const ContactModel> model)
     : model_(std::move(model)), net_(model_->net_), spec_(model_->spec_), reach_(model_->reach_) {
   renewed_at_ = model_->start_;
+  const int yarns = std::max(0, static_cast<int>(model_->yarn_begin_.size()) - 1);
+  made_at_.resize(yarns);
+  cut_offsets_.resize(yarns);
   if (spec_.remake_at_start) {
     points_.reserve(model_->point_count_);
-    for (int y = 0; y + 1 < static_cast<int>(model_->yarn_begin_.size()); ++y) {
+    const auto at = std::make_shared<const std::vector<Vec3>>(renewed_at_);
+    for (int y = 0; y < yarns; ++y) {
+      made_at_[y] = at;
       const std::vector<ContactPoint> yarn = linearised(renewed_at_, y);
       points_.insert(points_.end(), yarn.begin(), yarn.end());
     }
@@ -287,8 +292,9 @@ bool ContactNetwork::update(double t, const double* x) {
     moved = std::max({moved, std::abs(p.x - renewed_at_[i].x), std::abs(p.y - renewed_at_[i].y)});
   }
   if (moved < spec_.refresh_move) return false;
-  spec_.exact(particles, exact_);
-  if (exact_.size() != points_.size())
+  std::vector<Vec3> exact;  // every point's exact position
+  spec_.exact(particles, exact);
+  if (exact.size() != points_.size())
     throw std::logic_error("yarn contact: exact positions of another number of points");
   positions(t, x);
   // Each straying yarn is renewed: its points move from where they are to their exact positions,
@@ -300,55 +306,60 @@ bool ContactNetwork::update(double t, const double* x) {
   for (int y = 0; y + 1 < static_cast<int>(model_->yarn_begin_.size()); ++y) {
     double drift = 0.0;
     for (int k = model_->yarn_begin_[y]; k < model_->yarn_begin_[y + 1]; ++k)
-      drift = std::max(drift, norm(exact_[k] - pts_[k]));
+      drift = std::max(drift, norm(exact[k] - pts_[k]));
     if (drift > spec_.refresh_tol) straying.push_back(y);
   }
-  std::vector<std::vector<ContactPoint>> fresh(straying.size());
-  std::vector<Vec3> move(pts_.size());
-  for (std::size_t i = 0; i < straying.size(); ++i) {
-    const int y = straying[i], begin = model_->yarn_begin_[y], end = model_->yarn_begin_[y + 1];
-    fresh[i] = linearised(particles, y);
-    for (int k = begin; k < end; ++k) move[k] = exact_[k] - pts_[k];
-  }
-  // Swaps the fresh maps of straying[i], i in [i0, i1), into points_: fresh[i] then holds the
-  // old ones, and swapping again restores them (no third copy of the maps).
-  auto swap_in = [&](std::size_t i0, std::size_t i1) {
-    for (std::size_t i = i0; i < i1; ++i)
-      std::swap_ranges(fresh[i].begin(), fresh[i].end(),
-                       points_.begin() + model_->yarn_begin_[straying[i]]);
-    points_changed();
-  };
-  auto restore = [&](std::size_t i0, std::size_t i1) {
-    swap_in(i0, i1);
-    positions(t, x);
-  };
+  // A point's move: to its exact position if its yarn is renewed, else none.
+  std::vector<char> renewing(model_->yarn_begin_.size(), 0);
+  for (const int y : straying) renewing[y] = 1;
+  auto move = [&](std::size_t k) { return renewing[yarn_of_[k]] ? exact[k] - pts_[k] : Vec3{}; };
+  // The fresh maps are written over the old ones, one yarn at a time: a check that fails remakes
+  // the old ones from their recipes (remake), so no second set of maps is held.
+  const auto at = std::make_shared<const std::vector<Vec3>>(particles);
   bool batch = !straying.empty() && sweep_fraction(pts_, move, spec_.renew_keep) >= 1.0;
   if (batch) {
-    swap_in(0, straying.size());
+    for (const int y : straying) {
+      const std::vector<ContactPoint> fresh = linearised(particles, y);
+      std::copy(fresh.begin(), fresh.end(), points_.begin() + model_->yarn_begin_[y]);
+    }
+    points_changed();
     if (min_distance(t, x) > spec_.core) {  // pts_ now holds the renewed points
       renewed = static_cast<long>(straying.size());
+      for (const int y : straying) made_at_[y] = at, std::vector<Vec3>().swap(cut_offsets_[y]);
     } else {
-      restore(0, straying.size());
+      for (const int y : straying) remake(y);
+      points_changed();
+      positions(t, x);
       batch = false;
     }
   }
   for (std::size_t i = 0; !batch && i < straying.size(); ++i) {
-    const int begin = model_->yarn_begin_[straying[i]], end = model_->yarn_begin_[straying[i] + 1];
-    std::fill(move.begin(), move.end(), Vec3{0.0, 0.0, 0.0});
-    for (int k = begin; k < end; ++k) move[k] = exact_[k] - pts_[k];
+    const int y = straying[i], begin = model_->yarn_begin_[y], end = model_->yarn_begin_[y + 1];
+    std::vector<ContactPoint> fresh = linearised(particles, y);
+    std::fill(renewing.begin(), renewing.end(), 0);
+    renewing[y] = 1;
     const double s = sweep_fraction(pts_, move, spec_.renew_keep);
     if (s < 1.0) {
       ++cut_renewals_, ++cut;
       // Part way: the fresh map (its weights, the tangent here) moved to put each point s of the
       // way from where it is to its exact position; the rest is taken up at later checks.
       for (int k = begin; k < end; ++k)
-        fresh[i][k - begin].offset = fresh[i][k - begin].offset - (1.0 - s) * move[k];
+        fresh[k - begin].offset = fresh[k - begin].offset - (1.0 - s) * move(k);
     }
-    swap_in(i, i + 1);
+    // Swapped in: fresh then holds the old maps, and swapping again restores them.
+    std::swap_ranges(fresh.begin(), fresh.end(), points_.begin() + begin);
+    points_changed();
     if (min_distance(t, x) > spec_.core) {  // pts_ now holds the renewed points
       ++renewed;
+      made_at_[y] = at;
+      cut_offsets_[y].clear();
+      if (s < 1.0)
+        for (int k = begin; k < end; ++k) cut_offsets_[y].push_back(points_[k].offset);
+      cut_offsets_[y].shrink_to_fit();
     } else {  // round-off at the filter's floor: the old points are kept
-      restore(i, i + 1);
+      std::swap_ranges(fresh.begin(), fresh.end(), points_.begin() + begin);
+      points_changed();
+      positions(t, x);
     }
   }
   if (renewed == 0) return false;
@@ -358,25 +369,39 @@ bool ContactNetwork::update(double t, const double* x) {
   return true;
 }
 
+void ContactNetwork::remake(int y) {
+  const int begin = model_->yarn_begin_[y], end = model_->yarn_begin_[y + 1];
+  if (made_at_[y] == nullptr) {  // the model's own points
+    std::copy(spec_.points.begin() + begin, spec_.points.begin() + end, points_.begin() + begin);
+    return;
+  }
+  const std::vector<ContactPoint> maps = linearised(*made_at_[y], y);
+  std::copy(maps.begin(), maps.end(), points_.begin() + begin);
+  const std::vector<Vec3>& offsets = cut_offsets_[y];
+  for (std::size_t k = 0; k < offsets.size(); ++k) points_[begin + k].offset = offsets[k];
+}
+
 bool ContactNetwork::renew(double t, const double* x) {
   if (model_->yarn_begin_.empty() || !spec_.linearise) return false;
   std::vector<Vec3> particles;
   net_.all_positions(t, x, particles);
   for (const Vec3& p : particles)
     if (!is_finite(p)) return false;
-  const std::vector<ContactPoint> old = points_;
-  for (int y = 0; y + 1 < static_cast<int>(model_->yarn_begin_.size()); ++y) {
+  const int yarns = static_cast<int>(model_->yarn_begin_.size()) - 1;
+  for (int y = 0; y < yarns; ++y) {
     const std::vector<ContactPoint> fresh = linearised(particles, y);
     std::copy(fresh.begin(), fresh.end(), points_.begin() + model_->yarn_begin_[y]);
   }
   points_changed();
   if (!(min_distance(t, x) > spec_.core)) {
-    points_ = old;
+    for (int y = 0; y < yarns; ++y) remake(y);
     points_changed();
     return false;
   }
   check_points(points_, net_);
   renewed_at_ = particles;
+  const auto at = std::make_shared<const std::vector<Vec3>>(std::move(particles));
+  for (int y = 0; y < yarns; ++y) made_at_[y] = at, std::vector<Vec3>().swap(cut_offsets_[y]);
   return true;
 }
 
@@ -456,8 +481,9 @@ void ContactNetwork::positions(double t, const double* x) const {
   pts_.resize(points_.size());
   turns_.resize(points_.size());
   for (std::size_t k = 0; k < points_.size(); ++k) {
-    turns_[k] = turned(points_[k], pos_);
-    pts_[k] = rotate(turns_[k].c, turns_[k].s, turns_[k].u);
+    const PointTurn tk = turned(points_[k], pos_);
+    turns_[k] = {tk.c, tk.s, tk.a, tk.gx, tk.gy};
+    pts_[k] = rotate(tk.c, tk.s, tk.u);
   }
   cached_x_.assign(x, x + dof());
   cached_t_ = t;
@@ -572,8 +598,8 @@ bool ContactNetwork::add_contact_forces(double t, const double* x, double* out,
                                         const std::vector<double>* mass) const {
   return for_each_contact(t, x, [&](const Pair& pr, Vec3 d, double D, double de, double) {
     const Vec3 F = (-de / D) * d;  // on a; b gets the opposite
-    spread(points_[pr.a], turns_[pr.a], net_, F, out, mass);
-    spread(points_[pr.b], turns_[pr.b], net_, -1.0 * F, out, mass);
+    spread(points_[pr.a], turn_of(pr.a), net_, F, out, mass);
+    spread(points_[pr.b], turn_of(pr.b), net_, -1.0 * F, out, mass);
   });
 }
 
@@ -628,7 +654,8 @@ void ContactNetwork::stiffness_values(double t, const double* x, double* values)
   for (std::size_t k = 0; k < net_values_.size(); ++k)
     values[model_->net_entry_[k]] = net_values_[k];
   const std::vector<double>& m = net_.mass();
-  grad_.assign(points_.size(), Vec3{0.0, 0.0, 0.0});
+  // Per point, dE/dp summed over its pairs (a local: 24 bytes a point not held between calls).
+  std::vector<Vec3> grad(points_.size(), Vec3{0.0, 0.0, 0.0});
   bool missed = false;
   // Adds -block / m_r (2 x 2, row-major) to particle block (fr, fc): da/dx = -K / m.
   auto add_block = [&](int particle_r, int particle_c, const double block[4]) {
@@ -651,13 +678,13 @@ void ContactNetwork::stiffness_values(double t, const double* x, double* values)
         double H[3][3];
         for (int p = 0; p < 3; ++p)
           for (int q = 0; q < 3; ++q) H[p][q] = (d2e - s) * u[p] * u[q] + (p == q ? s : 0.0);
-        grad_[pr.a] = grad_[pr.a] + s * d;
-        grad_[pr.b] = grad_[pr.b] - s * d;
+        grad[pr.a] = grad[pr.a] + s * d;
+        grad[pr.b] = grad[pr.b] - s * d;
         missed = false;
         const ContactPoint* pt[2] = {&points_[pr.a], &points_[pr.b]};
         const int index[2] = {pr.a, pr.b};
         for (int A = 0; A < 2; ++A) {
-          const PointTurn& tA = turns_[index[A]];
+          const PointTurn tA = turn_of(index[A]);
           for (int i = 0; i < kContactParticles && pt[A]->particles[i] >= 0; ++i)
             J[A][i] = jacobian(*pt[A], tA, i);
         }
@@ -690,9 +717,9 @@ void ContactNetwork::stiffness_values(double t, const double* x, double* values)
   // The maps' curvature (header, "Co-rotated points"): per turning point with a gradient g.
   for (std::size_t k = 0; k < points_.size(); ++k) {
     const ContactPoint& pt = points_[k];
-    const Vec3 g = grad_[k];
+    const Vec3 g = grad[k];
     if (pt.turn[0] < 0 || (g.x == 0.0 && g.y == 0.0 && g.z == 0.0)) continue;
-    const PointTurn& tk = turns_[k];
+    const PointTurn tk = turn_of(static_cast<int>(k));
     const Vec3 gt = rotate(tk.c, -tk.s, g);  // R^T g
     int count = 0;
     while (count < kContactParticles && pt.particles[count] >= 0) ++count;
@@ -734,88 +761,96 @@ void ContactNetwork::stiffness_values(double t, const double* x, double* values)
 
 double ContactNetwork::admissible_step(double t, const double* x, const double* dx) const {
   if (!pairs_of(t, x)) return 1.0;
-  // x's particles, points and turns, put back at the end (the cache then describes x again).
-  const std::vector<Vec3> start = pts_, start_pos = pos_;
-  const std::vector<PointTurn> start_turns = turns_;
-  auto back_to_x = [&] {
-    pos_ = start_pos, pts_ = start, turns_ = start_turns;
-    cached_x_.assign(x, x + dof());
-    cached_t_ = t;
-    cached_ = true;
-  };
-  std::vector<double> turn0(points_.size());
-  for (std::size_t k = 0; k < points_.size(); ++k) turn0[k] = turn_angle(static_cast<int>(k));
-  // The points at fraction s of the (capped) step, into pts_.
+  // pos_, pts_ and turns_ describe x throughout: the step's points go into buffers of their own
+  // (the points, and each point's (c, s) for its turn; not a copy of the caches).
+  const std::size_t n = points_.size();
+  std::vector<Vec3> particles, at(n);  // the particles and points at fraction `done`
   std::vector<double> y(x, x + dof());
-  double cap = 1.0, at = -1.0;  // at: the fraction pts_ holds
-  auto points_at = [&](double s) {
-    if (s == at) return;
+  double cap = 1.0, done = -1.0;
+  // The points at fraction s of the (capped) step, into `at`; with `turn`, the largest turn of a
+  // point from x there (and `turning`: whether any point turns).
+  double turn = 0.0;
+  bool turning = false;
+  auto points_at = [&](double s, bool measure_turn) {
+    if (s == done && !measure_turn) return;
     for (int i = 0; i < dof(); ++i) y[i] = x[i] + s * cap * dx[i];
-    positions(t, y.data());
-    at = s;
+    net_.all_positions(t, y.data(), particles);
+    turn = 0.0;
+    for (std::size_t k = 0; k < n; ++k) {
+      const PointTurn tk = turned(points_[k], particles);
+      at[k] = rotate(tk.c, tk.s, tk.u);
+      if (!measure_turn || points_[k].turn[0] < 0) continue;
+      turning = true;
+      turn = std::max(turn, std::abs(std::remainder(std::atan2(tk.s, tk.c) -
+                                                        turn_angle(static_cast<int>(k)),
+                                                    2.0 * 3.14159265358979323846)));
+    }
+    done = s;
   };
-  points_at(1.0);
+  points_at(1.0, true);
   double longest = 0.0;
-  for (std::size_t k = 0; k < pts_.size(); ++k)
-    longest = std::max(longest, norm(pts_[k] - start[k]));
-  if (!(longest < std::numeric_limits<double>::infinity())) {
-    back_to_x();
-    return 0.0;
-  }
+  for (std::size_t k = 0; k < n; ++k) longest = std::max(longest, norm(at[k] - pts_[k]));
+  if (!(longest < std::numeric_limits<double>::infinity())) return 0.0;
   // A step that moves a point by more than step_cap is cut to that first (a yarn jumping several
   // diameters in one Newton step is not trusted, the swept boxes stay small, and renewable
   // points stray less from their exact positions within one step).
   if (longest > spec_.step_cap) {
     cap = spec_.step_cap / longest;
-    at = -1.0;
-    points_at(1.0);
+    points_at(1.0, true);
   }
   // Co-rotated points move on curves: the step is swept as chords between exact states, each
   // turning no point more than kChordTurn (its path's sagitta ~ kChordTurn^2 / 8 of its reach).
-  double turn = 0.0;
-  bool turning = false;
-  for (std::size_t k = 0; k < points_.size(); ++k) {
-    if (points_[k].turn[0] < 0) continue;
-    turning = true;
-    turn = std::max(turn, std::abs(std::remainder(turn_angle(static_cast<int>(k)) - turn0[k],
-                                                  2.0 * 3.14159265358979323846)));
-  }
   const int chords =
       std::min(kMaxChords, std::max(1, static_cast<int>(std::ceil(turn / kChordTurn))));
   double fraction = 1.0;
-  std::vector<Vec3> from = start, move(start.size());
+  std::vector<Vec3> from = pts_;
   for (int c = 0; c < chords; ++c) {
-    points_at(double(c + 1) / chords);
-    for (std::size_t k = 0; k < pts_.size(); ++k) move[k] = pts_[k] - from[k];
-    const double f = sweep_fraction(from, move, spec_.filter_keep);
+    points_at(double(c + 1) / chords, false);
+    const double f = sweep_fraction(
+        from, [&](std::size_t k) { return at[k] - from[k]; }, spec_.filter_keep);
     if (f < 1.0) {
       fraction = (c + f) / chords;
       break;
     }
-    from = pts_;
+    from = at;
   }
   // The end of a bent path is checked exactly on x's near pairs (a pair further apart would have
   // had to move more than the skin, which the chords see): halved while a pair is inside a core.
   if (turning)
     for (int halve = 0; fraction > 0.0; ++halve) {
-      points_at(fraction);
+      points_at(fraction, false);
       bool clear = true;
-      for (const Pair& pr : pairs_) clear = clear && norm(pts_[pr.a] - pts_[pr.b]) > spec_.core;
+      for (const Pair& pr : pairs_) clear = clear && norm(at[pr.a] - at[pr.b]) > spec_.core;
       if (clear) break;
       fraction = halve < 40 ? 0.5 * fraction : 0.0;
     }
-  back_to_x();
   return cap * fraction;
 }
 
 double ContactNetwork::turn_angle(int k) const { return std::atan2(turns_[k].s, turns_[k].c); }
 
-double ContactNetwork::sweep_fraction(const std::vector<Vec3>& start, const std::vector<Vec3>& move,
+PointTurn ContactNetwork::turn_of(int k) const {
+  const TurnCache& q = turns_[k];
+  const ContactPoint& point = points_[k];
+  PointTurn t;
+  t.c = q.c, t.s = q.s, t.a = q.a, t.gx = q.gx, t.gy = q.gy;
+  if (point.turn[0] >= 0) {  // v as turned() makes it, from the particles at the same state
+    const Vec3& xi = pos_[point.particles[point.turn[0]]];
+    const Vec3& xj = pos_[point.particles[point.turn[1]]];
+    t.vx = xj.x - xi.x, t.vy = xj.y - xi.y;
+    t.v2 = t.vx * t.vx + t.vy * t.vy;
+    t.turns = true;
+  }
+  return t;
+}
+
+template <class MoveOf>
+double ContactNetwork::sweep_fraction(const std::vector<Vec3>& start, MoveOf move,
                                       double keep) const {
   double fraction = 1.0;
   auto sweep_pair = [&](int a, int b) {
     const Vec3 d0 = start[a] - start[b];
-    const Vec3 dd = move[a] - move[b];
+    const Vec3 dd = move(a) - move(b);
     const double D0 = norm(d0);
     const double floor = spec_.core + keep * (std::min(D0, spec_.touching) - spec_.core);
     const double A = dot(dd, dd), B = dot(d0, dd), C = D0 * D0 - floor * floor;
@@ -832,7 +867,7 @@ double ContactNetwork::sweep_fraction(const std::vector<Vec3>& start, const std:
   if (listed_at_.size() == start.size()) {
     double furthest = 0.0;
     for (std::size_t k = 0; k < start.size(); ++k)
-      furthest = std::max(furthest, norm(start[k] - listed_at_[k]) + norm(move[k]));
+      furthest = std::max(furthest, norm(start[k] - listed_at_[k]) + norm(move(k)));
     if (2.0 * furthest <= spec_.skin) {
       for (const Pair& pr : pairs_) sweep_pair(pr.a, pr.b);
       ++list_sweeps_;
@@ -841,7 +876,7 @@ double ContactNetwork::sweep_fraction(const std::vector<Vec3>& start, const std:
   }
   std::vector<Box> boxes(start.size());
   for (std::size_t k = 0; k < start.size(); ++k) {
-    const Vec3 e = start[k] + move[k];
+    const Vec3 e = start[k] + move(k);
     boxes[k] = {std::min(start[k].x, e.x) - 0.5 * spec_.touching,
                 std::max(start[k].x, e.x) + 0.5 * spec_.touching,
                 std::min(start[k].y, e.y) - 0.5 * spec_.touching,

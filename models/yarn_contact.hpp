@@ -84,8 +84,10 @@ struct YarnContactSpec {
   double step_cap = 0.0;        // m: a step moves no point further than this (0: 4 d)
   // Renewal (docs/knit.md, "Yarn contact"; both set, or the points are never renewed). `exact`
   // writes every point's exact position (points order) from every particle's position; `linearise`
-  // returns yarn y's points (as many as it has, in order) linearised about those positions. Points
-  // must be ordered by yarn.
+  // returns yarn y's points (as many as it has, in order) linearised about those positions; it must
+  // be a function of the positions alone (the same positions, the same bits): a renewal refused at
+  // its check makes the old maps again by calling it, as a run holds one set of maps. Points must be
+  // ordered by yarn.
   std::function<void(const std::vector<Vec3>&, std::vector<Vec3>&)> exact;
   std::function<std::vector<ContactPoint>(const std::vector<Vec3>&, int)> linearise;
   double refresh_tol = 0.0;   // m: a yarn is renewed when one of its points strays this far
@@ -206,6 +208,9 @@ class ContactNetwork final : public MechanicalSystem, public HeldPoints {
   bool may_pair(int a, int b) const;
   // Yarn y's points linearised about the particles' positions (spec linearise, its count checked).
   std::vector<ContactPoint> linearised(const std::vector<Vec3>& particles, int y) const;
+  // Yarn y's current maps made again into points_ from their recipe (made_at_, cut_offsets_;
+  // the same bits): a renewal that fails its check restores the old maps so, not from a copy.
+  void remake(int y);
   // Calls on_contact(pair, p_a - p_b, D, dE/dD, d2E/dD2) for every pair closer than d at (t, x);
   // false (stopping) if the state is not finite or a pair is inside its core.
   template <class OnContact>
@@ -216,13 +221,15 @@ class ContactNetwork final : public MechanicalSystem, public HeldPoints {
                           const std::vector<double>* mass) const;
   // Barrier energy and its first two derivatives in D.
   void barrier(double D, double& e, double& de, double& d2e) const;
-  // The largest fraction in [0, 1] of the points' straight moves from start along which no pair
+  // The largest fraction in [0, 1] of the points' straight moves (move(k), a Vec3 per point k;
+  // computed where it is asked for, not an array of its own) from start along which no pair
   // comes closer than d0 + keep (min(D_start, d) - d0): exact (a quadratic per pair), pairs by
   // their swept boxes, or the near-pair list where it holds every pair the moves can bring
   // within d. The step filter keeps filter_keep, a renewal renew_keep.
-  double sweep_fraction(const std::vector<Vec3>& start, const std::vector<Vec3>& move,
-                        double keep) const;
+  template <class MoveOf>
+  double sweep_fraction(const std::vector<Vec3>& start, MoveOf move, double keep) const;
   double turn_angle(int k) const;  // point k's phi at pts_'s state (0 for a plain point), rad
+  PointTurn turn_of(int k) const;  // point k's PointTurn at pts_'s state (its u left unset)
   static constexpr double kChordTurn = 0.02;  // rad: the largest turn of a point per swept chord
   static constexpr int kMaxChords = 64;
 
@@ -238,22 +245,32 @@ class ContactNetwork final : public MechanicalSystem, public HeldPoints {
   std::vector<int> yarn_of_;          // per point, its yarn (may_pair reads these, not points_)
   std::vector<double> arc_of_;        // per point, its arc length, m
   std::vector<Vec3> renewed_at_;      // every particle's position at the latest whole renewal
+  // Per yarn the recipe of its current maps: linearised about *made_at_[y] (null: the model's
+  // points), then, after a renewal cut short, these offsets (empty otherwise). The yarns renewed
+  // at one update share one vector of positions.
+  std::vector<std::shared_ptr<const std::vector<Vec3>>> made_at_;
+  std::vector<std::vector<Vec3>> cut_offsets_;
   long refreshes_ = 0, cut_renewals_ = 0;
 
   // Caches, functions of the state evaluated last and points_ (positions()), and of the list's
   // history (refresh_pairs()); evaluations at the same (t, x) give the same values whatever
   // they hold. Mutable as they are refilled by const evaluations.
   mutable std::vector<Vec3> pos_, pts_;   // particles and points at cached_x_
-  mutable std::vector<PointTurn> turns_;  // per point, at pts_'s state
+  // Per point the part of its PointTurn at pts_'s state that is kept (56 bytes, not 112: turn_of
+  // makes v from pos_ again, the same bits, and u is not needed).
+  struct TurnCache {
+    double c, s;
+    Vec3 a;
+    double gx, gy;
+  };
+  mutable std::vector<TurnCache> turns_;
   mutable std::vector<double> cached_x_;  // the state pos_, pts_ and turns_ describe, if cached_
   mutable double cached_t_ = 0.0;
   mutable bool cached_ = false;
   mutable std::vector<Vec3> listed_at_;  // the points where the near-pair list was made
   mutable std::vector<Pair> pairs_;      // the near-pair list
   // Scratch of one evaluation.
-  mutable std::vector<Vec3> grad_;  // per point, dE/dp summed over its pairs (stiffness_values)
   mutable std::vector<double> net_values_, force_;
-  std::vector<Vec3> exact_;  // update's exact positions
   // Counters of the const evaluations.
   mutable long pattern_misses_ = 0, rebuilds_ = 0, list_sweeps_ = 0;
 };

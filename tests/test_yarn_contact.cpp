@@ -320,6 +320,49 @@ TEST_CASE("yarn contact: a renewal that would bring a pair near its core is take
   CHECK(std::isfinite(net.potential_energy(0.0, x.data())));
 }
 
+TEST_CASE("yarn contact: a renewal refused at its check leaves the maps as they were, bit for bit",
+          "[contact]") {
+  // The run holds one set of maps: a renewal writes the fresh ones in place and, refused, makes
+  // the old ones again from their recipe (the positions they were linearised about, and the
+  // offsets of a renewal cut short). Yarn 1's exact point lies z0 to the left of its particle,
+  // z0 the z of particle 0 (which the points do not see otherwise): linearise is a function of
+  // the positions alone, as it must be.
+  const SpringNetworkSpec spec = two_particles();
+  YarnContactSpec c = two_points();  // touching 1, core 0.9
+  const ContactPoint p0 = c.points[0], p1 = c.points[1];
+  c.refresh_tol = 0.01;
+  c.exact = [](const std::vector<Vec3>& pos, std::vector<Vec3>& out) {
+    out = {pos[0], pos[1] - Vec3{pos[0].z, 0.0, 0.0}};
+  };
+  c.linearise = [p0, p1](const std::vector<Vec3>& pos, int y) {
+    ContactPoint p = y == 0 ? p0 : p1;
+    p.offset = y == 0 ? Vec3{} : Vec3{-pos[0].z, 0.0, 0.0};
+    return std::vector<ContactPoint>{p};
+  };
+  ContactNetwork net(SpringNetwork(spec), c);
+  std::vector<double> x = {0.0, 0.0, 0.08, 1.05, 0.0, 0.0};
+  REQUIRE(net.update(0.0, x.data()));  // yarn 1 renewed whole: 0.97 apart
+  x[2] = 0.2;                          // exact 0.85 apart, inside the core: cut short
+  REQUIRE(net.update(0.0, x.data()));
+  REQUIRE(net.cut_renewals() == 1);
+  const std::vector<ContactPoint> kept = net.points();
+  const double apart = net.min_distance(0.0, x.data());
+  // Renewed whole at z0 = 0.3 the points would be 0.75 apart, inside the core: refused.
+  x[2] = 0.3;
+  CHECK_FALSE(net.renew(0.0, x.data()));
+  REQUIRE(net.points().size() == kept.size());
+  for (std::size_t k = 0; k < kept.size(); ++k) {
+    const ContactPoint &p = kept[k], &q = net.points()[k];
+    CHECK(p.particles == q.particles);
+    CHECK(p.weights == q.weights);
+    CHECK((p.offset.x == q.offset.x && p.offset.y == q.offset.y && p.offset.z == q.offset.z));
+    CHECK((p.yarn == q.yarn && p.arc == q.arc && p.turn == q.turn && p.axis == q.axis));
+  }
+  CHECK(net.points()[1].offset.x != -0.2);  // the cut offset, not the linearised one
+  x[2] = 0.2;
+  CHECK(net.min_distance(0.0, x.data()) == apart);
+}
+
 TEST_CASE("yarn contact: plain jersey stays exactly at rest, no pair in contact", "[contact]") {
   const KnitModel m = chart_model("plain_jersey.chart", with_contact());
   std::vector<double> x0(m.system().dof()), v0(m.system().dof());
