@@ -307,6 +307,10 @@ std::vector<Key> make_table() {
   option("", "--max-restarts", "max_restarts", &IO::max_restarts, "1",
          "Restarts from the last accepted state after CVODE's or ARKODE's repeated error-test or "
          "corrector failures (0 = the run ends with solver_failure)");
+  option("", "--stall-checks", "stall_checks", &IO::stall_checks, "1",
+         "Checks in a row at which t stands still (the equilibrium solver's flow) and the static "
+         "residual stays above its lowest value before the run ends with status stalled (0 = "
+         "never)");
   using NS = IO::NewtonSolver;
   named_option("--newton-solver", "newton_solver", &IO::newton_solver,
                std::vector<NS>{NS::Klu, NS::SchurLdl, NS::SchurCgLdl},
