@@ -607,6 +607,11 @@ Scene knit_scene(const std::string& chart, const std::vector<std::string>& overr
 Scene load_knit_scene(const std::string& path, const std::vector<std::string>& overrides) {
   std::string text, why;
   if (!read_input_file(path, kMaxSceneFileBytes, text, why)) unreadable(path, why);
+  return load_knit_scene_text(text, path, overrides);
+}
+
+Scene load_knit_scene_text(const std::string& text, const std::string& path,
+                           const std::vector<std::string>& overrides) {
   Scene scene;
   scene.source = path;
   apply_toml(scene, KeyModel::Knit, text, path);
