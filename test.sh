@@ -34,8 +34,8 @@ if [ "${1:-}" = "--fuzz" ]; then
   # run replays exactly the inputs a local run tried; FUZZ_SECONDS bounds the time either way.
   declare -A runs=([scene]=${FUZZ_RUNS_scene:-30000} [chart]=${FUZZ_RUNS_chart:-2000}
                    [target]=${FUZZ_RUNS_target:-400000} [state]=${FUZZ_RUNS_state:-50000}
-                   [set]=${FUZZ_RUNS_set:-50000})
-  for target in scene chart target state set; do
+                   [set]=${FUZZ_RUNS_set:-50000} [knit_scene]=${FUZZ_RUNS_knit_scene:-200000})
+  for target in scene chart target state set knit_scene; do
     # New inputs go to the work corpus; the committed seeds and regressions are only read.
     mkdir -p "$work/corpus-$target" "$work/artifacts"
     seeds=(tests/fuzz/corpus/$target)

@@ -102,6 +102,9 @@ void IntegratorOptions::validate() const {
     bad_field("runaway_position", runaway_position, "must be > 0 m and finite");
   if (max_restarts < 0 || max_restarts > 1000)
     bad_field("max_restarts", max_restarts, "must be in 0..1000 (0 = never restart)");
+  if (stall_checks < 0 || stall_checks > 1'000'000'000)
+    bad_field("stall_checks", static_cast<double>(stall_checks),
+              "must be in 0..1000000000 (0 = never)");
   if (krylov_dim < 0 || krylov_dim > 500)
     bad_field("krylov_dim", krylov_dim, "must be in 0..500 (0 = default)");
   if (!(krylov_eps_lin > 0.0 && krylov_eps_lin <= 1.0))
@@ -164,6 +167,8 @@ const char* to_string(RunStatus s) {
       return "wall_limit";
     case RunStatus::Interrupted:
       return "interrupted";
+    case RunStatus::Stalled:
+      return "stalled";
     case RunStatus::SolverFailure:
       return "solver_failure";
     case RunStatus::Diverged:
@@ -344,9 +349,37 @@ class EquilibriumRun {
       const std::string why = stop_test(t, integ_.positions(), r, t >= opt_.t_max);
       if (!why.empty()) return conclude(why);
     }
+    if (stalled(t, r)) return finish(RunStatus::Stalled, stall_message(t));
     if (opt_.max_wall_seconds > 0.0 && wall() > opt_.max_wall_seconds)
       return finish(RunStatus::WallLimit, "wall-clock cap reached");
     return std::nullopt;
+  }
+
+  // The stall rule (docs/equilibrium.md, "The stall rule"), at a check past the pins' motion
+  // that did not stop the run: progress is t advancing or the static residual r falling below
+  // its lowest value since t last advanced; stall_checks checks in a row without it end the
+  // run. t advances at every step of the dynamics, so only a run whose t stands still (the
+  // equilibrium solver's flow, a continuation in h) can stall; there the residual must come
+  // down, and a flow whose residual climbs for ever (a knit chart whose yarns crawl while its
+  // energy falls by 1e-5 of itself a step) is ended, not run for its 5000 flow steps and then
+  // the dynamics' failing error test.
+  bool stalled(double t, double r) {
+    if (opt_.stall_checks <= 0 || t < t_start_eq_) return false;
+    if (t != t_still_ || r < lowest_residual_) {
+      t_still_ = t;
+      lowest_residual_ = r;
+      checks_without_progress_ = 0;
+      return false;
+    }
+    return ++checks_without_progress_ >= opt_.stall_checks;
+  }
+
+  std::string stall_message(double t) const {
+    std::ostringstream os;
+    os << "stalled: the static residual stayed above its lowest value " << lowest_residual_
+       << " for " << checks_without_progress_ << " checks in a row (--stall-checks) while t "
+       << "stood at " << t << " s; the run made no progress toward an equilibrium";
+    return os.str();
   }
 
   // The energy check's reference: the total energy once the pins have stopped. From then on
@@ -483,6 +516,11 @@ class EquilibriumRun {
   double t_probe_ = std::numeric_limits<double>::infinity();  // t of the latest probe
   double floor_seen_ = 0.0;  // the residual's round-off floor at a recent check
   long floor_age_ = kFloorEvery;
+  // The stall rule (stalled()): t at the latest check, the lowest residual since t last
+  // advanced, and the checks since the last progress.
+  double t_still_ = std::numeric_limits<double>::quiet_NaN();
+  double lowest_residual_ = std::numeric_limits<double>::infinity();
+  long checks_without_progress_ = 0;
 };
 
 }  // namespace

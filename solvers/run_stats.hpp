@@ -20,6 +20,9 @@ enum class RunStatus {
   StepLimit,      // reached max_steps first
   WallLimit,      // reached max_wall_seconds first
   Interrupted,    // IntegratorOptions::interrupt was set (e.g. Ctrl-C) before the end
+  // No progress: IntegratorOptions::stall_checks checks in a row with t standing still and the
+  // static residual never below its lowest value (docs/equilibrium.md, "The stall rule").
+  Stalled,
   SolverFailure,  // the integrator reported an error (e.g. a SUNDIALS flag)
   Diverged,       // non-finite or runaway state
 };

@@ -76,6 +76,8 @@ const std::vector<RunOption>& run_options() {
        [](O& o, const std::string& t) { return to_double(t, o.max_wall_seconds); }, "a number"},
       {"max_restarts", "--max-restarts",
        [](O& o, const std::string& t) { return to_integer(t, o.max_restarts); }, "an integer"},
+      {"stall_checks", "--stall-checks",
+       [](O& o, const std::string& t) { return to_integer(t, o.stall_checks); }, "an integer"},
       {"newton_solver", "--newton-solver",
        [](O& o, const std::string& t) { return to_enum(t, o.newton_solver, kNewtonSolvers); },
        newton.c_str()},

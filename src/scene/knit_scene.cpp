@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "src/base/files.hpp"
+#include "src/base/text.hpp"
 
 namespace knitsim {
 
@@ -15,7 +16,7 @@ KnitChart read_knit_chart(const Scene& scene) {
     try {
       return parse_knit_chart(scene.chart_text);
     } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument("knit.chart_text (" + scene.source + "): " + e.what());
+      throw std::invalid_argument("knit.chart_text (" + printable(scene.source) + "): " + e.what());
     }
   }
   // 4 million points (KnitParams::max_points) are ~4 MB of letters: a larger file is refused.
@@ -23,17 +24,18 @@ KnitChart read_knit_chart(const Scene& scene) {
   std::string text, why;
   if (!read_input_file(scene.chart, kMaxChartFileBytes, text, why)) {
     const auto typed = scene.typed.find("knit.chart");
+    // The path as typed, on one line: a TOML multi-line string may hold newlines.
     throw std::invalid_argument(
-        (command_line ? "--chart " + scene.chart
-                      : "knit.chart = " +
-                            (typed != scene.typed.end() ? typed->second : scene.chart) + " (" +
-                            scene.source + ")") +
+        printable(command_line ? "--chart " + scene.chart
+                               : "knit.chart = " +
+                                     (typed != scene.typed.end() ? typed->second : scene.chart) +
+                                     " (" + scene.source + ")") +
         ": cannot read the file: " + why);
   }
   try {
     return parse_knit_chart(text);
   } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(scene.chart + ": " + e.what());
+    throw std::invalid_argument(printable(scene.chart) + ": " + e.what());
   }
 }
 

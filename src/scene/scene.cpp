@@ -395,6 +395,10 @@ std::vector<Key> make_table() {
   option("", "--max-restarts", "max_restarts", &IO::max_restarts, "1",
          "Restarts from the last accepted state after CVODE's or ARKODE's repeated error-test or "
          "corrector failures (0 = the run ends with solver_failure)");
+  option("", "--stall-checks", "stall_checks", &IO::stall_checks, "1",
+         "Checks in a row at which t stands still (the equilibrium solver's flow) and the static "
+         "residual stays above its lowest value before the run ends with status stalled (0 = "
+         "never)");
   using NS = IO::NewtonSolver;
   named_option("--newton-solver", "newton_solver", &IO::newton_solver,
                std::vector<NS>{NS::Klu, NS::SchurLdl, NS::SchurCgLdl},
@@ -718,6 +722,11 @@ Scene knit_scene(const std::string& chart, const std::vector<std::string>& overr
 Scene load_knit_scene(const std::string& path, const std::vector<std::string>& overrides) {
   std::string text, why;
   if (!read_input_file(path, kMaxSceneFileBytes, text, why)) unreadable(path, why);
+  return load_knit_scene_text(text, path, overrides);
+}
+
+Scene load_knit_scene_text(const std::string& text, const std::string& path,
+                           const std::vector<std::string>& overrides) {
   Scene scene;
   scene.source = path;
   apply_toml(scene, KeyModel::Knit, text, path);

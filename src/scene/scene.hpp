@@ -163,6 +163,10 @@ Scene knit_scene(const std::string& chart, const std::vector<std::string>& overr
 // inline chart). Exactly one of knit.chart and knit.chart_text (std::invalid_argument
 // otherwise). Not validated, as knit_scene.
 Scene load_knit_scene(const std::string& path, const std::vector<std::string>& overrides = {});
+// The same from the TOML text itself, `path` standing for the file it came from (messages, the
+// chart's folder, the name). load_knit_scene reads, then calls this.
+Scene load_knit_scene_text(const std::string& text, const std::string& path,
+                           const std::vector<std::string>& overrides = {});
 
 // The scene keys of `model`'s scenes (its own and the run's), dotted ("model.stiffness"), in
 // file order.

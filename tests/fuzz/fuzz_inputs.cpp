@@ -1,6 +1,7 @@
 #include "tests/fuzz/fuzz_inputs.hpp"
 
 #include <cmath>
+#include <optional>
 #include <vector>
 
 #include "models/drape_grid.hpp"
@@ -8,6 +9,8 @@
 #include "src/fit/targets.hpp"
 #include "src/io/run_state.hpp"
 #include "src/measure/measurement.hpp"
+#include "src/scene/knit_run.hpp"
+#include "src/scene/knit_scene.hpp"
 #include "src/scene/scene.hpp"
 
 namespace knitsim::fuzz {
@@ -110,6 +113,37 @@ void check_chart_input(const std::string& text) {
   });
 }
 
+void check_knit_scene_input(const std::string& text) {
+  // The scene's folder does not exist, so a knit.chart file under it is refused unread ("cannot
+  // read the file"); a chart path that leaves it (absolute, or through "..") is not read at all:
+  // the fuzzer reads no file of the machine's. Inline charts (knit.chart_text) are built.
+  const std::string folder = "/nonexistent-knitsim-fuzz/";
+  Scene input;
+  KnitChart chart;
+  bool inline_chart = false;
+  if (!accepted([&] {
+        input = load_knit_scene_text(text, folder + "fuzz.toml");
+        inline_chart = input.chart.empty();
+        if (inline_chart || input.chart.rfind(folder, 0) == 0) chart = read_knit_chart(input);
+        input.validate();
+      }))
+    return;
+  if (!inline_chart) return;
+  const long points = static_cast<long>(chart.wales) * (chart.courses + 1);  // at most
+  if (points > kMaxBuiltPoints) return;
+  // The contact's set-up is slow (check_chart_input): larger charts are built without it.
+  if (points > kMaxContactPoints) input.knit.contact_ratio = 0.0;
+  KnitScene scene = make_knit_scene(input, chart, 1);
+  std::optional<KnitStart> start;
+  // start_knit may still refuse the chart for the model (a float too long for the contact,
+  // yarns inside the contact's core at rest): one line, as a parser's refusal.
+  if (!accepted([&] { start.emplace(start_knit(scene)); })) return;
+  must_succeed("checking the knit's start", [&] {
+    check_initial_state(start->model.network);
+    for (double xi : start->x) require_finite(xi, "initial position");
+  });
+}
+
 void check_target_input(const std::string& text) {
   Target target;
   if (!accepted([&] { target = parse_target_csv(text, "fuzz.csv"); })) return;
@@ -140,7 +174,8 @@ const std::vector<FuzzEntry>& fuzz_entries() {
                                                  {"chart", check_chart_input},
                                                  {"target", check_target_input},
                                                  {"state", check_state_input},
-                                                 {"set", check_set_input}};
+                                                 {"set", check_set_input},
+                                                 {"knit_scene", check_knit_scene_input}};
   return entries;
 }
 

@@ -10,7 +10,9 @@
 //   state   parse_run_state (src/io/output.hpp: the state.json of drape|knit --continue), then
 //           what it holds (finite, x and v of one size);
 //   set     the --set overrides of knitsim drape (one key=value per line of the input, given to
-//           load_scene on four_corner in order), then, if accepted and small, the grid.
+//           load_scene on four_corner in order), then, if accepted and small, the grid;
+//   knit_scene  load_knit_scene_text (TOML knit scene, docs/knit.md), its inline chart, the
+//           validation knitsim knit makes, then, if small, start_knit (model and initial state).
 // Oracle: the parser either accepts the input or throws std::invalid_argument with one
 // non-empty line (docs/reliability.md: one clear line naming the bad input). Once it has accepted, the
 // later stages must succeed (validation promised they would) and give finite numbers. Anything
@@ -36,6 +38,7 @@ void check_chart_input(const std::string& text);
 void check_target_input(const std::string& text);
 void check_state_input(const std::string& text);
 void check_set_input(const std::string& text);
+void check_knit_scene_input(const std::string& text);
 
 // The fuzz targets by name (the folder names under tests/fuzz/corpus and regressions).
 struct FuzzEntry {
