@@ -616,7 +616,7 @@ void ContactNetwork::held_reactions(double t, const double* x, std::vector<Vec3>
     const Vec3 F = (-de / D) * d;  // on point a; b gets the opposite
     for (int side = 0; side < 2; ++side) {
       const ContactPoint& p = points_[side == 0 ? pr.a : pr.b];
-      const PointTurn& turn = turns_[side == 0 ? pr.a : pr.b];
+      const PointTurn turn = turn_of(side == 0 ? pr.a : pr.b);
       const Vec3 G = side == 0 ? F : -1.0 * F;
       for (int i = 0; i < kContactParticles && p.particles[i] >= 0; ++i) {
         const int h = net_.held_index(p.particles[i]);

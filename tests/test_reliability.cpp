@@ -353,7 +353,7 @@ TEST_CASE("a FIFO given as an input file is refused at once, never read", "[mess
   fs::create_directories(run_dir);
   REQUIRE(::mkfifo((run_dir / "state.json").c_str(), 0600) == 0);
   std::ofstream(run_dir / "manifest.json") << "{}\n";
-  for (const std::string args :
+  for (const std::string& args :
        {"knit --chart '" + fifo.string() + "'", "drape --scene '" + fifo.string() + "'",
         "drape --target '" + fifo.string() + "'", "drape --continue '" + run_dir.string() + "'"}) {
     CAPTURE(args);
