@@ -781,9 +781,9 @@ double ContactNetwork::admissible_step(double t, const double* x, const double* 
       at[k] = rotate(tk.c, tk.s, tk.u);
       if (!measure_turn || points_[k].turn[0] < 0) continue;
       turning = true;
-      turn = std::max(turn, std::abs(std::remainder(std::atan2(tk.s, tk.c) -
-                                                        turn_angle(static_cast<int>(k)),
-                                                    2.0 * 3.14159265358979323846)));
+      turn = std::max(
+          turn, std::abs(std::remainder(std::atan2(tk.s, tk.c) - turn_angle(static_cast<int>(k)),
+                                        2.0 * 3.14159265358979323846)));
     }
     done = s;
   };

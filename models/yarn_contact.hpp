@@ -86,8 +86,8 @@ struct YarnContactSpec {
   // writes every point's exact position (points order) from every particle's position; `linearise`
   // returns yarn y's points (as many as it has, in order) linearised about those positions; it must
   // be a function of the positions alone (the same positions, the same bits): a renewal refused at
-  // its check makes the old maps again by calling it, as a run holds one set of maps. Points must be
-  // ordered by yarn.
+  // its check makes the old maps again by calling it, as a run holds one set of maps. Points must
+  // be ordered by yarn.
   std::function<void(const std::vector<Vec3>&, std::vector<Vec3>&)> exact;
   std::function<std::vector<ContactPoint>(const std::vector<Vec3>&, int)> linearise;
   double refresh_tol = 0.0;   // m: a yarn is renewed when one of its points strays this far
@@ -255,7 +255,7 @@ class ContactNetwork final : public MechanicalSystem, public HeldPoints {
   // Caches, functions of the state evaluated last and points_ (positions()), and of the list's
   // history (refresh_pairs()); evaluations at the same (t, x) give the same values whatever
   // they hold. Mutable as they are refilled by const evaluations.
-  mutable std::vector<Vec3> pos_, pts_;   // particles and points at cached_x_
+  mutable std::vector<Vec3> pos_, pts_;  // particles and points at cached_x_
   // Per point the part of its PointTurn at pts_'s state that is kept (56 bytes, not 112: turn_of
   // makes v from pos_ again, the same bits, and u is not needed).
   struct TurnCache {
