@@ -97,16 +97,20 @@ void lay_yarn(YarnKnit& y, std::vector<std::array<double, 4>>& loop_points) {
     const NurbsCurve curve = interpolate_cubic(points[j], kYarnParametrization);
     const std::vector<double> ubar = interpolation_parameters(points[j], kYarnParametrization);
     const int edges = per_cell * c.wales;
-    const double length = arc_length(curve, curve.u_min(), curve.u_max());
-    samples[j] = sample_curve(curve, edges + 1, Spacing::ArcLength).points;
-    // Fractional vertex index of yarn point k: its arc length over the edge length.
-    std::vector<double> arc(ubar.size(), 0.0);
-    auto u_of = [&](std::size_t k) {
-      return curve.u_min() + ubar[k] * (curve.u_max() - curve.u_min());
-    };
-    for (std::size_t k = 1; k < ubar.size(); ++k)
-      arc[k] = arc[k - 1] + arc_length(curve, u_of(k - 1), u_of(k));
-    auto at = [&](int k) { return k < 0 ? kNaN : arc[k] / length * edges; };
+    const CurveSamples cs = sample_curve(curve, edges + 1, Spacing::ArcLength);
+    samples[j] = cs.points;
+    // Fractional vertex index of yarn point k: between the samples bracketing its parameter,
+    // linear in the parameter (the samples are uniform in arc length; the speed varies little
+    // across one edge).
+    std::vector<double> index(ubar.size(), 0.0);
+    for (std::size_t k = 0; k < ubar.size(); ++k) {
+      const double u = curve.u_min() + ubar[k] * (curve.u_max() - curve.u_min());
+      const std::size_t hi = std::clamp<std::size_t>(
+          std::upper_bound(cs.u.begin(), cs.u.end(), u) - cs.u.begin(), 1, cs.u.size() - 1);
+      const double u0 = cs.u[hi - 1], u1 = cs.u[hi];
+      index[k] = static_cast<double>(hi - 1) + (u1 > u0 ? (u - u0) / (u1 - u0) : 0.0);
+    }
+    auto at = [&](int k) { return k < 0 ? kNaN : index[k]; };
     int pos = 0;
     for (int i = 0; i < c.wales; ++i) {
       const int l = m.loop(i, j);
@@ -232,6 +236,7 @@ YarnRodsSpec YarnKnit::spec(int s, int n, const std::vector<Vec3>& initial) cons
   l /= std::max<std::size_t>(1, marks.size());
   out.residual_force_scale = params.yarn.bending_rigidity / (l * l);
   out.contact = true;
+  if (const char* e = std::getenv("YK_PATTERN")) out.yarn.pattern_radius = std::atof(e);
   return out;
 }
 

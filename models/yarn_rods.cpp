@@ -658,16 +658,24 @@ double YarnRods::admissible_step(double /*t*/, const double* x, const double* dx
     if (!may_pair(i, j)) continue;
     const Edge &A = edges_[i], &B = edges_[j];
     const double reach = std::max(move[A.a], move[A.b]) + std::max(move[B.a], move[B.b]);
+    // Every sample pair is at least the segments' distance apart: where that distance already
+    // keeps the bound, it stands for all of them (the samples only where it is inside the core).
+    const double D = closest_points(pos_[A.a], pos_[A.b], pos_[B.a], pos_[B.b]).distance;
+    if (D > d0_) {
+      if (D - reach < d0_ + keep * (D - d0_))
+        admit = std::min(admit, (1.0 - keep) * (D - d0_) / reach);
+      continue;
+    }
     for (int k = 0; k < A.samples; ++k) {
       const double s = (k + 0.5) / A.samples;
       const Vec3 P = (1.0 - s) * pos_[A.a] + s * pos_[A.b];
       for (int m = 0; m < B.samples; ++m) {
         const double t = (m + 0.5) / B.samples;
         if (!samples_pair(i, s, j, t)) continue;
-        const double D = norm(P - ((1.0 - t) * pos_[B.a] + t * pos_[B.b]));
-        if (!(D > d0_)) return 0.0;
-        if (D - reach < d0_ + keep * (D - d0_))
-          admit = std::min(admit, (1.0 - keep) * (D - d0_) / reach);
+        const double Ds = norm(P - ((1.0 - t) * pos_[B.a] + t * pos_[B.b]));
+        if (!(Ds > d0_)) return 0.0;
+        if (Ds - reach < d0_ + keep * (Ds - d0_))
+          admit = std::min(admit, (1.0 - keep) * (Ds - d0_) / reach);
       }
     }
   }

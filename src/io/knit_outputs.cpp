@@ -18,6 +18,7 @@
 #include "src/io/run_state.hpp"
 #include "src/io/textile_outputs.hpp"
 #include "src/io/vtk.hpp"
+#include "src/io/yarn_knit_outputs.hpp"
 #include "src/render/render.hpp"
 
 namespace knitsim {
@@ -278,7 +279,7 @@ nlohmann::json knit_summary(const KnitScene& scene, const KnitResult& r,
        {KnitSpringKind::Wale, KnitSpringKind::Course, KnitSpringKind::Tuck, KnitSpringKind::Float,
         KnitSpringKind::Shear, KnitSpringKind::Bending})
     springs[to_string(kind)] = m.count(kind);
-  return {{"chart", scene.name},
+  nlohmann::json summary = {{"chart", scene.name},
           {"chart_file", scene.chart_file},
           {"status", to_string(stats.status)},
           {"message", stats.message},
@@ -303,6 +304,8 @@ nlohmann::json knit_summary(const KnitScene& scene, const KnitResult& r,
           {"params", params_json(m.params)},
           {"options", to_json(scene.options)},
           {"units", knit_units()}};
+  if (r.yarn) add_yarn_knit_summary(*r.yarn, r.x.size(), summary);  // knit.model = yarn
+  return summary;
 }
 
 void write_knit_outputs(const fs::path& dir, const KnitScene& scene, const KnitResult& r,
@@ -312,11 +315,13 @@ void write_knit_outputs(const fs::path& dir, const KnitScene& scene, const KnitR
   write_points_csv(dir / "points.csv", m, r.positions);
   write_typevalue_csv(dir / "typevalue.csv", m, r.positions);
   CenterlineCache centerlines(m);
-  const std::vector<CurveSamples>& lines = centerlines.of(r.positions);
+  // knit.model = yarn: the yarn's own polylines and measures, not curves through the points.
+  const std::vector<CurveSamples>& lines =
+      r.yarn && !r.yarn->centerlines.empty() ? r.yarn->centerlines : centerlines.of(r.positions);
   write_centerlines_csv(dir / "centerlines.csv", lines);
   std::optional<TextileMeasures> textile;
   if (std::all_of(r.positions.begin(), r.positions.end(), is_finite)) {
-    textile = textile_measures(m, r.positions);
+    textile = r.yarn ? r.yarn->textile : textile_measures(m, r.positions);
     write_file_atomic(dir / "stitches.csv", stitches_csv(*textile));
   } else {
     remove_stale_output(dir / "stitches.csv");
