@@ -3,8 +3,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <limits>
 #include <optional>
 #include <sstream>
@@ -236,7 +234,9 @@ YarnRodsSpec YarnKnit::spec(int s, int n, const std::vector<Vec3>& initial) cons
   l /= std::max<std::size_t>(1, marks.size());
   out.residual_force_scale = params.yarn.bending_rigidity / (l * l);
   out.contact = true;
-  if (const char* e = std::getenv("YK_PATTERN")) out.yarn.pattern_radius = std::atof(e);
+  // Edge pairs within 4 d get Jacobian blocks: the yarn moves far while it relaxes (the run
+  // makes the rods afresh every few steps, src/scene/yarn_knit_run.cpp, so the pattern follows).
+  out.yarn.pattern_radius = std::max(out.yarn.pattern_radius, 4.0);
   return out;
 }
 
@@ -322,12 +322,6 @@ YarnKnit build_yarn_knit(const KnitChart& chart, const KnitParams& structure_par
     std::vector<double> x(rods.dof()), v(rods.dof());
     rods.initial_state(x.data(), v.data());
     clearance = rods.min_clearance(x.data());
-    if (std::getenv("YK_DEBUG")) {
-      std::fprintf(stderr, "pass %d r/d %.4f clearance/d %.4f\n", pass, r / d, clearance / d);
-      FILE* f = std::fopen("/tmp/yk/start.txt", "w");
-      for (const Vec3& q : y.start) std::fprintf(f, "%.9g %.9g %.9g\n", q.x, q.y, q.z);
-      std::fclose(f);
-    }
     if (clearance >= kYarnStartClearance * d && clearance <= kYarnStartClearanceMax * d) break;
     r *= std::isfinite(clearance)
              ? 0.5 * (kYarnStartClearance + kYarnStartClearanceMax) * d / clearance

@@ -15,6 +15,9 @@ namespace knitsim {
 
 namespace {
 
+// Steps of one round (above): short enough that the pattern follows the contacts.
+constexpr long kYarnRoundSteps = 50;
+
 double cpu_now() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
 
 // Measures the clearance at every residual check, then passes the check on.
@@ -112,43 +115,74 @@ KnitResult run_yarn_knit(KnitStart start, const KnitScene& scene, const std::str
     ramp = ramp || yk->target_length[e] != yk->start_length[e];
   const int stages = ramp ? yk->ramp_stages() : 1;
   std::vector<Vec3> pos = yk->start;
-  std::vector<FrameRecorder::Frame> yarn_frames;
-  for (int s = 1; s <= stages; ++s) {
-    const YarnRods rods(yk->spec(s, stages, pos));
-    std::vector<double> x(rods.dof()), v(rods.dof());
-    rods.initial_state(x.data(), v.data());
+  // Each stage in rounds of at most kYarnRoundSteps steps: between rounds the rods are made
+  // afresh at the state reached, so the contact's Jacobian pattern (fixed per YarnRods, the pairs
+  // near at its start) follows the yarn; a round ending at the stop ends the stage.
+  double t = 0.0;
+  long steps_left = scene.options.max_steps;
+  std::unique_ptr<YarnRods> rods;
+  std::vector<double> x, v;
+  bool done = false;
+  for (int s = 1; s <= stages && !done; ++s) {
     const bool last = s == stages;
-    FrameRecorder recorder(scene.frames, rods.dof(), observer);
-    if (last) recorder.record(0.0, x.data(), rods.static_residual(0.0, x.data()));
-    ClearanceWatch watch(rods, last ? static_cast<RunObserver*>(&recorder) : observer);
-    std::unique_ptr<Integrator> integ = make_integrator(integrator);
     const double c0 = cpu_now();
     const auto w0 = std::chrono::steady_clock::now();
-    RunStats st = run_to_equilibrium(rods, *integ, scene.options, x, v, &watch, 0.0);
-    run->stages.push_back(
-        {st.status, st.steps, st.residual, cpu_now() - c0,
-         std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count()});
-    run->pattern_misses += rods.pattern_misses();
-    min_clearance = std::min(min_clearance, watch.minimum());
-    checks += watch.checks();
-    rods.all_positions(x.data(), pos);
-    const double end_clearance = rods.min_clearance(x.data());
-    min_clearance = std::min(min_clearance, end_clearance);
-    r.stats = st;
-    r.x = x, r.v = v;
-    if (last || st.status != RunStatus::Equilibrium) {
-      run->clearance_end_over_d = end_clearance / d;
-      run->vertices = rods.vertex_count();
-      run->free_vertices = rods.dof() / 3;
-      if (last) yarn_frames = recorder.frames();
-      // The frames as states of the structure (its interlacing points read off the yarn).
-      for (FrameRecorder::Frame f : yarn_frames) {
-        std::vector<Vec3> all;
-        rods.all_positions(f.x.data(), all);
-        f.x = structure_state(r.model, yk->interlacing_points(all));
-        r.frames.push_back(std::move(f));
+    YarnKnitRun::Stage stage;
+    FrameRecorder recorder(scene.frames, 3 * static_cast<int>(pos.size() - yk->pins.size()),
+                           observer);
+    for (int round = 0;; ++round) {
+      rods = std::make_unique<YarnRods>(yk->spec(s, stages, pos));
+      x.assign(rods->dof(), 0.0), v.assign(rods->dof(), 0.0);
+      rods->initial_state(x.data(), v.data());
+      if (last && round == 0) recorder.record(t, x.data(), rods->static_residual(t, x.data()));
+      ClearanceWatch watch(*rods, last ? static_cast<RunObserver*>(&recorder) : observer);
+      IntegratorOptions options = scene.options;
+      options.max_steps = std::min(steps_left, kYarnRoundSteps);
+      if (scene.options.max_wall_seconds > 0.0) {
+        const double used =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+        options.max_wall_seconds = std::max(1e-3, scene.options.max_wall_seconds - used);
       }
-      break;
+      std::unique_ptr<Integrator> integ = make_integrator(integrator);
+      RunStats st = run_to_equilibrium(*rods, *integ, options, x, v, &watch, t);
+      steps_left -= st.steps;
+      stage.steps += st.steps;
+      run->pattern_misses += rods->pattern_misses();
+      min_clearance = std::min(min_clearance, watch.minimum());
+      checks += watch.checks();
+      rods->all_positions(x.data(), pos);
+      if (st.t_final > t) t = st.t_final;
+      r.stats = st;
+      r.stats.steps = stage.steps;
+      const bool more = st.status == RunStatus::StepLimit && steps_left > 0;
+      if (!more) {
+        if (st.status == RunStatus::StepLimit) r.stats.status = RunStatus::StepLimit;
+        break;
+      }
+    }
+    stage.status = r.stats.status;
+    stage.residual = r.stats.residual;
+    stage.cpu_seconds = cpu_now() - c0;
+    stage.wall_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
+    run->stages.push_back(stage);
+    r.x = x, r.v = v;
+    if (last || r.stats.status != RunStatus::Equilibrium) {
+      const double end_clearance = rods->min_clearance(x.data());
+      min_clearance = std::min(min_clearance, end_clearance);
+      run->clearance_end_over_d = end_clearance / d;
+      run->vertices = rods->vertex_count();
+      run->free_vertices = rods->dof() / 3;
+      if (last) {
+        // The frames as states of the structure (its interlacing points read off the yarn).
+        for (FrameRecorder::Frame f : recorder.frames()) {
+          std::vector<Vec3> all;
+          rods->all_positions(f.x.data(), all);
+          f.x = structure_state(r.model, yk->interlacing_points(all));
+          r.frames.push_back(std::move(f));
+        }
+      }
+      done = true;
     }
   }
   run->clearance_min_over_d = min_clearance / d;
