@@ -234,9 +234,9 @@ YarnRodsSpec YarnKnit::spec(int s, int n, const std::vector<Vec3>& initial) cons
   l /= std::max<std::size_t>(1, marks.size());
   out.residual_force_scale = params.yarn.bending_rigidity / (l * l);
   out.contact = true;
-  // Edge pairs within 4 d get Jacobian blocks: the yarn moves far while it relaxes (the run
-  // makes the rods afresh every few steps, src/scene/yarn_knit_run.cpp, so the pattern follows).
-  out.yarn.pattern_radius = std::max(out.yarn.pattern_radius, 4.0);
+  // The Jacobian pattern's radius (kYarnPatternRadius): the run makes the rods afresh every few
+  // steps (src/scene/yarn_knit_run.cpp), so the pattern follows the yarn.
+  out.yarn.pattern_radius = std::max(out.yarn.pattern_radius, kYarnPatternRadius);
   return out;
 }
 

@@ -46,6 +46,10 @@ const char* to_string(KnitModelKind kind);
 constexpr double kYarnStartClearance = 1.02;
 constexpr double kYarnStartClearanceMax = 1.10;
 
+// Edge pairs this close (in d) when the rods are made get Jacobian blocks (YarnParams::
+// pattern_radius); the run makes the rods afresh every few steps so the pattern follows the yarn.
+constexpr double kYarnPatternRadius = 2.0;
+
 struct YarnKnitParams {
   KnitModelKind model = KnitModelKind::Network;  // knit.model
   YarnParams yarn;                               // yarn.* keys (models/yarn_rods.hpp)

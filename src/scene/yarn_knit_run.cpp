@@ -123,19 +123,20 @@ KnitResult run_yarn_knit(KnitStart start, const KnitScene& scene, const std::str
   std::unique_ptr<YarnRods> rods;
   std::vector<double> x, v;
   bool done = false;
+  // The frames over the whole ramp, the start first.
+  FrameRecorder recorder(scene.frames, 3 * static_cast<int>(pos.size() - yk->pins.size()),
+                         observer);
   for (int s = 1; s <= stages && !done; ++s) {
     const bool last = s == stages;
     const double c0 = cpu_now();
     const auto w0 = std::chrono::steady_clock::now();
     YarnKnitRun::Stage stage;
-    FrameRecorder recorder(scene.frames, 3 * static_cast<int>(pos.size() - yk->pins.size()),
-                           observer);
     for (int round = 0;; ++round) {
       rods = std::make_unique<YarnRods>(yk->spec(s, stages, pos));
       x.assign(rods->dof(), 0.0), v.assign(rods->dof(), 0.0);
       rods->initial_state(x.data(), v.data());
-      if (last && round == 0) recorder.record(t, x.data(), rods->static_residual(t, x.data()));
-      ClearanceWatch watch(*rods, last ? static_cast<RunObserver*>(&recorder) : observer);
+      if (s == 1 && round == 0) recorder.record(t, x.data(), rods->static_residual(t, x.data()));
+      ClearanceWatch watch(*rods, &recorder);
       IntegratorOptions options = scene.options;
       options.max_steps = std::min(steps_left, kYarnRoundSteps);
       if (scene.options.max_wall_seconds > 0.0) {
@@ -173,14 +174,12 @@ KnitResult run_yarn_knit(KnitStart start, const KnitScene& scene, const std::str
       run->clearance_end_over_d = end_clearance / d;
       run->vertices = rods->vertex_count();
       run->free_vertices = rods->dof() / 3;
-      if (last) {
-        // The frames as states of the structure (its interlacing points read off the yarn).
-        for (FrameRecorder::Frame f : recorder.frames()) {
-          std::vector<Vec3> all;
-          rods->all_positions(f.x.data(), all);
-          f.x = structure_state(r.model, yk->interlacing_points(all));
-          r.frames.push_back(std::move(f));
-        }
+      // The frames as states of the structure (its interlacing points read off the yarn).
+      for (FrameRecorder::Frame f : recorder.frames()) {
+        std::vector<Vec3> all;
+        rods->all_positions(f.x.data(), all);
+        f.x = structure_state(r.model, yk->interlacing_points(all));
+        r.frames.push_back(std::move(f));
       }
       done = true;
     }
