@@ -6,6 +6,7 @@
 #include <limits>
 #include <optional>
 #include <sstream>
+#include <string>
 #include <stdexcept>
 #include <utility>
 
@@ -26,9 +27,9 @@ void check_whole(const char* key, double value, double lo, double hi) {
   }
 }
 
-void check_length(const char* key, double value) {
+void check_length(const char* key, double value, const char* zero) {
   if (!(std::isfinite(value) && value >= 0.0 && value <= 0.1))
-    bad_field(key, value, "must be in [0, 0.1] m (0: the start's own length)");
+    bad_field(key, value, std::string("must be in [0, 0.1] m (0: ") + zero + ")");
 }
 
 // Where each chart cell's yarn points lie in its course's list of yarn points
@@ -66,9 +67,9 @@ const char* to_string(KnitModelKind kind) {
 
 void YarnKnitParams::validate() const {
   yarn.validate();
-  check_length("knit.stitch_length", stitch_length);
-  check_length("knit.tuck_length", tuck_length);
-  check_length("knit.miss_length", miss_length);
+  check_length("knit.stitch_length", stitch_length, "the start's own length");
+  check_length("knit.tuck_length", tuck_length, "the knit's ratio");
+  check_length("knit.miss_length", miss_length, "the knit's ratio");
   check_whole("knit.yarn_vertices", vertices_per_loop, 4, 256);
   check_whole("knit.yarn_ramp", ramp_stages, 1, 100);
 }
