@@ -132,6 +132,7 @@ KnitResult run_yarn_knit(KnitStart start, const KnitScene& scene, const std::str
     const auto w0 = std::chrono::steady_clock::now();
     YarnKnitRun::Stage stage;
     for (int round = 0;; ++round) {
+      rods.reset();  // one set of rods alive at a time (memory)
       rods = std::make_unique<YarnRods>(yk->spec(s, stages, pos));
       x.assign(rods->dof(), 0.0), v.assign(rods->dof(), 0.0);
       rods->initial_state(x.data(), v.data());
