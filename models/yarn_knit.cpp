@@ -197,17 +197,20 @@ void lay_yarn(YarnKnit& y, std::vector<std::array<double, 4>>& loop_points) {
     y.target_length[e] = y.start_length[e] * ratio[t];
   }
 
-  // Held: both ends of the yarn and the heads of the last course's loops.
+  // Held: both ends of the yarn and the heads of the first and last courses' loops. Measured:
+  // with only the last course held, a frictionless yarn unravels from the bottom (bending
+  // straightens the first courses: their loops shrink and slip, the yarn kept at its length).
   y.pins = {0, ne};
-  const int top = c.courses - 1;
-  for (int i = 0; i < c.wales; ++i) {
-    const int l = m.loop(i, top);
-    if (l < 0) continue;
-    // The head T4 lies half-way between T3 and T5 along the yarn.
-    const double head = 0.5 * (loop_points[l][2] + loop_points[l][3]);
-    if (!std::isfinite(head)) continue;
-    const int v = y.course_vertices[top][static_cast<int>(std::lround(head))];
-    if (std::find(y.pins.begin(), y.pins.end(), v) == y.pins.end()) y.pins.push_back(v);
+  for (int held : {0, c.courses - 1}) {
+    for (int i = 0; i < c.wales; ++i) {
+      const int l = m.loop(i, held);
+      if (l < 0) continue;
+      // The head T4 lies half-way between T3 and T5 along the yarn.
+      const double head = 0.5 * (loop_points[l][2] + loop_points[l][3]);
+      if (!std::isfinite(head)) continue;
+      const int v = y.course_vertices[held][static_cast<int>(std::lround(head))];
+      if (std::find(y.pins.begin(), y.pins.end(), v) == y.pins.end()) y.pins.push_back(v);
+    }
   }
   std::sort(y.pins.begin(), y.pins.end());
 }

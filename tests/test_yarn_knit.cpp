@@ -68,10 +68,10 @@ TEST_CASE("chart to yarn: vertex counts, one yarn continuous at the selvedges, h
         longest = std::max(longest, l);
       }
       CHECK(longest < 2.0 * sum / static_cast<double>(y.start.size() - 1));
-      // Held: both yarn ends and one head per loop of the last course.
+      // Held: both yarn ends and one head per loop of the first and the last course.
       CHECK(y.pins.front() == 0);
       CHECK(y.pins.back() == static_cast<int>(y.start.size()) - 1);
-      CHECK(static_cast<int>(y.pins.size()) == chart.wales + 2);
+      CHECK(static_cast<int>(y.pins.size()) == 2 * chart.wales + 2);
     }
   }
 }

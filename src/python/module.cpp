@@ -353,7 +353,8 @@ std::string knit_doc() {
       "\n"
       "Knit and run keys (unit; default; accepted values; meaning):\n";
   doc += key_lines([](const std::string& key) {
-    return key.rfind("knit.", 0) == 0 || key.rfind("run.", 0) == 0 || key.rfind("--", 0) == 0;
+    return key.rfind("knit.", 0) == 0 || key.rfind("yarn.", 0) == 0 || key.rfind("run.", 0) == 0 ||
+           key.rfind("--", 0) == 0;
   });
   return doc;
 }
