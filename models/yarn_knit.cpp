@@ -205,11 +205,14 @@ void lay_yarn(YarnKnit& y, std::vector<std::array<double, 4>>& loop_points) {
     for (int i = 0; i < c.wales; ++i) {
       const int l = m.loop(i, held);
       if (l < 0) continue;
-      // The head T4 lies half-way between T3 and T5 along the yarn.
-      const double head = 0.5 * (loop_points[l][2] + loop_points[l][3]);
-      if (!std::isfinite(head)) continue;
-      const int v = y.course_vertices[held][static_cast<int>(std::lround(head))];
-      if (std::find(y.pins.begin(), y.pins.end(), v) == y.pins.end()) y.pins.push_back(v);
+      // The head arc T3..T5, as a needle through the loop holds it (one vertex at T4 let the
+      // loop it holds slip over it).
+      const double a = loop_points[l][2], b = loop_points[l][3];
+      if (!std::isfinite(a) || !std::isfinite(b)) continue;
+      for (long k = std::lround(std::min(a, b)); k <= std::lround(std::max(a, b)); ++k) {
+        const int v = y.course_vertices[held][static_cast<int>(k)];
+        if (std::find(y.pins.begin(), y.pins.end(), v) == y.pins.end()) y.pins.push_back(v);
+      }
     }
   }
   std::sort(y.pins.begin(), y.pins.end());

@@ -17,8 +17,8 @@
 //      (knit.stitch_length, per chart cell; Kaldor et al. 2008 shrink the rest lengths of their
 //      loose start the same way) in `ramp_stages` equal steps, each relaxed to its steady state.
 // Held: the yarn's first vertex (the start of the first course) and last vertex, and the head
-// of every loop of the first course (the cast-on, held) and of the last course (the loops still
-// on the needles): a frictionless yarn unravels from a free end or a free first or last course.
+// arc (T3..T5) of every loop of the first course (the cast-on, held) and of the last course (the
+// loops still on the needles): a frictionless yarn unravels from a free end or a free first or last course.
 //
 // Failure modes: bad parameters throw std::invalid_argument naming the key and its range
 // (YarnKnitParams::validate); a chart the structure model refuses throws its message; a start

@@ -68,10 +68,20 @@ TEST_CASE("chart to yarn: vertex counts, one yarn continuous at the selvedges, h
         longest = std::max(longest, l);
       }
       CHECK(longest < 2.0 * sum / static_cast<double>(y.start.size() - 1));
-      // Held: both yarn ends and one head per loop of the first and the last course.
+      // Held: both yarn ends and the head arc (T3..T5) of every loop of the first and the last
+      // course, nothing of the courses between.
       CHECK(y.pins.front() == 0);
       CHECK(y.pins.back() == static_cast<int>(y.start.size()) - 1);
-      CHECK(static_cast<int>(y.pins.size()) == 2 * chart.wales + 2);
+      for (int held : {0, chart.courses - 1})
+        for (int i = 0; i < chart.wales; ++i) {
+          const int l = y.structure.loop(i, held);
+          for (int e = 2; e < 4; ++e) {
+            const int v = y.course_vertices[held][std::lround(y.loop_points[l][e])];
+            CHECK(std::binary_search(y.pins.begin(), y.pins.end(), v));
+          }
+        }
+      for (int j = 1; j + 1 < chart.courses; ++j)
+        for (int v : y.course_vertices[j]) CHECK(!std::binary_search(y.pins.begin(), y.pins.end(), v));
     }
   }
 }
