@@ -53,8 +53,10 @@ constexpr double kYarnPatternRadius = 2.0;
 struct YarnKnitParams {
   KnitModelKind model = KnitModelKind::Network;  // knit.model
   YarnParams yarn;                               // yarn.* keys (models/yarn_rods.hpp)
-  // The yarn knitted into one cell, sinker to sinker, m; 0 = the start's own (no ramp).
-  double stitch_length = 3.4e-3;  // knit.stitch_length, [0, 0.1]
+  // The yarn knitted into one cell, sinker to sinker, m; 0 = the start's own (no ramp). 0 by
+  // default this session: a ramp to a tighter stitch jams against the held edge courses
+  // (docs/yarn_model.md, "What is not met"); 3.4e-3 is the default yarn at tightness 1.47.
+  double stitch_length = 0.0;  // knit.stitch_length, [0, 0.1]
   double tuck_length = 0.0;       // knit.tuck_length, m, [0, 0.1]; 0 = the knit's ratio
   double miss_length = 0.0;       // knit.miss_length, m, [0, 0.1]; 0 = the knit's ratio
   double vertices_per_loop = 16;  // knit.yarn_vertices: edges per chart cell, whole, [4, 256]
