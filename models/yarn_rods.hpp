@@ -188,7 +188,8 @@ class YarnRods final : public MechanicalSystem {
   double rest_length(int yarn) const;
   // Smallest segment-segment distance (exact, src/geometry/segment_distance.hpp) over edge pairs
   // that can touch (different yarns, or one yarn's edges more than same_yarn_gap apart along it
-  // at rest), m; +inf if none is closer than 2 d.
+  // at rest), m; +inf if none is closer than 2 d. Edges of one yarn nearer than the gap along it
+  // (adjacent ones share a vertex) count by their sample pairs that pair: within d/8 of exact.
   double min_clearance(const double* x) const;
   // Energies by kind, J.
   double stretch_energy(const double* x) const;

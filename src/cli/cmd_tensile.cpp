@@ -90,7 +90,7 @@ void run(const TensileArgs& args) {
     fs::create_directories(dir / name);
     KnitScene at = scene;
     at.chart = r.specimen;
-    KnitResult kr{r.model, kept.stats, 0.0, kept.x, v, kept.positions, {}, {}};
+    KnitResult kr{r.model, kept.stats, 0.0, kept.x, v, kept.positions, {}, {}, nullptr};
     // The yarn measures of this state alone (a knit run's are over its whole run).
     const YarnPolylines rest_lines = yarn_polylines(r.model, r.model.rest_positions());
     const YarnPolylines lines = yarn_polylines(r.model, kept.positions);

@@ -18,6 +18,7 @@
 #include "src/io/run_state.hpp"
 #include "src/io/textile_outputs.hpp"
 #include "src/io/vtk.hpp"
+#include "src/io/yarn_knit_outputs.hpp"
 #include "src/render/render.hpp"
 
 namespace knitsim {
@@ -321,6 +322,7 @@ nlohmann::json knit_summary(const KnitScene& scene, const KnitResult& r,
           {"options", to_json(scene.options)},
           {"units", knit_units(params_json(m.params), to_json(scene.options))}};
   if (!m.clamps.empty()) summary["clamps"] = clamps_json(m, stats.t_final, r.x);
+  if (r.yarn) add_yarn_knit_summary(*r.yarn, r.x.size(), summary);  // knit.model = yarn
   return summary;
 }
 
@@ -331,11 +333,13 @@ void write_knit_outputs(const fs::path& dir, const KnitScene& scene, const KnitR
   write_points_csv(dir / "points.csv", m, r.positions);
   write_typevalue_csv(dir / "typevalue.csv", m, r.positions);
   CenterlineCache centerlines(m);
-  const std::vector<CurveSamples>& lines = centerlines.of(r.positions);
+  // knit.model = yarn: the yarn's own polylines and measures, not curves through the points.
+  const std::vector<CurveSamples>& lines =
+      r.yarn && !r.yarn->centerlines.empty() ? r.yarn->centerlines : centerlines.of(r.positions);
   write_centerlines_csv(dir / "centerlines.csv", lines);
   std::optional<TextileMeasures> textile;
   if (std::all_of(r.positions.begin(), r.positions.end(), is_finite)) {
-    textile = textile_measures(m, r.positions);
+    textile = r.yarn ? r.yarn->textile : textile_measures(m, r.positions);
     write_file_atomic(dir / "stitches.csv", stitches_csv(*textile));
   } else {
     remove_stale_output(dir / "stitches.csv");

@@ -355,7 +355,8 @@ std::string knit_doc() {
       "Knit and run keys (unit; default; accepted values; meaning):\n";
   doc += key_lines([](const std::string& key, const std::string& model) {
     return model != "fit" &&
-           (key.rfind("knit.", 0) == 0 || key.rfind("run.", 0) == 0 || key.rfind("--", 0) == 0);
+           (key.rfind("knit.", 0) == 0 || key.rfind("yarn.", 0) == 0 ||
+            key.rfind("run.", 0) == 0 || key.rfind("--", 0) == 0);
   });
   return doc;
 }

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "src/base/text.hpp"
+#include "src/scene/yarn_knit_run.hpp"
 
 namespace knitsim {
 
@@ -95,7 +96,14 @@ std::string knit_overlap_warning(const KnitMeasures& m) {
 }
 
 KnitStart start_knit(const KnitScene& scene) {
-  KnitStart s{build_knit(scene.chart, scene.params), 0.0, {}, {}};  // validates the parameters
+  if (scene.yarn.model == KnitModelKind::Yarn) {
+    if (scene.params.pins != KnitPins::None || !scene.params.clamps.empty() || scene.params.gravity)
+      throw std::invalid_argument(
+          "knit.model = yarn holds its first and last courses itself: knit.pins, knit.clamps and "
+          "knit.gravity apply to knit.model = network only (docs/yarn_model.md)");
+    return start_yarn_knit(scene);
+  }
+  KnitStart s{build_knit(scene.chart, scene.params), 0.0, {}, {}, nullptr};  // validates params
   refuse_overlap_at_rest(s.model);
   s.x.resize(s.model.network.dof());
   s.v.resize(s.model.network.dof());
@@ -114,6 +122,8 @@ KnitStart start_knit(const KnitScene& scene) {
 }
 
 void continue_knit(KnitStart& start, const RunState& from) {
+  if (start.yarn)
+    throw std::invalid_argument("knit.model = yarn cannot go on from a saved state yet");
   if (from.x.size() != start.x.size())  // same chart and parameters: only a corrupt file gets here
     throw std::invalid_argument("the state has " + std::to_string(from.x.size()) +
                                 " unknowns; this chart has " + std::to_string(start.x.size()));
@@ -128,9 +138,10 @@ void continue_knit(KnitStart& start, const RunState& from) {
 
 KnitResult run_knit(KnitStart start, const KnitScene& scene, const std::string& integrator,
                     RunObserver* observer) {
+  if (start.yarn) return run_yarn_knit(std::move(start), scene, integrator, observer);
   std::unique_ptr<Integrator> integ = make_integrator(integrator);
   KnitResult r{std::move(start.model), {}, start.t, std::move(start.x), std::move(start.v),
-               {}, {}, {}};
+               {}, {}, {}, nullptr};
   const KnitModel& model = r.model;
   const int dof = model.network.dof();
   const YarnPolylines rest_lines = yarn_polylines(model, model.rest_positions());

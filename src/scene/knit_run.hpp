@@ -7,10 +7,12 @@
 // does not reach its steady state is a status in the result's stats, not an exception.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "models/knit_loops.hpp"
+#include "models/yarn_knit.hpp"
 #include "solvers/integrator.hpp"
 #include "src/core/vec3.hpp"
 #include "src/measure/yarn_measures.hpp"
@@ -66,10 +68,14 @@ std::vector<std::string> knit_run_warnings(const KnitParams& params, const std::
 std::string knit_overlap_warning(const KnitMeasures& measures);
 
 // A knit run's model and start: the chart built, and the state the run starts from.
+struct YarnKnitRun;  // src/scene/yarn_knit_run.hpp
 struct KnitStart {
   KnitModel model;
   double t = 0.0;            // s
   std::vector<double> x, v;  // the free dofs, m and m/s
+  // knit.model = yarn: the chart's yarn (then `model` is its structure at the start's scale and
+  // x, v the yarn's state); null for the network.
+  std::shared_ptr<const YarnKnit> yarn;
 };
 
 // Builds the model of `scene` (build_knit: throws std::invalid_argument for bad parameters) and
@@ -89,6 +95,9 @@ struct KnitResult {
   std::vector<Vec3> positions;  // all points at stats.t_final, m
   std::vector<FrameRecorder::Frame> frames;  // scene.frames states, the start first
   KnitMeasures measures;
+  // knit.model = yarn: what the yarn run adds (x, v are then the yarn's; positions, frames and
+  // measures the interlacing points read off it); null for the network.
+  std::shared_ptr<const YarnKnitRun> yarn;
 };
 
 // Runs `start` with the named integrator (make_integrator: throws std::invalid_argument for an

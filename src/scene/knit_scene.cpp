@@ -41,7 +41,12 @@ KnitChart read_knit_chart(const Scene& scene) {
 
 KnitScene make_knit_scene(const Scene& scene, KnitChart chart, int frames) {
   return {scene.name,   scene.chart.empty() ? scene.source : scene.chart,
-          std::move(chart), scene.knit, scene.options, frames};
+          std::move(chart), scene.knit, scene.options, frames, scene.yarn};
+}
+
+bool yarn_model_key(const std::string& key) {
+  return key.rfind("yarn.", 0) == 0 || key == "knit.stitch_length" || key == "knit.tuck_length" ||
+         key == "knit.miss_length" || key == "knit.yarn_vertices" || key == "knit.yarn_ramp";
 }
 
 nlohmann::json knit_model_keys(const KnitChart& chart, const Scene& scene) {
@@ -57,6 +62,8 @@ nlohmann::json knit_model_keys(const KnitChart& chart, const Scene& scene) {
   for (const Key& k : key_table()) {
     if (k.model != KeyModel::Knit || k.name == "knit.chart" || k.name == "knit.chart_text")
       continue;  // the chart is "chart", as its letters
+    if (yarn_model_key(k.name) && scene.yarn.model != KnitModelKind::Yarn)
+      continue;  // the yarn model's keys only for it (earlier state files still match)
     if (k.number)
       keys[k.name] = k.number(const_cast<Scene&>(scene));  // read only
     else if (k.name == "knit.network" || k.get(scene) != k.get(defaults))

@@ -24,6 +24,7 @@ struct KnitScene {
   KnitParams params;
   IntegratorOptions options;
   int frames = 4;  // captured states, >= 1 (src/scene/frame_recorder.hpp)
+  YarnKnitParams yarn;  // knit.model and the yarn-level model's keys
 };
 
 // The chart of a knit scene: the file scene.chart, or the text scene.chart_text.
@@ -36,6 +37,9 @@ KnitScene make_knit_scene(const Scene& scene, KnitChart chart, int frames);
 // the chart, one string of stitch letters per course from the bottom, and the knit.* keys of
 // `scene` under their names (a text key at its default is left out unless it is knit.network, so
 // that state files written before it existed still match; the chart keys are the letters).
+// True for the keys only the yarn-level model reads (yarn.*, knit.stitch_length, ...).
+bool yarn_model_key(const std::string& key);
+
 nlohmann::json knit_model_keys(const KnitChart& chart, const Scene& scene);
 
 }  // namespace knitsim

@@ -348,6 +348,52 @@ std::vector<Key> make_table() {
               std::vector<std::pair<std::string, bool>>{
                   {"off", false}, {"on", true}, {"0", false}, {"1", true}},
               "", "gravity, g = 9.81 m/s^2 along -y (off: paper 2 has no external force)");
+  // The yarn-level model's keys (models/yarn_knit.hpp, models/yarn_rods.hpp; sources in
+  // docs/yarn_model.md). Written to state.json only with knit.model = yarn (knit_model_keys).
+  other(
+      "knit.model", Kind::Text,
+      [](Scene& s, const std::string& v) {
+        if (v != "network" && v != "yarn") return false;
+        s.yarn.model = v == "yarn" ? KnitModelKind::Yarn : KnitModelKind::Network;
+        return true;
+      },
+      "one of network, yarn", [](const Scene& s) { return std::string(to_string(s.yarn.model)); },
+      "network: the interlacing-point network (knit.network); yarn: each course's yarn a "
+      "discrete elastic rod with contact, one yarn through the chart (docs/yarn_model.md)",
+      KeyModel::Knit);
+  auto yarn = [&number](const char* name, double YarnParams::*field, const char* unit,
+                        const char* meaning) {
+    number(
+        name, [field](Scene& s) -> double& { return s.yarn.yarn.*field; }, unit, meaning,
+        KeyModel::Knit);
+  };
+  yarn("yarn.tex", &YarnParams::tex, "tex", "yarn linear density (g/km); masses from it");
+  yarn("yarn.fibre_density", &YarnParams::fibre_density, "kg/m^3",
+       "fibre density rho_f (cotton 1520); with tex and packing the diameter d");
+  yarn("yarn.packing_fraction", &YarnParams::packing_fraction, "1",
+       "fibre area over yarn area phi: d = sqrt(4 tex 1e-6 / (pi rho_f phi))");
+  yarn("yarn.tensile_modulus", &YarnParams::tensile_modulus, "N/tex",
+       "initial tensile modulus per linear density: EA = modulus x tex");
+  yarn("yarn.bending_rigidity", &YarnParams::bending_rigidity, "N m^2", "bending rigidity B");
+  yarn("yarn.relaxation_time", &YarnParams::relaxation_time, "s",
+       "damping gamma = 1/tau on every dof (1e-8 s overdamps every mode: the gradient flow)");
+  auto yarn_knit = [&number](const char* name, double YarnKnitParams::*field, const char* unit,
+                             const char* meaning) {
+    number(
+        name, [field](Scene& s) -> double& { return s.yarn.*field; }, unit, meaning,
+        KeyModel::Knit);
+  };
+  yarn_knit("knit.stitch_length", &YarnKnitParams::stitch_length, "m",
+            "knit.model = yarn: yarn knitted into one knit stitch, sinker to sinker (0: the "
+            "start's own, no ramp)");
+  yarn_knit("knit.tuck_length", &YarnKnitParams::tuck_length, "m",
+            "knit.model = yarn: yarn in one tuck cell (0: the knit's ratio to the start)");
+  yarn_knit("knit.miss_length", &YarnKnitParams::miss_length, "m",
+            "knit.model = yarn: yarn in one miss cell, the float (0: the knit's ratio)");
+  yarn_knit("knit.yarn_vertices", &YarnKnitParams::vertices_per_loop, "1",
+            "knit.model = yarn: rod edges per chart cell");
+  yarn_knit("knit.yarn_ramp", &YarnKnitParams::ramp_stages, "1",
+            "knit.model = yarn: relaxed steps from the start's rest lengths to the knitted ones");
   other(
       "knit.clamps", Kind::Text,
       [](Scene& s, const std::string& v) { return (s.knit.clamps = parse_knit_clamps(v), true); },
@@ -481,6 +527,7 @@ std::string validated_range(const Key& key) {
       probe.options.validate();
       probe.knit.validate();
       probe.material.validate(probe.params);
+      probe.yarn.validate();
     }
   } catch (const InvalidField& e) {
     const std::string must = "must be ";
@@ -693,6 +740,7 @@ void Scene::validate() const {
     material.validate(params);
     options.validate();
     knit.validate();
+    yarn.validate();
   } catch (const std::invalid_argument& e) {
     // The validators name struct fields; the user wrote a scene key or a command-line flag.
     rethrow_as_typed(e, this);

@@ -42,6 +42,7 @@
 
 #include "models/drape_grid.hpp"
 #include "models/knit_loops.hpp"
+#include "models/yarn_knit.hpp"
 #include "solvers/integrator.hpp"
 #include "src/base/table.hpp"
 #include "src/core/invalid_field.hpp"
@@ -67,6 +68,9 @@ struct Scene {
   IntegratorOptions options;
   // The knit model (knitsim knit): its parameters (knit.* keys) and stitch chart file.
   KnitParams knit;
+  // knit.model and the yarn-level model's keys (knit.model = yarn: yarn.*, knit.stitch_length,
+  // ...; models/yarn_knit.hpp, docs/yarn_model.md).
+  YarnKnitParams yarn;
   std::string chart;
   std::string chart_text;  // the chart inline (knit.chart_text); a knit scene has one of the two
   // The keys the scene file or a --set gave, in that order (a key may repeat): every other

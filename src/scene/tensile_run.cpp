@@ -95,6 +95,10 @@ double tensile_work(const std::vector<TensileStep>& steps, std::size_t from, std
 TensileResult run_tensile(const KnitScene& scene, const TensileOptions& o, RunObserver* observer,
                           const TensileKeptCallback& on_kept) {
   o.validate();
+  if (scene.yarn.model == KnitModelKind::Yarn)
+    throw std::invalid_argument(
+        "knit.model = yarn: knitsim tensile runs the network model only (the yarn model has no "
+        "clamps yet: docs/yarn_model.md)");
   if (scene.params.pins != KnitPins::None || !scene.params.clamps.empty())
     throw std::invalid_argument(
         std::string(scene.params.pins != KnitPins::None ? "knit.pins" : "knit.clamps") +

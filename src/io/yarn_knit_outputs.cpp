@@ -1,0 +1,67 @@
+#include "src/io/yarn_knit_outputs.hpp"
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "src/io/json.hpp"
+
+namespace knitsim {
+
+namespace {
+
+nlohmann::json number_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nullptr; }
+
+}  // namespace
+
+void add_yarn_knit_summary(const YarnKnitRun& run, std::size_t dof, nlohmann::json& summary) {
+  const YarnKnit& y = *run.knit;
+  summary["model"] = "yarn";
+  summary["dof"] = dof;
+  nlohmann::json& b = summary["yarn"];
+  if (!b.is_object()) b = nlohmann::json::object();
+  b["clearance_min_over_d"] = number_or_null(run.clearance_min_over_d);
+  b["clearance_start_over_d"] = number_or_null(run.clearance_start_over_d);
+  b["clearance_end_over_d"] = number_or_null(run.clearance_end_over_d);
+  b["clearance_checks"] = run.clearance_checks;
+  nlohmann::json change = nlohmann::json::array(), knitted = nlohmann::json::array();
+  double worst = 0.0;
+  for (std::size_t j = 0; j < run.course_end.size(); ++j) {
+    const double c = run.course_end[j] / run.course_knitted[j] - 1.0;
+    change.push_back(number_or_null(c));
+    knitted.push_back(run.course_knitted[j]);
+    if (!(std::abs(c) <= worst)) worst = std::abs(c);
+  }
+  b["course_length_knitted_m"] = knitted;
+  b["course_length_change"] = change;  // end against knitted, relative
+  b["course_length_change_max"] = number_or_null(worst);
+  nlohmann::json stages = nlohmann::json::array();
+  for (const YarnKnitRun::Stage& s : run.stages)
+    stages.push_back({{"status", to_string(s.status)},
+                      {"steps", s.steps},
+                      {"residual", number_or_null(s.residual)},
+                      {"cpu_seconds", s.cpu_seconds},
+                      {"wall_seconds", s.wall_seconds}});
+  const YarnParams& p = y.params.yarn;
+  summary["yarn_model"] = {
+      {"diameter_m", y.d},
+      {"start_loop_radius_m", y.r},
+      {"start_loop_radius_over_d", y.r / y.d},
+      {"vertices", run.vertices},
+      {"free_vertices", run.free_vertices},
+      {"edges_per_cell", y.params.vertices_per_loop},
+      {"pins", y.pins.size()},
+      {"stitch_length_m", y.params.stitch_length},
+      {"ramp_stages", stages},
+      {"pattern_misses", run.pattern_misses},
+      {"tex", p.tex},
+      {"fibre_density", p.fibre_density},
+      {"packing_fraction", p.packing_fraction},
+      {"tensile_modulus", p.tensile_modulus},
+      {"stretch_stiffness_N", p.stretch_stiffness()},
+      {"bending_rigidity", p.bending_rigidity},
+      {"relaxation_time", p.relaxation_time},
+      {"contact_stiffness", p.contact_kappa()}};
+}
+
+}  // namespace knitsim

@@ -1,0 +1,227 @@
+#include "src/scene/yarn_knit_run.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <ctime>
+#include <limits>
+#include <memory>
+#include <stdexcept>
+#include <utility>
+
+#include "models/yarn_rods.hpp"
+
+namespace knitsim {
+
+namespace {
+
+// Steps of one round (above): short enough that the pattern follows the contacts.
+constexpr long kYarnRoundSteps = 50;
+
+double cpu_now() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
+
+// Measures the clearance at every residual check, then passes the check on.
+class ClearanceWatch final : public RunObserver {
+ public:
+  ClearanceWatch(const YarnRods& rods, RunObserver* next) : rods_(rods), next_(next) {}
+  void on_step(double t, double h, int order) override {
+    if (next_) next_->on_step(t, h, order);
+  }
+  void on_check(double t, const double* x, const double* v, double residual) override {
+    const double c = rods_.min_clearance(x);
+    if (c < min_) min_ = c;
+    ++checks_;
+    if (next_) next_->on_check(t, x, v, residual);
+  }
+  double minimum() const { return min_; }
+  int checks() const { return checks_; }
+
+ private:
+  const YarnRods& rods_;
+  RunObserver* next_;
+  double min_ = std::numeric_limits<double>::infinity();
+  int checks_ = 0;
+};
+
+// The structure's free dofs at the given points (the structure has no pins).
+std::vector<double> structure_state(const KnitModel& m, const std::vector<Vec3>& points) {
+  std::vector<double> x(m.network.dof(), 0.0);
+  for (std::size_t p = 0; p < points.size(); ++p) {
+    const int f = m.network.free_index(static_cast<int>(p));
+    if (f < 0) continue;
+    x[3 * f] = points[p].x, x[3 * f + 1] = points[p].y, x[3 * f + 2] = points[p].z;
+  }
+  return x;
+}
+
+}  // namespace
+
+KnitYarns yarn_knit_yarns(const YarnKnit& y, const std::vector<Vec3>& all) {
+  KnitYarns out;
+  out.chart = y.structure.chart;
+  out.lines.samples_per_interval = 1;
+  out.lines.vertices = y.course_polylines(all);
+  for (const std::vector<Vec3>& v : out.lines.vertices) {
+    std::vector<double> arc(v.size(), 0.0);
+    for (std::size_t k = 1; k < v.size(); ++k) arc[k] = arc[k - 1] + norm(v[k] - v[k - 1]);
+    out.lines.arc.push_back(std::move(arc));
+  }
+  const int wales = out.chart.wales;
+  out.marks.resize(y.marks.size());
+  for (std::size_t c = 0; c < y.marks.size(); ++c) {
+    const std::vector<double>& arc = out.lines.arc[c / wales];
+    auto at = [&arc](double q) {
+      if (!std::isfinite(q)) return kNoMark;
+      const int last = static_cast<int>(arc.size()) - 1;
+      const int k = std::clamp(static_cast<int>(std::floor(q)), 0, last - 1);
+      const double s = std::clamp(q - k, 0.0, 1.0);
+      return (1.0 - s) * arc[k] + s * arc[k + 1];
+    };
+    const YarnCellMarks& m = y.marks[c];
+    const bool miss = out.chart.stitches[c] == Stitch::Miss;
+    out.marks[c] = {at(m.begin), at(m.end), miss ? kNoMark : at(m.loop_begin),
+                    miss ? kNoMark : at(m.loop_end)};
+  }
+  return out;
+}
+
+KnitStart start_yarn_knit(const KnitScene& scene) {
+  auto yarn = std::make_shared<YarnKnit>(build_yarn_knit(scene.chart, scene.params, scene.yarn));
+  KnitStart s{yarn->structure, 0.0, {}, {}, yarn};
+  const YarnRods rods(yarn->spec(0, 1));
+  s.x.resize(rods.dof());
+  s.v.resize(rods.dof());
+  rods.initial_state(s.x.data(), s.v.data());
+  return s;
+}
+
+KnitResult run_yarn_knit(KnitStart start, const KnitScene& scene, const std::string& integrator,
+                         RunObserver* observer) {
+  make_integrator(integrator);  // an unknown name is refused before anything runs
+  const std::shared_ptr<const YarnKnit> yk = start.yarn;
+  const double d = yk->d;
+  const auto wall0 = std::chrono::steady_clock::now();
+  const double cpu0 = cpu_now();
+  KnitResult r{std::move(start.model), {}, 0.0, {}, {}, {}, {}, {}, nullptr};
+  auto run = std::make_shared<YarnKnitRun>();
+  run->knit = yk;
+  run->clearance_start_over_d = yk->start_clearance / d;
+  double min_clearance = yk->start_clearance;
+  int checks = 0;
+
+  // No ramp where the knitted lengths are the start's (knit.stitch_length = 0 on every type).
+  bool ramp = false;
+  for (std::size_t e = 0; e < yk->start_length.size(); ++e)
+    ramp = ramp || yk->target_length[e] != yk->start_length[e];
+  const int stages = ramp ? yk->ramp_stages() : 1;
+  std::vector<Vec3> pos = yk->start;
+  // Each stage in rounds of at most kYarnRoundSteps steps: between rounds the rods are made
+  // afresh at the state reached, so the contact's Jacobian pattern (fixed per YarnRods, the pairs
+  // near at its start) follows the yarn; a round ending at the stop ends the stage.
+  double t = 0.0;
+  long steps_left = scene.options.max_steps;
+  std::unique_ptr<YarnRods> rods;
+  std::vector<double> x, v;
+  bool done = false;
+  // The frames over the whole ramp, the start first.
+  FrameRecorder recorder(scene.frames, 3 * static_cast<int>(pos.size() - yk->pins.size()),
+                         observer);
+  for (int s = 1; s <= stages && !done; ++s) {
+    const bool last = s == stages;
+    const double c0 = cpu_now();
+    const auto w0 = std::chrono::steady_clock::now();
+    YarnKnitRun::Stage stage;
+    for (int round = 0;; ++round) {
+      rods.reset();  // one set of rods alive at a time (memory)
+      rods = std::make_unique<YarnRods>(yk->spec(s, stages, pos));
+      x.assign(rods->dof(), 0.0), v.assign(rods->dof(), 0.0);
+      rods->initial_state(x.data(), v.data());
+      if (s == 1 && round == 0) recorder.record(t, x.data(), rods->static_residual(t, x.data()));
+      ClearanceWatch watch(*rods, &recorder);
+      IntegratorOptions options = scene.options;
+      options.max_steps = std::min(steps_left, kYarnRoundSteps);
+      if (scene.options.max_wall_seconds > 0.0) {
+        const double used =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+        options.max_wall_seconds = std::max(1e-3, scene.options.max_wall_seconds - used);
+      }
+      std::unique_ptr<Integrator> integ = make_integrator(integrator);
+      RunStats st = run_to_equilibrium(*rods, *integ, options, x, v, &watch, t);
+      steps_left -= st.steps;
+      stage.steps += st.steps;
+      run->pattern_misses += rods->pattern_misses();
+      min_clearance = std::min(min_clearance, watch.minimum());
+      checks += watch.checks();
+      rods->all_positions(x.data(), pos);
+      if (st.t_final > t) t = st.t_final;
+      r.stats = st;
+      r.stats.steps = stage.steps;
+      const bool more = st.status == RunStatus::StepLimit && steps_left > 0;
+      if (!more) {
+        if (st.status == RunStatus::StepLimit) r.stats.status = RunStatus::StepLimit;
+        break;
+      }
+    }
+    stage.status = r.stats.status;
+    stage.residual = r.stats.residual;
+    stage.cpu_seconds = cpu_now() - c0;
+    stage.wall_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
+    run->stages.push_back(stage);
+    r.x = x, r.v = v;
+    if (last || r.stats.status != RunStatus::Equilibrium) {
+      const double end_clearance = rods->min_clearance(x.data());
+      min_clearance = std::min(min_clearance, end_clearance);
+      run->clearance_end_over_d = end_clearance / d;
+      run->vertices = rods->vertex_count();
+      run->free_vertices = rods->dof() / 3;
+      // The frames as states of the structure (its interlacing points read off the yarn).
+      for (FrameRecorder::Frame f : recorder.frames()) {
+        std::vector<Vec3> all;
+        rods->all_positions(f.x.data(), all);
+        f.x = structure_state(r.model, yk->interlacing_points(all));
+        r.frames.push_back(std::move(f));
+      }
+      done = true;
+    }
+  }
+  run->clearance_min_over_d = min_clearance / d;
+  run->clearance_checks = checks;
+  run->end = pos;
+  for (int j = 0; j < r.model.chart.courses; ++j) {
+    double knitted = 0.0;
+    const std::vector<int>& idx = yk->course_vertices[j];
+    for (std::size_t k = 1; k < idx.size(); ++k)
+      knitted += yk->target_length[std::min(idx[k], idx[k - 1])];
+    run->course_knitted.push_back(knitted);
+    run->course_start.push_back(yk->course_length(j, yk->start));
+    run->course_end.push_back(yk->course_length(j, pos));
+  }
+  r.positions = yk->interlacing_points(pos);
+  if (std::all_of(pos.begin(), pos.end(), is_finite)) {
+    run->textile = textile_measures(yarn_knit_yarns(*yk, pos), yarn_knit_yarns(*yk, yk->start));
+    for (const std::vector<Vec3>& line : yk->course_polylines(pos)) {
+      CurveSamples c;
+      c.points = line;
+      double a = 0.0;
+      for (std::size_t k = 0; k < line.size(); ++k) {
+        if (k > 0) a += norm(line[k] - line[k - 1]);
+        c.u.push_back(a);
+      }
+      run->centerlines.push_back(std::move(c));
+    }
+  }
+  // The network's yarn measures, in r, from the yarn's own (designed crossings not checked).
+  const double r_over_d = yk->r / d;
+  r.measures.rest_clearance = run->clearance_start_over_d / r_over_d;
+  r.measures.end_clearance = run->clearance_end_over_d / r_over_d;
+  r.measures.min_clearance.over_r = run->clearance_min_over_d / r_over_d;
+  r.measures.measured_states = checks;
+  r.stats.wall_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  r.stats.cpu_seconds = cpu_now() - cpu0;
+  r.yarn = std::move(run);
+  return r;
+}
+
+}  // namespace knitsim
