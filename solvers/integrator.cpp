@@ -371,7 +371,15 @@ class EquilibriumRun {
       checks_without_progress_ = 0;
       return false;
     }
-    return ++checks_without_progress_ >= opt_.stall_checks;
+    return ++checks_without_progress_ >= stall_window();
+  }
+  // The checks without progress that end a run: stall_checks for a model of up to 2500
+  // unknowns, growing as sqrt(n / 2500) above it (default 1000: 20 sqrt(n)), since a converging
+  // flow's longest stretch without a new minimum grows with the grid (about 4 sqrt(n) measured on
+  // two_corner's refinements: docs/equilibrium.md, "The stall rule").
+  long stall_window() const {
+    const double grow = std::max(1.0, std::sqrt(static_cast<double>(n_) / 2500.0));
+    return static_cast<long>(std::ceil(static_cast<double>(opt_.stall_checks) * grow));
   }
 
   std::string stall_message(double t) const {

@@ -34,7 +34,8 @@ struct IntegratorOptions {
   int max_restarts = 10;          // most fresh starts per run after recoverable step failures
   // The stall rule (run_to_equilibrium): the run ends as Stalled after this many checks in a
   // row at which t has not advanced (the equilibrium solver's flow, whose t stands still) and
-  // the static residual is not below its lowest value since t last advanced; 0 = never.
+  // the static residual is not below its lowest value since t last advanced, for a model of up
+  // to 2500 unknowns, x sqrt(n / 2500) above (a fine grid's flow needs more); 0 = never.
   long stall_checks = 1000;
   int krylov_dim = 30;            // cvode-bdf-gmres: Krylov dimension (0 = SUNDIALS' 5)
   double krylov_eps_lin = 5e-7;   // cvode-bdf-gmres: GMRES over Newton tolerance (SUNDIALS': 0.05)

@@ -443,8 +443,8 @@ std::vector<Key> make_table() {
          "corrector failures (0 = the run ends with solver_failure)");
   option("", "--stall-checks", "stall_checks", &IO::stall_checks, "1",
          "Checks in a row at which t stands still (the equilibrium solver's flow) and the static "
-         "residual stays above its lowest value before the run ends with status stalled (0 = "
-         "never)");
+         "residual stays above its lowest value before the run ends with status stalled, for a model "
+         "of up to 2500 unknowns; x sqrt(n / 2500) above (0 = never)");
   using NS = IO::NewtonSolver;
   named_option("--newton-solver", "newton_solver", &IO::newton_solver,
                std::vector<NS>{NS::Klu, NS::SchurLdl, NS::SchurCgLdl},
@@ -819,10 +819,15 @@ std::string summary_name(const Key& key) {
 
 std::string units_text(KeyModel model, const std::vector<std::string>& fields) {
   std::vector<std::pair<std::string, std::string>> groups;  // (unit, "name, name")
+  std::vector<std::string> named;  // a name two rows share (model.damping, material.damping):
+                                   // the first row's, that of the model summary.json describes
   for (const Key& k : key_table()) {
     if (k.model != model || k.unit.empty()) continue;
     const std::string name = summary_name(k);
-    if (std::find(fields.begin(), fields.end(), name) == fields.end()) continue;
+    if (std::find(fields.begin(), fields.end(), name) == fields.end() ||
+        std::find(named.begin(), named.end(), name) != named.end())
+      continue;
+    named.push_back(name);
     const auto group = std::find_if(groups.begin(), groups.end(),
                                     [&k](const auto& g) { return g.first == k.unit; });
     if (group == groups.end())
