@@ -74,25 +74,30 @@ std::vector<Key> make_table() {
     key.meaning = meaning;
     k.push_back(std::move(key));
   };
-  // A text key naming one of a few values of the DrapeParams member `field`: (name, value).
-  auto choice = [&other](const char* name, auto field, auto values, const char* meaning) {
+  // A text key naming one of a few values of the member `field` of the Scene part `part`
+  // (params, material): (name, value).
+  auto choice_in = [&other](const char* name, auto part, auto field, auto values,
+                            const char* meaning) {
     std::string accepted = "one of ";
     for (std::size_t i = 0; i < values.size(); ++i)
       accepted += (i > 0 ? ", " : "") + values[i].first;
     other(
         name, Kind::Text,
-        [field, values](Scene& s, const std::string& v) {
+        [part, field, values](Scene& s, const std::string& v) {
           for (const auto& [text, value] : values)
-            if (v == text) return (s.params.*field = value, true);
+            if (v == text) return ((s.*part).*field = value, true);
           return false;
         },
         accepted.c_str(),
-        [field, values](const Scene& s) {
+        [part, field, values](const Scene& s) {
           for (const auto& [text, value] : values)
-            if (s.params.*field == value) return text;
+            if ((s.*part).*field == value) return text;
           return std::string("?");
         },
         meaning);
+  };
+  auto choice = [&choice_in](const char* name, auto field, auto values, const char* meaning) {
+    choice_in(name, &Scene::params, field, values, meaning);
   };
   // An IntegratorOptions field: a run.* key (`key`, its flag none) or a flag (`key` empty).
   auto option = [&k](const char* key, const char* flag, const char* field, auto member,
@@ -204,24 +209,9 @@ std::vector<Key> make_table() {
       "duration of that pin move");
   k.back().summary = "pin_move_time";
   // The material model's keys (src/scene/material_scene.hpp, docs/material_drape.md).
-  auto material_choice = [&other](const char* name, auto field, auto values, const char* meaning) {
-    std::string accepted = "one of ";
-    for (std::size_t i = 0; i < values.size(); ++i)
-      accepted += (i > 0 ? ", " : "") + values[i].first;
-    other(
-        name, Kind::Text,
-        [field, values](Scene& s, const std::string& v) {
-          for (const auto& [text, value] : values)
-            if (v == text) return (s.material.*field = value, true);
-          return false;
-        },
-        accepted.c_str(),
-        [field, values](const Scene& s) {
-          for (const auto& [text, value] : values)
-            if (s.material.*field == value) return text;
-          return std::string("?");
-        },
-        meaning);
+  auto material_choice = [&choice_in](const char* name, auto field, auto values,
+                                       const char* meaning) {
+    choice_in(name, &Scene::material, field, values, meaning);
   };
   auto material = [&number](const char* name, double MaterialScene::*field, const char* unit,
                             const char* meaning) {
