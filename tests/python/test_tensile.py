@@ -157,3 +157,22 @@ def test_help_lists_the_tests_options_and_keys():
     doc = knitsim.tensile.__doc__
     for word in ("direction", "gauge_ratio", "unload", "step_NNN", "knit.contact", "ValueError"):
         assert word in doc, word
+
+
+def test_threads_give_the_same_curve(plain):
+    import threading
+    one = knitsim.tensile(plain, {"knit.contact": 0}, **SMALL)
+    results = [None] * 4
+
+    def work(k):
+        results[k] = knitsim.tensile(plain, {"knit.contact": 0}, **SMALL)
+
+    threads = [threading.Thread(target=work, args=(k,)) for k in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for r in results:
+        assert r.status == "complete"
+        assert r.force_N.tolist() == one.force_N.tolist()
+        assert r.energy_J.tolist() == one.energy_J.tolist()
