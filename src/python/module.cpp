@@ -12,6 +12,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/numpy.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdlib>
@@ -28,6 +29,7 @@
 #include "src/python/drape_call.hpp"
 #include "src/python/fit_call.hpp"
 #include "src/python/knit_call.hpp"
+#include "src/python/tensile_call.hpp"
 
 namespace py = pybind11;
 
@@ -248,10 +250,14 @@ py::object knit(const py::object& chart_or_scene, const py::object& overrides,
   return result;
 }
 
-// stitches.csv as {column: array}: numbers as float64 (an empty field, a measure the cell does
-// not have, as NaN), wale, course and held_over as int, stitch as str ('K', 'T', 'M'); parsed
-// from the text the command writes, so the values are the file's, bit for bit.
-py::dict stitches_columns(const std::string& csv) {
+// A CSV the command writes as {column: array}: numbers as float64 (an empty field as NaN), the
+// columns named in `ints` as int, those in `texts` as str; parsed from the text the command
+// writes, so the values are the file's, bit for bit.
+py::dict csv_columns(const std::string& csv, const std::vector<std::string>& ints,
+                     const std::vector<std::string>& texts) {
+  auto among = [](const std::vector<std::string>& names, const std::string& name) {
+    return std::find(names.begin(), names.end(), name) != names.end();
+  };
   py::dict out;
   if (csv.empty()) return out;
   std::vector<std::string> names;
@@ -284,11 +290,11 @@ py::dict stitches_columns(const std::string& csv) {
   for (std::size_t c = 0; c < names.size(); ++c) {
     const std::vector<std::string>& col = cols[c];
     const auto n = static_cast<py::ssize_t>(col.size());
-    if (names[c] == "stitch") {
+    if (among(texts, names[c])) {
       py::list l;
       for (const std::string& v : col) l.append(v);
-      out[names[c].c_str()] = py::module_::import("numpy").attr("array")(l, "U1");
-    } else if (names[c] == "wale" || names[c] == "course" || names[c] == "held_over") {
+      out[names[c].c_str()] = py::module_::import("numpy").attr("array")(l, "U");
+    } else if (among(ints, names[c])) {
       py::array_t<long long> a(n);
       for (py::ssize_t i = 0; i < n; ++i)
         a.mutable_at(i) = std::strtoll(col[i].c_str(), nullptr, 10);
@@ -302,6 +308,55 @@ py::dict stitches_columns(const std::string& csv) {
     }
   }
   return out;
+}
+
+// knitsim.tensile: the tensile test of `knitsim tensile` (tensile_call.hpp).
+py::object tensile(const py::object& chart_or_scene, const py::object& overrides,
+                   const std::string& direction, int steps, double strain, double gauge_ratio,
+                   bool unload, int outputs, const py::object& integrator,
+                   const py::object& cancel_token, const py::kwargs& run_options) {
+  TensileRequest request;
+  request.chart_or_scene = path_text(chart_or_scene, "chart_or_scene");
+  request.overrides = override_list(overrides);
+  // The command solves every step with the equilibrium solver and has no --integrator.
+  if (!integrator.is_none() &&
+      !(py::isinstance<py::str>(integrator) && integrator.cast<std::string>() == "equilibrium"))
+    throw std::invalid_argument("--integrator = " + printable(py::str(integrator).cast<std::string>()) +
+                                ": tensile solves each step with equilibrium (the only one)");
+  request.test.direction = direction;
+  request.test.steps = steps;
+  request.test.strain = strain;
+  request.test.gauge_ratio = gauge_ratio;
+  request.test.unload = unload;
+  request.test.outputs = outputs;
+  for (const auto& [name, value] : run_options)
+    request.run_options.emplace_back(name.cast<std::string>(), value_text(value));
+
+  const std::shared_ptr<std::atomic<bool>> cancel = cancel_flag(cancel_token);
+  SignalPoll signals(cancel.get());
+  std::shared_ptr<TensileCall> call;
+  {
+    py::gil_scoped_release release;
+    call = tensile_call(request, cancel.get(), &signals);
+  }
+  py::object result = py::cast(call);
+  if (signals.raised()) {
+    py::error_already_set e;
+    if (PyExceptionInstance_Check(e.value().ptr())) e.value().attr("result") = result;
+    throw e;
+  }
+  return result;
+}
+
+// tensile.csv as {column: array}: step and newton_steps int, status str, the rest float64.
+py::dict tensile_columns(const std::string& csv) {
+  return csv_columns(csv, {"step", "newton_steps"}, {"status"});
+}
+
+// stitches.csv as {column: array}: wale, course and held_over int, stitch str ('K', 'T', 'M'),
+// the measures float64 (NaN where the cell has none).
+py::dict stitches_columns(const std::string& csv) {
+  return csv_columns(csv, {"wale", "course", "held_over"}, {"stitch"});
 }
 
 // The key table's rows as help lines "  key (unit; default D; accepted): meaning", by column name
@@ -351,6 +406,54 @@ std::string knit_doc() {
       "its row and column); a run that does not reach its steady state returns its status. "
       "Ctrl-C ends the run (status interrupted) and raises KeyboardInterrupt with the partial "
       "result as .result.\n"
+      "\n"
+      "Knit and run keys (unit; default; accepted values; meaning):\n";
+  doc += key_lines([](const std::string& key, const std::string& model) {
+    return model != "fit" &&
+           (key.rfind("knit.", 0) == 0 || key.rfind("yarn.", 0) == 0 ||
+            key.rfind("run.", 0) == 0 || key.rfind("--", 0) == 0);
+  });
+  return doc;
+}
+
+std::string tensile_doc() {
+  std::string doc =
+      "tensile(chart_or_scene, overrides=None, direction='wale', steps=20, strain=0.2, "
+      "gauge_ratio=2.0, unload=False, outputs=3, integrator=None, cancel=None, **run_options)\n"
+      "\n"
+      "Quasi-static tensile test of a stitch chart, as `knitsim tensile` does (the same curve, "
+      "bit for bit; docs/knit.md, \"Under load\"): a strip of the chart clamped at two "
+      "opposite edges, one edge moved in equal steps, each step's equilibrium certified. Returns "
+      "a TensileResult: the columns of tensile.csv as arrays (step, strain, displacement_m, "
+      "force_N, force_per_width_N_per_m, lateral_strain, energy_J, step_status, newton_steps; "
+      "all of them in .curve), summary (summary.json), status; result.write(folder) writes "
+      "tensile.csv, tensile.png, summary.json and manifest.json, but not the kept steps' "
+      "step_NNN/ knit outputs the command also writes (they need the model in each step's "
+      "state, which only the run holds; their positions are in result.states).\n"
+      "\n"
+      "chart_or_scene: a stitch chart file (as --chart) or a knit scene ending in .toml (as "
+      "--scene).\n"
+      "overrides: {key: value} (or [\"key=value\", ...]) of the knit.* and run.* keys below, as "
+      "--set takes them, e.g. {\"knit.contact\": 0}; knit.pins and knit.clamps are the test's "
+      "own.\n"
+      "direction: wale (bottom edge held, top edge moved) or course (left held, right moved).\n"
+      "steps: equal loading steps, 1 to 100000 (--steps).\n"
+      "strain: engineering strain of the clamp distance at the last step, in (0, 1] "
+      "(--strain).\n"
+      "gauge_ratio: clamp distance / width of the strip, in (0, 100] (--gauge-ratio).\n"
+      "unload: then unload back to 0 along the same steps (--unload).\n"
+      "outputs: steps whose whole state is kept (result.states), 0 to 1000 (--outputs).\n"
+      "integrator: None or 'equilibrium' (the command has no other).\n"
+      "cancel: a knitsim.Cancel another thread may set() to end the test (the step's status "
+      "interrupted).\n"
+      "run_options: the run flags of `knitsim tensile` by name:";
+  for (const auto& [name, flag] : run_option_flags()) doc += " " + name;
+  doc +=
+      ".\n\n"
+      "Bad input raises ValueError with the command line's one-line message (e.g. \"--steps = "
+      "0: ...\"); a step that does not reach equilibrium ends the test with its status "
+      "(result.status, the curve so far kept). Ctrl-C ends the test (status interrupted) and "
+      "raises KeyboardInterrupt with the partial result as .result.\n"
       "\n"
       "Knit and run keys (unit; default; accepted values; meaning):\n";
   doc += key_lines([](const std::string& key, const std::string& model) {
@@ -484,7 +587,7 @@ PYBIND11_MODULE(knitsim, m) {
                       .cast<unsigned long>();
   m.doc() =
       "knitsim from Python: mass-spring models of knitted fabric (docs/python.md). drape(), "
-      "knit(), fit(), list_keys(), integrators(), scenes(); results hold numpy arrays and "
+      "knit(), tensile(), fit(), list_keys(), integrators(), scenes(); results hold numpy arrays and "
       "summary.json as a dict.";
   m.attr("__version__") = KNITSIM_VERSION;
   m.attr("build") = py::dict(py::arg("version") = version_string(),
@@ -703,6 +806,110 @@ PYBIND11_MODULE(knitsim, m) {
   m.def("knit", &knit, py::arg("chart_or_scene"), py::arg("overrides") = py::none(),
         py::arg("integrator") = py::none(), py::arg("frames") = 4,
         py::arg("cancel") = py::none(), knit_docstring.c_str());
+
+  using TensilePtr = std::shared_ptr<TensileCall>;
+  auto curve_column = [](const char* name) {
+    return [name](const TensileCall& c) { return py::object(tensile_columns(c.csv)[name]); };
+  };
+  py::class_<TensileCall, TensilePtr>(
+      m, "TensileResult",
+      "One tensile test: tensile.csv's columns as arrays (one row per step, the rest state step "
+      "0 first), summary.json as a dict.")
+      .def_property_readonly(
+          "curve", [](const TensileCall& c) { return tensile_columns(c.csv); },
+          "tensile.csv as {column: array} (step, newton_steps int; status str; the rest "
+          "float64), the file's numbers bit for bit")
+      .def_property_readonly("step", curve_column("step"), "step number, 0 = settled at rest")
+      .def_property_readonly("strain", curve_column("strain"),
+                             "engineering strain of the clamp distance, 1")
+      .def_property_readonly("displacement_m", curve_column("displacement_m"),
+                             "the moving clamp's displacement along the pull, m")
+      .def_property_readonly("force_N", curve_column("force_N"),
+                             "the moving clamp's reaction along the pull, N (tension > 0)")
+      .def_property_readonly("force_per_width_N_per_m", curve_column("force_per_width_N_per_m"),
+                             "force per rest width, N/m")
+      .def_property_readonly("lateral_strain", curve_column("lateral_strain"),
+                             "width change at mid-length over the rest width, 1")
+      .def_property_readonly("energy_J", curve_column("energy_J"), "potential energy, J")
+      .def_property_readonly("step_status", curve_column("status"),
+                             "each step's status (tensile.csv status)")
+      .def_property_readonly("newton_steps", curve_column("newton_steps"),
+                             "each step's Newton steps")
+      .def_property_readonly(
+          "reactions",
+          [](const TensileCall& c) {
+            const auto& steps = c.result.steps;
+            py::array_t<double> a({static_cast<py::ssize_t>(steps.size()), py::ssize_t{2},
+                                   py::ssize_t{3}});
+            std::fill(a.mutable_data(), a.mutable_data() + a.size(),
+                      std::numeric_limits<double>::quiet_NaN());
+            for (std::size_t k = 0; k < steps.size(); ++k)
+              for (std::size_t j = 0; j < 2 && j < steps[k].reactions.size(); ++j) {
+                const Vec3& f = steps[k].reactions[j];
+                a.mutable_at(k, j, 0) = f.x;
+                a.mutable_at(k, j, 1) = f.y;
+                a.mutable_at(k, j, 2) = f.z;
+              }
+            return a;
+          },
+          "steps x 2 x 3, N: the force each clamp (fixed, moving) exerts on the fabric")
+      .def_property_readonly(
+          "rest_positions",
+          [](const TensileCall& c) { return points_array(c.result.model.rest_positions()); },
+          "the specimen's interlacing points at rest, n x 3, m")
+      .def_property_readonly(
+          "states",
+          [](const TensileCall& c) {
+            py::dict d;
+            for (const TensileResult::Kept& k : c.result.kept)
+              d[py::int_(k.step)] = points_array(k.positions);
+            return d;
+          },
+          "{step: n x 3 positions, m} at the kept steps (outputs=)")
+      .def_property_readonly(
+          "summary", [](const TensileCall& c) { return json_to_python(c.summary); },
+          "summary.json as a dict, with its 'units' map")
+      .def_property_readonly(
+          "status", [](const TensileCall& c) { return c.summary["status"].get<std::string>(); },
+          "complete, or the status of the step that did not reach equilibrium (interrupted, "
+          "...; summary['status'])")
+      .def_property_readonly(
+          "complete", [](const TensileCall& c) { return c.result.complete; },
+          "every step reached equilibrium")
+      .def_property_readonly(
+          "message",
+          [](const TensileCall& c) {
+            return c.result.steps.empty() ? std::string() : c.result.steps.back().stats.message;
+          },
+          "why the last step's solve stopped")
+      .def_property_readonly(
+          "chart", [](const TensileCall& c) { return c.scene.name; }, "the chart's name")
+      .def(
+          "write",
+          [](const TensilePtr& c, const py::object& folder, bool pictures) {
+            const std::string dir = path_text(folder, "--out");
+            std::string written;
+            {
+              py::gil_scoped_release release;
+              written = write_tensile_call(*c, dir, pictures);
+            }
+            return written;
+          },
+          py::arg("folder"), py::arg("pictures") = true,
+          "Writes the files of `knitsim tensile --out folder` but the step_NNN/ folders "
+          "(tensile.csv, tensile.png unless pictures=False, summary.json, manifest.json); "
+          "returns the folder.")
+      .def("__repr__", [](const TensileCall& c) {
+        return "<knitsim.TensileResult " + c.scene.name + " " + c.test.direction + ": " +
+               c.summary["status"].get<std::string>() + ", " +
+               std::to_string(c.result.steps.size()) + " steps>";
+      });
+  static const std::string tensile_docstring = tensile_doc();
+  m.def("tensile", &tensile, py::arg("chart_or_scene"), py::arg("overrides") = py::none(),
+        py::arg("direction") = "wale", py::arg("steps") = 20, py::arg("strain") = 0.2,
+        py::arg("gauge_ratio") = 2.0, py::arg("unload") = false, py::arg("outputs") = 3,
+        py::arg("integrator") = py::none(), py::arg("cancel") = py::none(),
+        tensile_docstring.c_str());
 
   py::class_<FitCall, std::shared_ptr<FitCall>>(
       m, "FitResult", "One ICA fit: the best parameters, their objective, the history.")
