@@ -91,6 +91,26 @@ class SignalPoll final : public RunObserver {
   py::object type_, value_, trace_;
 };
 
+// Runs `solve(signals)` (it returns the call's result as a shared pointer) without the GIL,
+// polling for signals; a signal or a handler's exception during the run is raised after it
+// (KeyboardInterrupt carrying the partial result as .result). One path for every solving call.
+template <class Solve>
+py::object solve_without_gil(std::atomic<bool>* cancel, Solve&& solve) {
+  SignalPoll signals(cancel);
+  decltype(solve(signals)) call;
+  {
+    py::gil_scoped_release release;
+    call = solve(signals);
+  }
+  py::object result = py::cast(call);
+  if (signals.raised()) {
+    py::error_already_set e;
+    if (PyExceptionInstance_Check(e.value().ptr())) e.value().attr("result") = result;
+    throw e;
+  }
+  return result;
+}
+
 // A Python value as the text --set or a run flag takes: str as is, a float (numpy's float64
 // included) by the plain float's repr (the shortest text that reads back as the same double),
 // anything else by str().
@@ -202,19 +222,9 @@ py::object drape(const py::object& scene, const py::object& overrides, const py:
     request.run_options.emplace_back(name.cast<std::string>(), value_text(value));
 
   const std::shared_ptr<std::atomic<bool>> cancel = cancel_flag(cancel_token);
-  SignalPoll signals(cancel.get());
-  CallPtr call;
-  {
-    py::gil_scoped_release release;
-    call = std::make_shared<DrapeCall>(drape_call(request, cancel.get(), &signals));
-  }
-  py::object result = py::cast(call);
-  if (signals.raised()) {  // KeyboardInterrupt (or a handler's own exception) with the result
-    py::error_already_set e;
-    if (PyExceptionInstance_Check(e.value().ptr())) e.value().attr("result") = result;
-    throw e;
-  }
-  return result;
+  return solve_without_gil(cancel.get(), [&](SignalPoll& signals) {
+    return CallPtr(std::make_shared<DrapeCall>(drape_call(request, cancel.get(), &signals)));
+  });
 }
 
 
@@ -235,19 +245,9 @@ py::object knit(const py::object& chart_or_scene, const py::object& overrides,
     request.run_options.emplace_back(name.cast<std::string>(), value_text(value));
 
   const std::shared_ptr<std::atomic<bool>> cancel = cancel_flag(cancel_token);
-  SignalPoll signals(cancel.get());
-  std::shared_ptr<KnitCall> call;
-  {
-    py::gil_scoped_release release;
-    call = knit_call(request, cancel.get(), &signals);
-  }
-  py::object result = py::cast(call);
-  if (signals.raised()) {
-    py::error_already_set e;
-    if (PyExceptionInstance_Check(e.value().ptr())) e.value().attr("result") = result;
-    throw e;
-  }
-  return result;
+  return solve_without_gil(cancel.get(), [&](SignalPoll& signals) {
+    return knit_call(request, cancel.get(), &signals);
+  });
 }
 
 // A CSV the command writes as {column: array}: numbers as float64 (an empty field as NaN), the
@@ -333,19 +333,9 @@ py::object tensile(const py::object& chart_or_scene, const py::object& overrides
     request.run_options.emplace_back(name.cast<std::string>(), value_text(value));
 
   const std::shared_ptr<std::atomic<bool>> cancel = cancel_flag(cancel_token);
-  SignalPoll signals(cancel.get());
-  std::shared_ptr<TensileCall> call;
-  {
-    py::gil_scoped_release release;
-    call = tensile_call(request, cancel.get(), &signals);
-  }
-  py::object result = py::cast(call);
-  if (signals.raised()) {
-    py::error_already_set e;
-    if (PyExceptionInstance_Check(e.value().ptr())) e.value().attr("result") = result;
-    throw e;
-  }
-  return result;
+  return solve_without_gil(cancel.get(), [&](SignalPoll& signals) {
+    return tensile_call(request, cancel.get(), &signals);
+  });
 }
 
 // tensile.csv as {column: array}: step and newton_steps int, status str, the rest float64.
@@ -496,22 +486,12 @@ py::object fit(const py::object& target, const py::object& scene, const py::obje
     request.options.emplace_back(name.cast<std::string>(), value_text(value));
 
   std::atomic<bool> cancel{false};
-  SignalPoll signals(&cancel);
-  std::shared_ptr<FitCall> call;
-  {
-    py::gil_scoped_release release;
-    call = std::make_shared<FitCall>(fit_call(request, [&signals, &cancel] {
+  return solve_without_gil(&cancel, [&](SignalPoll& signals) {
+    return std::make_shared<FitCall>(fit_call(request, [&signals, &cancel] {
       signals.poll();
       return cancel.load(std::memory_order_relaxed);
     }));
-  }
-  py::object result = py::cast(call);
-  if (signals.raised()) {
-    py::error_already_set e;
-    if (PyExceptionInstance_Check(e.value().ptr())) e.value().attr("result") = result;
-    throw e;
-  }
-  return result;
+  });
 }
 
 std::string fit_doc() {
