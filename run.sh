@@ -58,6 +58,13 @@ build knitsim
 if grep -qs '/knitsim_optimizers\.dir$' "$BUILD_DIR/CMakeFiles/TargetDirectories.txt"; then
   build knitsim_optimizers
 fi
+# The Python module (build/python, README.md) and the python study's C++ loop, where pybind11
+# was found: the study of experiments/python imports the module.
+for target in knitsim_python knitsim_python_bench; do
+  if grep -qs "/$target\.dir\$" "$BUILD_DIR/CMakeFiles/TargetDirectories.txt"; then
+    build "$target"
+  fi
+done
 
 # The main job: the quick reproduction of paper 1's Tables 4 and 6 (with the Taguchi
 # tuning, Fig. 13 and the fitted drapes), the integrator comparison on the built-in scenes, and
