@@ -120,7 +120,12 @@ TEST_CASE("SIGTERM during a 3.7 M-particle drape's set-up ends it within 2 s", "
   CAPTURE(latency);
   const std::string err = slurp(tmp.path / "background-stderr.txt");
   CAPTURE(err);
-  CHECK(latency < 2.0);  // was 199 s: the request was read at the next residual check
+#ifdef KNITSIM_SANITIZED
+  const double bound = 10.0;  // ASan's teardown of the set-up's memory (2.3 s measured, loaded)
+#else
+  const double bound = 2.0;
+#endif
+  CHECK(latency < bound);  // was 199 s: the request was read at the next residual check
   REQUIRE(WIFEXITED(st));
   CHECK(WEXITSTATUS(st) == 143);
   CHECK(err.find("interrupted by SIGTERM") != std::string::npos);
