@@ -16,18 +16,23 @@ bool is_knit_scene_path(const std::string& path) {
   return path.size() > ext.size() && path.compare(path.size() - ext.size(), ext.size(), ext) == 0;
 }
 
+KnitChart read_knit_input(const std::string& chart_or_scene,
+                          const std::vector<std::string>& overrides, Scene& input) {
+  // As the commands' run(): the chart is read before the --set keys apply.
+  if (!is_knit_scene_path(chart_or_scene)) {
+    KnitChart chart = read_knit_chart(knit_scene(chart_or_scene, {}));
+    input = knit_scene(chart_or_scene, overrides);
+    return chart;
+  }
+  input = load_knit_scene(chart_or_scene, overrides);
+  return read_knit_chart(input);
+}
+
 std::shared_ptr<KnitCall> knit_call(const KnitRequest& request, const std::atomic<bool>* cancel,
                                     RunObserver* observer) {
-  // As cmd_knit.cpp's run(): the chart is read before the --set keys apply.
+  // As cmd_knit.cpp's run().
   Scene input;
-  KnitChart chart;
-  if (!is_knit_scene_path(request.chart_or_scene)) {
-    chart = read_knit_chart(knit_scene(request.chart_or_scene, {}));
-    input = knit_scene(request.chart_or_scene, request.overrides);
-  } else {
-    input = load_knit_scene(request.chart_or_scene, request.overrides);
-    chart = read_knit_chart(input);
-  }
+  KnitChart chart = read_knit_input(request.chart_or_scene, request.overrides, input);
   bool velocity_atol_given = false;
   for (const auto& [name, value] : request.run_options) {
     apply_run_option(input.options, name, value);

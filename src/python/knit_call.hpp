@@ -36,6 +36,10 @@ struct KnitRequest {
 
 // True where `path` names a knit scene (a .toml file) rather than a chart.
 bool is_knit_scene_path(const std::string& path);
+// The chart and the scene of a knit call (a chart file or a .toml knit scene, with the --set
+// overrides), read as the commands read them: the chart before the overrides apply.
+KnitChart read_knit_input(const std::string& chart_or_scene,
+                          const std::vector<std::string>& overrides, Scene& input);
 
 struct KnitCall {
   KnitScene scene;

@@ -370,6 +370,15 @@ std::string key_lines(Keep keep) {
   return doc;
 }
 
+// The knit and run keys of the parameter table, for knit's and tensile's docstrings.
+std::string knit_key_lines() {
+  return key_lines([](const std::string& key, const std::string& model) {
+    return model != "fit" &&
+           (key.rfind("knit.", 0) == 0 || key.rfind("yarn.", 0) == 0 ||
+            key.rfind("run.", 0) == 0 || key.rfind("--", 0) == 0);
+  });
+}
+
 std::string knit_doc() {
   std::string doc =
       "knit(chart_or_scene, overrides=None, integrator=None, frames=4, cancel=None, "
@@ -398,11 +407,7 @@ std::string knit_doc() {
       "result as .result.\n"
       "\n"
       "Knit and run keys (unit; default; accepted values; meaning):\n";
-  doc += key_lines([](const std::string& key, const std::string& model) {
-    return model != "fit" &&
-           (key.rfind("knit.", 0) == 0 || key.rfind("yarn.", 0) == 0 ||
-            key.rfind("run.", 0) == 0 || key.rfind("--", 0) == 0);
-  });
+  doc += knit_key_lines();
   return doc;
 }
 
@@ -446,11 +451,7 @@ std::string tensile_doc() {
       "raises KeyboardInterrupt with the partial result as .result.\n"
       "\n"
       "Knit and run keys (unit; default; accepted values; meaning):\n";
-  doc += key_lines([](const std::string& key, const std::string& model) {
-    return model != "fit" &&
-           (key.rfind("knit.", 0) == 0 || key.rfind("yarn.", 0) == 0 ||
-            key.rfind("run.", 0) == 0 || key.rfind("--", 0) == 0);
-  });
+  doc += knit_key_lines();
   return doc;
 }
 

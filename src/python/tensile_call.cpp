@@ -17,14 +17,7 @@ std::shared_ptr<TensileCall> tensile_call(const TensileRequest& request,
   // As cmd_tensile.cpp's run(): the chart is read before the --set keys apply; everything is
   // checked before the run.
   Scene input;
-  KnitChart chart;
-  if (!is_knit_scene_path(request.chart_or_scene)) {
-    chart = read_knit_chart(knit_scene(request.chart_or_scene, {}));
-    input = knit_scene(request.chart_or_scene, request.overrides);
-  } else {
-    input = load_knit_scene(request.chart_or_scene, request.overrides);
-    chart = read_knit_chart(input);
-  }
+  KnitChart chart = read_knit_input(request.chart_or_scene, request.overrides, input);
   for (const auto& [name, value] : request.run_options)
     apply_run_option(input.options, name, value);
   input.validate();
