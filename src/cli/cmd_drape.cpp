@@ -61,20 +61,13 @@ std::string human_summary(const Scene& scene, const DrapeResult& r, const std::s
                         ? " (" + std::to_string(r.integrated_dof) +
                               " integrated: " + to_string(r.symmetry) +
                               (r.whole_sheet_checked ? ", certified on the whole sheet" : "") + ")"
-                        : std::string())},
-      {"integrator", s.integrator},
-      {"status", std::string(to_string(s.status)) + " (" + s.message + ")"},
-      {"certificate", certificate_summary(s)},
-      {"t_final", format_number(s.t_final, 6) + " s"},
-      {"steps", steps_summary(s)}};
-  if (const std::string la = linear_algebra_summary(s); !la.empty())
-    t.rows.push_back({"linear algebra", la});
-  t.rows.insert(t.rows.end(),
-                {{"residual", residual_summary(s, scene.options.position_tol)},
-                 {"centre sag", format_number(100 * r.centre_sag, 4) + " cm"},
-                 {"max strain", format_number(100 * r.max_strain, 3) + " %"},
-                 {"wall", format_number(1e3 * s.wall_seconds, 4) + " ms"},
-                 {"outputs", dir + "/"}});
+                        : std::string())}};
+  const auto run = run_rows(s, scene.options.position_tol);
+  t.rows.insert(t.rows.end(), run.begin(), run.end());
+  t.rows.insert(t.rows.end(), {{"centre sag", format_number(100 * r.centre_sag, 4) + " cm"},
+                               {"max strain", format_number(100 * r.max_strain, 3) + " %"},
+                               {"wall", format_number(1e3 * s.wall_seconds, 4) + " ms"},
+                               {"outputs", dir + "/"}});
   return t.text();
 }
 

@@ -25,17 +25,11 @@ std::string human_summary(const Scene& scene, const MaterialDrapeResult& r,
   const MaterialSheet& sheet = *r.sheet;
   Table t;
   t.columns = {"drape", scene.name + " (" + scene.source + ", model.kind = material)"};
-  t.rows = {{"mesh", std::to_string(sheet.nx()) + " x " + std::to_string(sheet.ny()) +
-                         " cells, " + std::to_string(sheet.vertex_count()) + " vertices, " +
-                         std::to_string(sheet.dof()) + " dof"},
-            {"integrator", s.integrator},
-            {"status", std::string(to_string(s.status)) + " (" + s.message + ")"},
-            {"certificate", certificate_summary(s)},
-            {"t_final", format_number(s.t_final, 6) + " s"},
-            {"steps", steps_summary(s)}};
-  if (const std::string la = linear_algebra_summary(s); !la.empty())
-    t.rows.push_back({"linear algebra", la});
-  t.rows.push_back({"residual", residual_summary(s, scene.options.position_tol)});
+  t.rows = {{"mesh", std::to_string(sheet.nx()) + " x " + std::to_string(sheet.ny()) + " cells, " +
+                         std::to_string(sheet.vertex_count()) + " vertices, " +
+                         std::to_string(sheet.dof()) + " dof"}};
+  const auto run = run_rows(s, scene.options.position_tol);
+  t.rows.insert(t.rows.end(), run.begin(), run.end());
   if (scene.material.clamps == ClampLayout::Corners) {
     t.rows.push_back({"centre sag", format_number(100 * r.centre_sag, 5) + " cm"});
   } else {
@@ -119,8 +113,8 @@ void run_material_drape_command(Scene& scene, const std::string& integrator,
   if (status == RunStatus::Interrupted || status == RunStatus::StepLimit ||
       status == RunStatus::WallLimit)
     std::cerr << "knitsim drape: "
-              << (status == RunStatus::Interrupted ? std::string("interrupted by ") +
-                                                         interrupt.signal_name()
+              << (status == RunStatus::Interrupted
+                      ? std::string("interrupted by ") + interrupt.signal_name()
                   : status == RunStatus::StepLimit ? std::string("stopped by --max-steps")
                                                    : std::string("stopped by --max-wall"))
               << " at t = " << result.stats.t_final << " s; outputs written to " << dir.string()

@@ -4,10 +4,10 @@
 //
 // Order of work, as drape's: parse the flags, read the chart and the keys (--chart and --set, or
 // the knit scene --scene and --set), check the parameters, the run options and the integrator
-// name, build the model, read --continue; only then create --out, run and write. Bad input (a bad chart: one line naming row and column)
-// therefore writes nothing and exits 2; a run that ends in any status but equilibrium still
-// writes everything and exits 3 -- or 128 + the signal (130, 143) when Ctrl-C or SIGTERM stopped
-// it (status interrupted, src/cli/interrupt.hpp).
+// name, build the model, read --continue; only then create --out, run and write. Bad input (a bad
+// chart: one line naming row and column) therefore writes nothing and exits 2; a run that ends in
+// any status but equilibrium still writes everything and exits 3 -- or 128 + the signal (130, 143)
+// when Ctrl-C or SIGTERM stopped it (status interrupted, src/cli/interrupt.hpp).
 #include <CLI/CLI.hpp>
 #include <filesystem>
 #include <iostream>
@@ -39,10 +39,10 @@ struct KnitArgs {
   std::string chart;
   std::string scene;  // --scene FILE, a knit scene (or --chart)
   std::vector<std::string> sets;
-  std::string integrator;            // empty: default_knit_integrator()
-  IntegratorOptions options;         // only the fields add_run_options binds are taken from here
+  std::string integrator;     // empty: default_knit_integrator()
+  IntegratorOptions options;  // only the fields add_run_options binds are taken from here
   std::map<std::string, std::string> typed;  // those flags' values as typed (messages)
-  bool velocity_atol_given = false;  // --velocity-atol on the command line
+  bool velocity_atol_given = false;          // --velocity-atol on the command line
   int frames = 4;
   std::string out;
   bool step_history = false;
@@ -67,21 +67,14 @@ std::string human_summary(const KnitScene& scene, const KnitResult& r, const std
   t.rows = {{"chart", std::to_string(scene.chart.wales) + " wales x " +
                           std::to_string(scene.chart.courses) + " courses, " +
                           std::to_string(r.model.points.size()) + " points, " +
-                          std::to_string(r.model.network.spec().springs.size()) + " springs"},
-            {"integrator", s.integrator},
-            {"status", std::string(to_string(s.status)) + " (" + s.message + ")"},
-            {"certificate", certificate_summary(s)},
-            {"t_final", format_number(s.t_final, 6) + " s" +
-                            (s.t_final > r.t_start || s.steps == 0
-                                 ? ""
-                                 : " (its steps do not advance t)")},
-            {"steps", steps_summary(s)}};
-  if (const std::string la = linear_algebra_summary(s); !la.empty())
-    t.rows.push_back({"linear algebra", la});
+                          std::to_string(r.model.network.spec().springs.size()) + " springs"}};
+  const auto run =
+      run_rows(s, scene.options.position_tol,
+               s.t_final > r.t_start || s.steps == 0 ? "" : " (its steps do not advance t)");
+  t.rows.insert(t.rows.end(), run.begin(), run.end());
   t.rows.insert(
       t.rows.end(),
-      {{"residual", residual_summary(s, scene.options.position_tol)},
-       {"max displacement", format_number(max_displacement_over_r(r.model, r.positions), 4) + " r"},
+      {{"max displacement", format_number(max_displacement_over_r(r.model, r.positions), 4) + " r"},
        {"clearance", "min " + format_number(m.min_clearance.over_r, 3) + " r over the run (" +
                          std::to_string(m.measured_states) + " states, to " +
                          format_number(m.min_resolution, 2) + " r), end " +
@@ -139,9 +132,9 @@ void run(const KnitArgs& args) {
   KnitScene scene = make_knit_scene(input, std::move(chart), args.frames);
   KnitStart start = start_knit(scene);  // validates the parameters
   if (!args.continue_from.empty()) {
-    const RunState from = continue_state(args.continue_from, "knit",
-                                         knit_model_keys(scene.chart, input), inputs, integrator,
-                                         scene.options);
+    const RunState from =
+        continue_state(args.continue_from, "knit", knit_model_keys(scene.chart, input), inputs,
+                       integrator, scene.options);
     try {
       continue_knit(start, from);
     } catch (const std::invalid_argument& e) {
@@ -175,8 +168,7 @@ void run(const KnitArgs& args) {
     write_file_atomic(dir / "steps.csv", steps_csv);
   else
     remove_stale_output(dir / "steps.csv");
-  write_knit_outputs(dir, scene, result, knit_model_keys(scene.chart, input),
-                     !args.no_pictures);
+  write_knit_outputs(dir, scene, result, knit_model_keys(scene.chart, input), !args.no_pictures);
   if (const std::string w = knit_overlap_warning(result.measures); !w.empty()) warn(w);
   if (!args.quiet) std::cout << human_summary(scene, result, dir.string()) << std::flush;
   exit_with_run_status("knit", result.stats, interrupt, dir.string());

@@ -49,13 +49,29 @@ std::string residual_summary(const RunStats& s, double position_tol) {
          format_number(position_tol, 3) + " m)";
 }
 
+std::vector<std::vector<std::string>> run_rows(const RunStats& s, double position_tol,
+                                               const std::string& t_note) {
+  std::vector<std::vector<std::string>> rows = {
+      {"integrator", s.integrator},
+      {"status", std::string(to_string(s.status)) + " (" + s.message + ")"},
+      {"certificate", certificate_summary(s)},
+      {"t_final", format_number(s.t_final, 6) + " s" + t_note},
+      {"steps", steps_summary(s)}};
+  if (const std::string la = linear_algebra_summary(s); !la.empty())
+    rows.push_back({"linear algebra", la});
+  rows.push_back({"residual", residual_summary(s, position_tol)});
+  return rows;
+}
+
 nlohmann::json summary_units(const nlohmann::json& model) {
   nlohmann::json units = {
       {"t_start, t_final", "s"},
       {"dt", "s: the fixed step of euler, verlet, implicit-euler; 0 for adaptive integrators"},
-      {"dt_estimated, dt_predicted", "s: stability limits of the explicit methods (docs/numerics.md)"},
+      {"dt_estimated, dt_predicted",
+       "s: stability limits of the explicit methods (docs/numerics.md)"},
       {"wall_seconds, cpu_seconds", "s (cpu: this process, all threads)"},
-      {"factor_flops", "floating-point operations of one symmetric factorisation (CHOLMOD's count)"},
+      {"factor_flops",
+       "floating-point operations of one symmetric factorisation (CHOLMOD's count)"},
       {"factor_nonzeros", "entries of one factor L"},
       {"steps, rhs_evals, jac_evals, lin_setups, lin_iters, nonlin_iters, factorisations",
        "counts"}};
@@ -104,7 +120,8 @@ nlohmann::json drape_summary(const Scene& scene, const DrapeResult& r) {
   j["options"] = to_json(scene.options);
   j["units"] = summary_units(
       {{"residual, residual_floor",
-        "1: the static residual (docs/equilibrium.md), max over free particles of |spring force + weight| "
+        "1: the static residual (docs/equilibrium.md), max over free particles of |spring force + "
+        "weight| "
         "/ mean particle weight; residual_floor: its round-off bound"},
        {"centre_sag_m", "m"},
        {"max_strain", "1: (L - L0) / L0 of the most stretched spring, a fraction (stdout: %)"},

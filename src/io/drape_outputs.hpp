@@ -31,6 +31,12 @@ std::string steps_summary(const RunStats& s);
 std::string certificate_summary(const RunStats& s);
 std::string residual_summary(const RunStats& s, double position_tol);
 
+// The rows a run's console table shares (drape, material drape, knit): integrator, status,
+// certificate, t_final (followed by t_note), steps, linear algebra (where there is any) and
+// residual, each as {label, text}.
+std::vector<std::vector<std::string>> run_rows(const RunStats& s, double position_tol,
+                                               const std::string& t_note = "");
+
 // summary.json's "units": what each number of a run summary is measured in, for a reader
 // without the source. `model` maps the model's own numbers (drape or knit: the residual's
 // scale, centre_sag_m, params, ...) to their units; times, steps and cost figures are shared.
