@@ -60,6 +60,12 @@ def main():
     width = p["width_m"]
     c = (B / w) ** (1.0 / 3.0)
     failures = []
+    # Every run option that is a number has its unit in summary.json, from the key table's rows.
+    named = {name for group in scene["units"]["options"].split("; ")
+             for name in group.rsplit(" ", 1)[0].split(", ")}
+    for name, value in scene["options"].items():
+        if isinstance(value, (int, float)) and not isinstance(value, bool) and name not in named:
+            failures.append(f"units.options names no unit for {name}")
     print(f"bending length c = {1e3 * c:.4f} mm (B_w = {B} N m, w = {w:.4f} N/m^2)")
     print("G        L (mm)   ny     chord (deg)  elastica   err %    drop/L     elastica  err %")
     for G in ([8.0] if quick else [0.1, 8.0, 20.0]):

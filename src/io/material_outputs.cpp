@@ -56,6 +56,7 @@ nlohmann::json material_summary(const Scene& scene, const MaterialDrapeResult& r
        {"chord_angle_deg, tip_slope_deg", "degrees below the horizontal"},
        {"mesh", "cells, m (hx_m, hy_m), counts"},
        {"params", "the unit is in each name: _m, _N_m (N/m), _Nm (N m), _g_m2, _per_s"}});
+  j["units"]["options"] = units_text(KeyModel::Both, field_names(j["options"]));
   return j;
 }
 
