@@ -100,19 +100,34 @@
 
 namespace knitsim {
 
-// One yarn's material, with units. Defaults: a 25 tex ring-spun cotton yarn (docs/yarn_model.md,
-// "Parameters", has the sources and the arithmetic).
+// One yarn's material, with units. Defaults: a 25 tex ring-spun cotton yarn. Each default's
+// source and arithmetic: docs/yarn_sources.md (the measurements found, with citations) and
+// docs/yarn_model.md, "Parameters".
 struct YarnParams {
-  double tex = 25.0;              // linear density, tex = g/km = 1e-6 kg/m; (0, 1e4]
-  double fibre_density = 1520.0;  // rho_f, kg/m^3 (cellulose, cotton); [500, 3000]
-  double packing_fraction = 0.6;  // phi, fibre area / yarn area; (0.1, 0.9]
-  // Initial tensile modulus per linear density, N/tex: EA = tensile_modulus x tex, N.
-  double tensile_modulus = 2.0;      // (0, 100]
-  double bending_rigidity = 2.2e-9;  // B, N m^2; (0, 1e-3]
-  // tau, s: gamma = 1 / tau on every dof; (0, 1e6]. The default overdamps every mode of a yarn
-  // cut into edges of d/2 or longer (gamma >= 2 omega_max = 4 c / l, c = sqrt(EA / rho_l) the
-  // yarn's wave speed, 1414 m/s by default): the dynamics is then the gradient flow to the steady
-  // state, not a transient in real time (docs/yarn_model.md, "Damping").
+  double tex = 25.0;  // linear density, tex = g/km = 1e-6 kg/m; (0, 1e4]
+  // rho_f, kg/m^3; [500, 3000]. Cotton 1.52 g/cm^3 (Morton & Hearle, Physical Properties of
+  // Textile Fibres, 4th ed. 2008, Table 5.1).
+  double fibre_density = 1520.0;
+  // phi, fibre area / yarn area; (0.1, 0.9]. Peirce's specific volume of cotton yarn, 1.1 cm^3/g,
+  // gives 1 / (1.1 x 1.52) = 0.60 (the value a study of cotton plain and rib knits found to
+  // reproduce their measured stitch lengths); the handbooks' d = 4.44e-3 sqrt(tex / rho) cm
+  // hides 0.646.
+  double packing_fraction = 0.6;
+  // Initial tensile modulus per linear density, N/tex: EA = tensile_modulus x tex, N; (0, 100].
+  // Carded ring-spun cotton yarns of 15-30 tex break at 0.17 N/tex and 6.4-5.6 % (Uster
+  // Tensorapid means, Elmogahzy & Chewning 2001, tabulated in Handbook of Properties of Textile
+  // and Technical Fibres, 2nd ed. 2018, Table 7.3): their chord modulus is 2.7-3.0 N/tex; 2.7 at
+  // 25 tex (6.3 %). The fibre's own initial modulus is 5.0 N/tex (Morton & Hearle, Table 13.1).
+  double tensile_modulus = 2.7;
+  // B, N m^2; (0, 1e-3]. The free-fibre bound n_f B_f = R_f tex_f tex: cotton's specific flexural
+  // rigidity R_f = 0.53 mN mm^2 / tex^2 (Morton & Hearle, Table 17.2) with 0.165 tex fibres;
+  // no measured single-yarn value for a 20-30 tex cotton yarn was found (docs/yarn_sources.md).
+  double bending_rigidity = 2.2e-9;
+  // tau, s: gamma = 1 / tau on every dof; (0, 1e6]. A numerical choice, not a measurement (no
+  // source gives a yarn's relaxation time): it overdamps every mode of a yarn cut into edges of
+  // d/2 or longer (gamma >= 2 omega_max = 4 c / l, c = sqrt(EA / rho_l) the yarn's wave speed,
+  // 1643 m/s by default), so the dynamics is the gradient flow to the steady state, not a
+  // transient in real time (docs/yarn_model.md, "Damping").
   double relaxation_time = 1e-8;
   // kappa_c, N/m; 0: 10 B / d^3 (a sample pair's force at half the barrier's width is then
   // 3.6 w B / d^2 at the default core_fraction).

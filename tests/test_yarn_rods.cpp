@@ -150,7 +150,7 @@ TEST_CASE(
   p.packing_fraction = 4e-5 / kPi / (4.44e-3 * 4.44e-3);
   CHECK(p.packing_fraction == Approx(0.6458).epsilon(1e-3));
   CHECK(p.diameter() * 100 == Approx(4.44e-3 * std::sqrt(25.0 / 1.52)).epsilon(1e-12));
-  CHECK(p.stretch_stiffness() == Approx(50.0));  // N: 2 N/tex x 25 tex
+  CHECK(p.stretch_stiffness() == Approx(67.5));  // N: 2.7 N/tex x 25 tex
 }
 
 TEST_CASE("yarn parameters out of range are refused naming the field") {
@@ -173,7 +173,7 @@ TEST_CASE(
     "yarn rods: forces are -dE/dx and the Jacobian matches finite differences, bent, in "
     "contact (between yarns and within one)") {
   // Soft stretching (1e-6 N/tex) lets bending and contact dominate the columns, so their
-  // Hessians are checked as sharply as the stretching's (default modulus).
+  // Hessians are checked as sharply as the stretching's (2 N/tex, near the default 2.7).
   for (double modulus : {2.0, 1e-6}) {
     YarnParams p;
     p.tensile_modulus = modulus;
