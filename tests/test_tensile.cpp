@@ -254,11 +254,12 @@ TEST_CASE("knitsim tensile writes the curve, and the curve so far when a step fa
   CHECK(fs::exists(out / "step_006" / "points.csv"));  // --outputs 3 of 6: steps 2, 4, 6
   CHECK(fs::exists(out / "manifest.json"));
 
-  // A flow step cap of 1: step 1 (2 flow steps with the contact on) ends step_limit.
+  // A flow step cap of 1: step 1 along the courses (with the contact on it needs more than the
+  // warm start's Newton step and one flow step) ends step_limit.
   const fs::path cut = tmp.path / "cut";
   run = run_knitsim("tensile --chart '" + chart.string() +
-                        "' --steps 3 --strain 0.06 --max-steps 1 --quiet --no-pictures --out '" +
-                        cut.string() + "'",
+                        "' --steps 3 --strain 0.06 --direction course --max-steps 1 --quiet "
+                        "--no-pictures --out '" + cut.string() + "'",
                     tmp);
   CHECK(run.status == 3);
   CHECK(run.err.find("ended step_limit") != std::string::npos);
