@@ -138,6 +138,23 @@ StiffnessProbe::Result StiffnessProbe::probe(double t, const double* x, Measure 
   return r;
 }
 
+bool StiffnessProbe::newton_correction(double t, const double* x, std::vector<double>& w) {
+  const int n = sys_->dof();
+  fill_stiffness(t, x);
+  ++factorisations_;
+  if (!factor_->factorize(K_) || factor_->negative_pivots() > 0) return false;
+  sys_->conservative_acceleration(t, x, f_.data());
+  const auto& m = sys_->mass();
+  Eigen::VectorXd F(n), dx(n);
+  for (int i = 0; i < n; ++i) F[i] = m[i] * f_[i];
+  hold_gauge(F);
+  factor_->solve(F, dx);
+  hold_gauge(dx);
+  if (!dx.allFinite()) return false;
+  w.assign(dx.data(), dx.data() + n);
+  return true;
+}
+
 std::vector<double> StiffnessProbe::negative_mode(double t, const double* x) {
   const int n = sys_->dof();
   fill_stiffness(t, x);

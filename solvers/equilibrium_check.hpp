@@ -66,6 +66,12 @@ class StiffnessProbe {
   // auto on the whole sheet). False, x unchanged, where no negative mode is found or the model
   // admits none of the move.
   bool leave_saddle(double t, double* x, double move);
+  // The Newton correction K^-1 F at (t, x) into w (length dof; zero at the gauge dofs of a
+  // free-floating model), with one factorisation of K: true where K is positive definite (no
+  // zero or negative pivot) and w is finite, else false (w unspecified). The warm start of a
+  // stepped run (src/scene/tensile_run.cpp): one Newton step from its predictor, the solver's
+  // stop then certifying the result.
+  bool newton_correction(double t, const double* x, std::vector<double>& w);
   long factorisations() const { return factorisations_; }
   // The gauge dofs of the last factorisation (empty unless the model is free-floating).
   const std::vector<int>& gauge() const { return gauge_; }

@@ -6,11 +6,13 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 #include "models/knit_loops.hpp"
+#include "solvers/equilibrium_check.hpp"
 #include "solvers/integrator.hpp"
 #include "src/scene/knit_run.hpp"
 #include "src/scene/tensile_run.hpp"
@@ -254,11 +256,12 @@ TEST_CASE("knitsim tensile writes the curve, and the curve so far when a step fa
   CHECK(fs::exists(out / "step_006" / "points.csv"));  // --outputs 3 of 6: steps 2, 4, 6
   CHECK(fs::exists(out / "manifest.json"));
 
-  // A flow step cap of 1: step 1 (2 flow steps with the contact on) ends step_limit.
+  // A flow step cap of 1: step 1 along the courses (with the contact on it needs more than the
+  // warm start's Newton step and one flow step) ends step_limit.
   const fs::path cut = tmp.path / "cut";
   run = run_knitsim("tensile --chart '" + chart.string() +
-                        "' --steps 3 --strain 0.06 --max-steps 1 --quiet --no-pictures --out '" +
-                        cut.string() + "'",
+                        "' --steps 3 --strain 0.06 --direction course --max-steps 1 --quiet "
+                        "--no-pictures --out '" + cut.string() + "'",
                     tmp);
   CHECK(run.status == 3);
   CHECK(run.err.find("ended step_limit") != std::string::npos);
@@ -268,4 +271,87 @@ TEST_CASE("knitsim tensile writes the curve, and the curve so far when a step fa
   const nlohmann::json summary = nlohmann::json::parse(slurp(cut / "summary.json"));
   CHECK(summary["status"] == "step_limit");
   CHECK(fs::exists(cut / "manifest.json"));
+}
+
+namespace {
+
+// Every check's state and static residual, and where each kept step's solve ended in that list.
+struct CheckRecorder final : RunObserver {
+  std::vector<std::vector<double>> states;
+  std::vector<double> residuals;
+  std::vector<std::size_t> step_end;  // per kept step k (1, 2, ...), states.size() after it
+  int dof = 0;
+  void on_check(double, const double* x, const double*, double residual) override {
+    states.emplace_back(x, x + dof);
+    residuals.push_back(residual);
+  }
+};
+
+}  // namespace
+
+// A step that lands on a saddle follows the negative mode (docs/knit.md, "Under load"): the
+// several_tucks chart with out-of-plane bending (knit.bending = 0.1, the contact off: its points
+// may leave the plane) pulled along the wales to 20 % in 4 steps and unloaded. Unloading to 5 %
+// (step 7) the flow converges onto a saddle (K has a negative pivot: a tuck's compressed yarn
+// would rather buckle out of the plane) and leaves it along the most negative mode; the step's
+// status says so, and its end is a certified stable minimum whose energy lies below the
+// saddle's (the step's check state of least residual where K is indefinite). With the escape
+// disabled (EquilibriumSolver::escape_saddle returning false) the step does not end
+// equilibrium_after_saddle (the flow stalls on the saddle and falls back to the dynamics).
+TEST_CASE("a tensile step that lands on a saddle leaves it for a lower minimum", "[tensile]") {
+  KnitParams p;
+  p.contact_ratio = 0.0;
+  p.bending_ratio = 0.1;
+  const KnitScene scene = scene_of(
+      "KKKKKKKKKKKK\nKKKKKKKKKKKK\nKKTKKKKKTKKK\nKKKKKKKKTKKK\nKKKKKTTKKKKK\nKKKKKKKKKKKK\n"
+      "KKTKKKKKKKKK\nKKKKKKKKKKKK\n",
+      p);
+  TensileOptions o;
+  o.steps = 4;
+  o.strain = 0.2;
+  o.unload = true;
+  o.outputs = 8;  // every step kept: on_kept marks where each step's checks end
+  CheckRecorder checks;
+  const TensileResult r = run_tensile(
+      scene, o, &checks, [&](const TensileResult& so_far, int step, const std::vector<double>&) {
+        checks.dof = so_far.model.network.dof();
+        checks.step_end.resize(static_cast<std::size_t>(step), checks.states.size());
+      });
+  REQUIRE(r.complete);
+  REQUIRE(r.steps.size() == 9u);
+  const TensileStep& s = r.steps[7];
+  INFO(s.stats.message);
+  CHECK(s.strain == Approx(0.05));
+  REQUIRE(s.status == "equilibrium_after_saddle");
+  CHECK(s.stats.saddle_escapes >= 1);
+  CHECK(s.stats.certificate == "stable_minimum");
+  CHECK(s.stats.negative_pivots == 0);
+  // The saddle: step 7's check states (after step 6's), K probed at each with the clamps where
+  // step 7 holds them.
+  REQUIRE(checks.step_end.size() == 8u);
+  KnitModel& m = const_cast<KnitModel&>(r.model);
+  MechanicalSystem& sys = m.system();
+  HeldPoints& held = *sys.held_points();
+  std::vector<Vec3> held_rest(held.held_count());
+  for (int k = 0; k < held.held_count(); ++k) held_rest[k] = m.points[held.held_particle(k)].rest;
+  move_clamps(held, m.clamps, held_rest, 0.25);
+  CHECK(sys.potential_energy(0.0, r.kept[6].x.data()) == Approx(s.energy).epsilon(1e-12));
+  detail::StiffnessProbe probe(sys, scene.options.factorization);
+  double saddle_residual = std::numeric_limits<double>::infinity(), saddle_energy = 0.0;
+  for (std::size_t c = checks.step_end[5]; c < checks.step_end[6]; ++c) {
+    const double* x = checks.states[c].data();
+    if (checks.residuals[c] >= saddle_residual) continue;
+    if (probe.probe(0.0, x, detail::StiffnessProbe::Measure::Spectrum).negative_pivots == 0)
+      continue;
+    saddle_residual = checks.residuals[c];
+    saddle_energy = sys.potential_energy(0.0, x);
+  }
+  INFO("saddle residual " << saddle_residual << ", energy " << saddle_energy << " J; end "
+                          << s.energy << " J");
+  REQUIRE(saddle_residual < 1e-6);  // a critical point, to the flow's convergence
+  CHECK(s.energy < saddle_energy - 1e-6 * saddle_energy);
+  // It left the plane: the buckled tuck.
+  double depth = 0.0;
+  for (const Vec3& q : r.kept[6].positions) depth = std::max(depth, std::abs(q.z));
+  CHECK(depth > 0.1 * p.loop_radius);
 }

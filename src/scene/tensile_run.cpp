@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "solvers/equilibrium_check.hpp"
 #include "src/base/text.hpp"
 #include "src/core/held_points.hpp"
 #include "src/core/invalid_field.hpp"
@@ -202,23 +203,54 @@ TensileResult run_tensile(const KnitScene& scene, const TensileOptions& o, RunOb
       return r;
     }
   }
-  std::vector<double> previous = x, trial(n);
-  double load = 0.0, last_change = 0.0;
+  // The last equilibria (at most 3, the latest last) and their load fractions: the predictor's
+  // nodes.
+  std::vector<std::pair<double, std::vector<double>>> solved{{0.0, x}};
+  std::vector<double> trial(n);
+  double load = 0.0;
   r.complete = true;
   auto admissible = [&](const std::vector<double>& y) {
     return std::isfinite(sys.potential_energy(0.0, y.data()));
   };
-  // The clamps moved from `load` to `target` and the state solved there. Warm start: the secant
-  // predictor, else the affine stretch from the last equilibrium, else that equilibrium as it
-  // is (see the header); where none is admissible (the moved clamp's yarn lands inside another's
-  // contact core) the move is halved and each half solved in turn, up to kMaxHalvings deep.
+  // trial = the polynomial through the last `nodes` equilibria (2: the secant, 3: a quadratic)
+  // in the load fraction, at `target`.
+  auto extrapolate = [&](int nodes, double target) {
+    const std::size_t first = solved.size() - nodes;
+    std::fill(trial.begin(), trial.end(), 0.0);
+    for (std::size_t node = first; node < solved.size(); ++node) {
+      double weight = 1.0;  // Lagrange's basis polynomial of `node` at target
+      for (std::size_t q = first; q < solved.size(); ++q)
+        if (q != node)
+          weight *= (target - solved[q].first) / (solved[node].first - solved[q].first);
+      for (int i = 0; i < n; ++i) trial[i] += weight * solved[node].second[i];
+    }
+  };
+  // One Newton step from the predictor y, taken where K is positive definite there, the step
+  // admitted whole by the model and the energy falls along it (else y stays): true if taken.
+  detail::StiffnessProbe newton_probe(sys, scene.options.factorization);
+  std::vector<double> correction;
+  auto newton_step = [&](std::vector<double>& y) {
+    if (!newton_probe.newton_correction(0.0, y.data(), correction)) return false;
+    if (!(sys.admissible_step(0.0, y.data(), correction.data()) >= 1.0)) return false;
+    for (int i = 0; i < n; ++i) trial[i] = y[i] + correction[i];
+    if (!(sys.potential_energy(0.0, trial.data()) <= sys.potential_energy(0.0, y.data())))
+      return false;
+    y = trial;
+    return true;
+  };
+  // The clamps moved from `load` to `target` and the state solved there. Warm start: the
+  // quadratic through the last three equilibria, else the secant through the last two, else the
+  // affine stretch from the last equilibrium, else that equilibrium as it is (see the header);
+  // where none is admissible (the moved clamp's yarn lands inside another's contact core) the
+  // move is halved and each half solved in turn, up to kMaxHalvings deep.
   constexpr int kMaxHalvings = 6;
   std::function<RunStats(double, int)> advance = [&](double target, int depth) -> RunStats {
     const double change = target - load;
     move_clamps(held, m.clamps, held_rest, target);
     bool predicted = false;
-    if (last_change != 0.0) {
-      for (int i = 0; i < n; ++i) trial[i] = x[i] + (change / last_change) * (x[i] - previous[i]);
+    for (int nodes = std::min<int>(3, static_cast<int>(solved.size())); nodes >= 2 && !predicted;
+         --nodes) {
+      extrapolate(nodes, target);
       predicted = admissible(trial);
     }
     if (!predicted) {
@@ -236,11 +268,25 @@ TensileResult run_tensile(const KnitScene& scene, const TensileOptions& o, RunOb
       second.saddle_escapes += first.saddle_escapes;
       return second;
     }
-    previous = x;
     if (predicted) x = trial;
+    // The contact's maps renewed at the predicted state (as the solver's check after its first
+    // step would), so that the Newton step is the renewed energy's; then one Newton step, which
+    // the solver's stop certifies at once where it converged (its counters count it).
+    const double cpu_newton = cpu_now();
+    const auto wall_newton = std::chrono::steady_clock::now();
+    sys.update(0.0, x.data());
+    const bool newton = newton_step(x);
+    const double newton_cpu = cpu_now() - cpu_newton;
+    const double newton_wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_newton).count();
     std::fill(v.begin(), v.end(), 0.0);
-    const RunStats stats = solve(x, v);
-    load = target, last_change = change;
+    RunStats stats = solve(x, v);
+    stats.steps += newton ? 1 : 0;
+    stats.factorisations += 1;
+    stats.cpu_seconds += newton_cpu, stats.wall_seconds += newton_wall;
+    load = target;
+    if (solved.size() == 3) solved.erase(solved.begin());
+    solved.emplace_back(load, x);
     return stats;
   };
   for (std::size_t k = 0; k < loads.size(); ++k) {

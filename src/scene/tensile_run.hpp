@@ -20,12 +20,17 @@
 //
 // Step 0 settles the chart between its clamps at rest (the rest lattice is not an equilibrium of
 // the network: the clamps may hold a force there already, the curve's offset).
-// Warm start: step 1 from step 0 stretched affinely to its clamp positions, later steps from the
-// last equilibrium plus the last step's change (a secant predictor), each dropped for the last
-// equilibrium as it is if its energy is not finite (a contact pair inside its core); where even
-// that is not finite (the moved clamp's yarn lands inside another's contact core) the step's
-// move is halved, each half solved in turn (up to 6 halvings; the row is the step's end, its
-// counters the halves' sum).
+// Warm start: step 1 from step 0 stretched affinely to its clamp positions, step 2 from the
+// secant through the last two equilibria (in the load fraction), later steps from the quadratic
+// through the last three, each dropped for the next if its energy is not finite (a contact pair
+// inside its core), the last for the last equilibrium as it is; where even that is not finite
+// (the moved clamp's yarn lands inside another's contact core) the step's move is halved, each
+// half solved in turn (up to 6 halvings; the row is the step's end, its counters the halves'
+// sum). At the predicted state the contact's maps are renewed (MechanicalSystem::update, as the
+// solver's checks do) and one Newton step is taken where K is positive definite, the model admits
+// the step whole and the energy falls (StiffnessProbe::newton_correction); the solver starts
+// there, and its stop certifies the state at once where that step converged (a step's
+// newton_steps and factorisations count it).
 //
 // Energy check: a step whose end lies above its start's energy after renewals of the contact's
 // maps (which change E(x) itself) is solved again from there with the renewed energy as the
