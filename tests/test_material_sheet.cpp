@@ -459,7 +459,8 @@ TEST_CASE("material sheet: corner patches hold their vertices; derivatives with 
 namespace {
 
 // A square sheet under four corner patches (four_corner_material's shape), n cells a side.
-MaterialSheetParams corner_sheet(int n, double bending_wale, double membrane_wale) {
+MaterialSheetParams corner_sheet(int n, double bending_wale, double membrane_wale,
+                                 double patch = 0.05) {
   MaterialSheetParams p;
   p.width = p.length = 0.5;
   p.cells = n;
@@ -471,7 +472,7 @@ MaterialSheetParams corner_sheet(int n, double bending_wale, double membrane_wal
   p.bending_wale = bending_wale;
   p.bending_course = 1e-5;
   p.damping_rate = 1e5;
-  const double a = 0.05 * 1.0000001;  // the patch's side, past round-off of the cell count
+  const double a = patch * 1.0000001;  // the patch's side, past round-off of the cell count
   p.patches = {{0.0, 0.0, a, a}, {0.5 - a, 0.0, 0.5, a}, {0.0, 0.5 - a, a, 0.5},
                {0.5 - a, 0.5 - a, 0.5, 0.5}};
   return p;
@@ -514,7 +515,7 @@ TEST_CASE("mirrored sheet: the reduction's forces and Jacobian are the whole she
   for (int n : {8, 9}) {  // mirror planes on grid lines (8) and through cell centres (9)
     for (SheetMirrors m : {SheetMirrors{true, false, false}, SheetMirrors{true, true, false},
                            SheetMirrors{true, true, true}}) {
-      auto sheet = std::make_shared<const MaterialSheet>(corner_sheet(n, 1e-5, 1000.0));
+      auto sheet = std::make_shared<const MaterialSheet>(corner_sheet(n, 1e-5, 1000.0, 0.125));
       const MirroredSheet r(sheet, m);
       INFO("n " << n << " group " << m.order());
       // A random symmetric state, well off rest.
@@ -596,7 +597,9 @@ TEST_CASE("mirrored sheet: no diagonal mirror on an anisotropic sheet",
   // A rectangle has no diagonal; asymmetric clamps have no mirror at all across them.
   MaterialSheetParams p = corner_sheet(10, 1e-5, 1000.0);
   p.length = 0.6;
-  p.patches.back() = {0.45, 0.55, 0.5, 0.6};
+  const double a = 0.05 * 1.0000001;
+  p.patches = {{0.0, 0.0, a, a}, {0.5 - a, 0.0, 0.5, a}, {0.0, 0.6 - a, a, 0.6},
+               {0.5 - a, 0.6 - a, 0.5, 0.6}};
   CHECK(largest_mirrors(MaterialSheet(p)).order() == 4);
   p.patches.pop_back();  // three corners: neither x nor y maps the clamps onto themselves
   CHECK(largest_mirrors(MaterialSheet(p)).order() == 1);
