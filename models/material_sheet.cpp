@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <array>
+#include <map>
+#include <set>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -489,6 +491,383 @@ std::string MaterialSheet::describe() const {
   s << "material sheet " << params_.width << " x " << params_.length << " m, " << nx_ << " x "
     << ny_ << " cells, " << free_count_ << " free vertices";
   return s.str();
+}
+
+}  // namespace knitsim
+
+// ---- Mirrors (MirroredSheet) -----------------------------------------------------------------
+
+namespace knitsim {
+
+namespace {
+
+// One element of a sheet's mirror group, g = Y^fy X^fx D^s (D first): its vertex map and its
+// action on a position, x_out[k] = sign[k] x_in[perm[k]] + offset[k].
+struct Mirror {
+  std::vector<int> vertex;
+  int perm[3];
+  double sign[3], offset[3];
+};
+
+std::vector<Mirror> mirror_group(const MaterialSheet& s, SheetMirrors m) {
+  const int nx = s.nx(), ny = s.ny();
+  const double w = nx * s.hx(), l = ny * s.hy();
+  std::vector<Mirror> group;
+  for (int d = 0; d <= (m.diagonal ? 1 : 0); ++d)
+    for (int fx = 0; fx <= (m.x ? 1 : 0); ++fx)
+      for (int fy = 0; fy <= (m.y ? 1 : 0); ++fy) {
+        Mirror g;
+        g.vertex.resize(s.vertex_count());
+        for (int i = 0; i <= ny; ++i)
+          for (int j = 0; j <= nx; ++j) {
+            int a = i, b = j;
+            if (d) std::swap(a, b);  // the diagonal needs nx == ny (sheet_lacks checks it)
+            if (fx) b = nx - b;
+            if (fy) a = ny - a;
+            g.vertex[s.vertex(i, j)] = (a >= 0 && a <= ny && b >= 0 && b <= nx) ? s.vertex(a, b) : -1;
+          }
+        // Positions: D swaps x and y (a square: W = L), X takes x to W - x, Y y to L - y.
+        int perm[3] = {d ? 1 : 0, d ? 0 : 1, 2};
+        for (int k = 0; k < 3; ++k) g.perm[k] = perm[k], g.sign[k] = 1.0, g.offset[k] = 0.0;
+        if (fx) g.sign[0] = -1.0, g.offset[0] = w;
+        if (fy) g.sign[1] = -1.0, g.offset[1] = l;
+        group.push_back(std::move(g));
+      }
+  return group;
+}
+
+Vec3 apply_linear(const Mirror& g, const Vec3& v) {  // the mirror's linear part (forces, loads)
+  const double in[3] = {v.x, v.y, v.z};
+  return {g.sign[0] * in[g.perm[0]], g.sign[1] * in[g.perm[1]], g.sign[2] * in[g.perm[2]]};
+}
+
+bool near(double a, double b) { return std::abs(a - b) <= 1e-12 * std::max(std::abs(a), std::abs(b)); }
+bool near(const Vec3& a, const Vec3& b) {
+  const double s = std::max(norm(a), norm(b));
+  return norm(a - b) <= 1e-12 * s;
+}
+
+std::array<int, 3> sorted_key(int a, int b, int c) {
+  std::array<int, 3> k{a, b, c};
+  std::sort(k.begin(), k.end());
+  return k;
+}
+
+}  // namespace
+
+std::string sheet_lacks(const MaterialSheet& s, SheetMirrors m) {
+  if (m.diagonal && !(m.x && m.y)) return "the diagonal mirror comes with the x and y mirrors";
+  if (m.order() == 1) return "";
+  const MaterialSheetParams& p = s.params();
+  if (m.diagonal) {
+    if (!(s.nx() == s.ny() && s.hx() == s.hy()))
+      return "the diagonal mirror needs a square sheet on a square mesh (fabric.length = "
+             "fabric.width)";
+    if (!(p.membrane_wale == p.membrane_course && p.bending_wale == p.bending_course))
+      return "the diagonal mirror needs an isotropic sheet (material.membrane_wale = "
+             "material.membrane_course and material.bending_wale = material.bending_course; "
+             "here A_w = " + std::to_string(p.membrane_wale) + ", A_c = " +
+             std::to_string(p.membrane_course) + " N/m, B_w = " + std::to_string(p.bending_wale) +
+             ", B_c = " + std::to_string(p.bending_course) + " N m)";
+  }
+  const char* names[3] = {"x", "y", "diagonal"};
+  // Check each generator alone (the group they generate then maps the sheet onto itself).
+  for (int which = 0; which < 3; ++which) {
+    if (!(which == 0 ? m.x : which == 1 ? m.y : m.diagonal)) continue;
+    SheetMirrors one;
+    (which == 0 ? one.x : which == 1 ? one.y : one.diagonal) = true;
+    if (which == 2) one.x = one.y = true;
+    const std::vector<Mirror> group = mirror_group(s, one);
+    // The generator: x alone, y alone, or D itself (s = 1, no flips: the 5th element).
+    const Mirror& g = which == 2 ? group[4] : group[1];
+    const std::string what = std::string("the ") + names[which] + " mirror: ";
+    if (!near(apply_linear(g, p.gravity), p.gravity))
+      return what + "gravity is not symmetric";
+    for (int v = 0; v < s.vertex_count(); ++v) {
+      const int u = g.vertex[v];
+      if ((s.free_index(v) < 0) != (s.free_index(u) < 0))
+        return what + "the clamps are not symmetric";
+      if (!near(s.vertex_mass_[u], s.vertex_mass_[v])) return what + "the masses are not symmetric";
+      if (!near(apply_linear(g, s.vertex_load_[v]), s.vertex_load_[u]))
+        return what + "the edge loads are not symmetric";
+    }
+    std::map<std::array<int, 3>, double> stiffness;
+    for (const MaterialSheet::BendStencil& b : s.stencils_)
+      stiffness[sorted_key(b.v[0], b.v[1], b.v[2])] = b.stiffness;
+    for (const MaterialSheet::BendStencil& b : s.stencils_) {
+      const auto it = stiffness.find(sorted_key(g.vertex[b.v[0]], g.vertex[b.v[1]], g.vertex[b.v[2]]));
+      if (it == stiffness.end() || !near(it->second, b.stiffness))
+        return what + "the bending stiffness is not symmetric";
+    }
+  }
+  return "";
+}
+
+SheetMirrors largest_mirrors(const MaterialSheet& s) {
+  for (SheetMirrors m : {SheetMirrors{true, true, true}, SheetMirrors{true, true, false},
+                         SheetMirrors{true, false, false}, SheetMirrors{false, true, false}})
+    if (sheet_lacks(s, m).empty()) return m;
+  return {};
+}
+
+MirroredSheet::MirroredSheet(std::shared_ptr<const MaterialSheet> sheet, SheetMirrors m)
+    : sheet_(std::move(sheet)), mirrors_(m) {
+  const MaterialSheet& s = *sheet_;
+  if (const std::string why = sheet_lacks(s, m); !why.empty()) throw std::invalid_argument(why);
+  const std::vector<Mirror> group = mirror_group(s, m);
+  const int order = static_cast<int>(group.size());
+  const int nv = s.vertex_count(), nx = s.nx(), ny = s.ny();
+  const double cx = 0.5 * nx * s.hx(), cy = 0.5 * ny * s.hy();
+  auto in_domain = [&](int v) {
+    const int i = v / (nx + 1), j = v % (nx + 1);
+    return (!m.x || 2 * j <= nx) && (!m.y || 2 * i <= ny) && (!m.diagonal || i <= j);
+  };
+  // Representatives: the free vertices of the domain, in vertex order, with their entries.
+  std::vector<int> rep_entry(3 * nv, -1);
+  std::vector<double> rep_offset(3 * nv, 0.0);
+  for (int v = 0; v < nv; ++v) {
+    if (!in_domain(v) || s.free_index(v) < 0) continue;
+    const int i = v / (nx + 1), j = v % (nx + 1);
+    const bool on_x = m.x && 2 * j == nx, on_y = m.y && 2 * i == ny, on_d = m.diagonal && i == j;
+    std::set<int> orbit;
+    for (const Mirror& g : group) orbit.insert(g.vertex[v]);
+    Rep r{v, static_cast<double>(orbit.size()) / order, static_cast<int>(mult_.size()), 0};
+    if (on_x) {
+      rep_offset[3 * v] = cx;
+    } else {
+      rep_entry[3 * v] = static_cast<int>(mult_.size());
+      mult_.push_back(on_d && !on_y ? 2 : 1);
+    }
+    if (on_y || (on_d && on_x)) {
+      rep_offset[3 * v + 1] = cy;
+    } else if (on_d) {
+      rep_entry[3 * v + 1] = rep_entry[3 * v];  // y - c_y = x - c_x
+      rep_offset[3 * v + 1] = cy - cx;
+    } else {
+      rep_entry[3 * v + 1] = static_cast<int>(mult_.size());
+      mult_.push_back(1);
+    }
+    rep_entry[3 * v + 2] = static_cast<int>(mult_.size());
+    mult_.push_back(1);
+    r.count = static_cast<int>(mult_.size()) - r.first;
+    reps_.push_back(r);
+  }
+  // Every vertex's coordinates from its representative's: x_p = g(x_r), g(r) = p.
+  index_.assign(3 * nv, -1);
+  sign_.assign(3 * nv, 0.0);
+  offset_.assign(3 * nv, 0.0);
+  for (int r = 0; r < nv; ++r) {
+    if (!in_domain(r)) continue;
+    for (const Mirror& g : group) {
+      const int p = g.vertex[r];
+      if (s.free_index(p) < 0) {
+        const Vec3 x = s.rest_position(p);
+        offset_[3 * p] = x.x, offset_[3 * p + 1] = x.y, offset_[3 * p + 2] = x.z;
+        continue;
+      }
+      for (int k = 0; k < 3; ++k) {
+        const int c = g.perm[k];
+        index_[3 * p + k] = rep_entry[3 * r + c];
+        sign_[3 * p + k] = g.sign[k];
+        offset_[3 * p + k] = g.sign[k] * rep_offset[3 * r + c] + g.offset[k];
+      }
+    }
+  }
+  // One element of each orbit (the least by its sorted vertices), weighted |O| / |G|.
+  auto pick = [&](const int* v, std::vector<int>& kept, std::vector<double>& weight, int e) {
+    const std::array<int, 3> own = sorted_key(v[0], v[1], v[2]);
+    std::set<std::array<int, 3>> orbit;
+    for (const Mirror& g : group) {
+      const std::array<int, 3> k = sorted_key(g.vertex[v[0]], g.vertex[v[1]], g.vertex[v[2]]);
+      if (k < own) return;
+      orbit.insert(k);
+    }
+    kept.push_back(e);
+    weight.push_back(static_cast<double>(orbit.size()) / order);
+  };
+  for (std::size_t e = 0; e < s.triangles_.size(); ++e)
+    pick(s.triangles_[e].v, triangles_, tri_weight_, static_cast<int>(e));
+  for (std::size_t e = 0; e < s.stencils_.size(); ++e)
+    pick(s.stencils_[e].v, stencils_, stencil_weight_, static_cast<int>(e));
+
+  // Masses, damping, and the pattern: every pair of entries an element's coordinates touch.
+  const int n = static_cast<int>(mult_.size());
+  mass_.assign(n, 0.0);
+  for (const Rep& r : reps_)
+    for (int j = r.first; j < r.first + r.count; ++j)
+      mass_[j] = mult_[j] * r.weight * s.vertex_mass_[r.vertex];
+  gamma_.assign(n, s.params().damping_rate);
+  std::vector<std::pair<int, int>> pairs;
+  auto element_pairs = [&](const int* v) {
+    for (int a = 0; a < 9; ++a)
+      for (int b = 0; b < 9; ++b) {
+        const int r = index_[3 * v[a / 3] + a % 3], c = index_[3 * v[b / 3] + b % 3];
+        if (r >= 0 && c >= 0) pairs.emplace_back(r, c);
+      }
+  };
+  for (int e : triangles_) element_pairs(s.triangles_[e].v);
+  for (int e : stencils_) element_pairs(s.stencils_[e].v);
+  std::vector<int> position;
+  pattern_ = make_csc_pattern(n, n, pairs, /*with_diagonal=*/true, &position);
+  int next = 0;
+  auto slots = [&](const int* v, std::vector<int>& out) {
+    for (int a = 0; a < 9; ++a)
+      for (int b = 0; b < 9; ++b) {
+        const bool both = index_[3 * v[a / 3] + a % 3] >= 0 && index_[3 * v[b / 3] + b % 3] >= 0;
+        out.push_back(both ? position[next++] : -1);
+      }
+  };
+  for (int e : triangles_) slots(s.triangles_[e].v, tri_slots_);
+  for (int e : stencils_) slots(s.stencils_[e].v, stencil_slots_);
+}
+
+double MirroredSheet::coordinate(const double* q, int v, int k) const {
+  const int j = index_[3 * v + k];
+  return j < 0 ? offset_[3 * v + k] : sign_[3 * v + k] * q[j] + offset_[3 * v + k];
+}
+
+void MirroredSheet::initial_state(double* q, double* v) const {
+  for (const Rep& r : reps_) {
+    const Vec3 x = sheet_->rest_position(r.vertex);
+    const double c[3] = {x.x, x.y, x.z};
+    for (int k = 2; k >= 0; --k) {  // z, then y, then x (a diagonal's y shares x's entry)
+      const int j = index_[3 * r.vertex + k];
+      if (j >= 0) q[j] = c[k] - offset_[3 * r.vertex + k];  // a representative's sign is +1
+    }
+  }
+  std::fill(v, v + dof(), 0.0);
+}
+
+void MirroredSheet::unfold(const double* q, double* x_full) const {
+  const MaterialSheet& s = *sheet_;
+  for (int v = 0; v < s.vertex_count(); ++v) {
+    const int f = s.free_index(v);
+    if (f < 0) continue;
+    for (int k = 0; k < 3; ++k) x_full[3 * f + k] = coordinate(q, v, k);
+  }
+}
+
+template <bool Hessian>
+void MirroredSheet::assemble(const double* q, double* energy, double* force, double* values) const {
+  using J = Jet<6, Hessian>;
+  const MaterialSheet& s = *sheet_;
+  auto element = [&](const int* vs, double weight, const int* slot, const Alpha& alpha,
+                     auto&& energy_of) {
+    Vec3 p[3];
+    for (int a = 0; a < 3; ++a)
+      p[a] = {coordinate(q, vs[a], 0), coordinate(q, vs[a], 1), coordinate(q, vs[a], 2)};
+    std::array<J, 6> u;
+    for (int c = 0; c < 2; ++c) {
+      const Vec3 w = alpha[c][0] * p[0] + alpha[c][1] * p[1] + alpha[c][2] * p[2];
+      u[3 * c] = J::variable(w.x, 3 * c);
+      u[3 * c + 1] = J::variable(w.y, 3 * c + 1);
+      u[3 * c + 2] = J::variable(w.z, 3 * c + 2);
+    }
+    const J e = energy_of(u);
+    if (energy) *energy += weight * e.v;
+    int idx[9];
+    double sg[9];
+    for (int a = 0; a < 9; ++a) idx[a] = index_[3 * vs[a / 3] + a % 3], sg[a] = sign_[3 * vs[a / 3] + a % 3];
+    if (force)
+      for (int a = 0; a < 3; ++a)
+        for (int k = 0; k < 3; ++k)
+          if (idx[3 * a + k] >= 0)
+            force[idx[3 * a + k]] -=
+                weight * sg[3 * a + k] * (alpha[0][a] * e.g[k] + alpha[1][a] * e.g[3 + k]);
+    if constexpr (Hessian) {
+      double hu[36];
+      for (int i = 0; i < 6; ++i)
+        for (int j = 0; j < 6; ++j) hu[6 * i + j] = i <= j ? e.h[6 * i + j] : e.h[6 * j + i];
+      for (int a = 0; a < 9; ++a) {
+        if (idx[a] < 0) continue;
+        const double row = weight * sg[a] / mass_[idx[a]];
+        const int va = a / 3, k = a % 3;
+        for (int b = 0; b < 9; ++b) {
+          const int entry = slot[9 * a + b];
+          if (entry < 0) continue;
+          const int vb = b / 3, l = b % 3;
+          double h = 0.0;
+          for (int c = 0; c < 2; ++c)
+            for (int d = 0; d < 2; ++d)
+              h += alpha[c][va] * alpha[d][vb] * hu[6 * (3 * c + k) + 3 * d + l];
+          values[entry] -= row * sg[b] * h;
+        }
+      }
+    }
+  };
+  for (std::size_t k = 0; k < triangles_.size(); ++k) {
+    const MaterialSheet::Triangle& t = s.triangles_[triangles_[k]];
+    element(t.v, tri_weight_[k], &tri_slots_[81 * k], membrane_alpha(t),
+            [&](const std::array<J, 6>& u) {
+              return membrane_energy(u, t, s.c11_, s.c12_, s.c22_, s.c66_);
+            });
+  }
+  for (std::size_t k = 0; k < stencils_.size(); ++k) {
+    const MaterialSheet::BendStencil& b = s.stencils_[stencils_[k]];
+    element(b.v, stencil_weight_[k], &stencil_slots_[81 * k], kBendAlpha,
+            [&](const std::array<J, 6>& u) { return bending_energy(u, b.stiffness); });
+  }
+  // Gravity and edge loads on the representatives, weighted.
+  for (const Rep& r : reps_) {
+    const Vec3 f = s.vertex_mass_[r.vertex] * s.params().gravity + s.vertex_load_[r.vertex];
+    const double fc[3] = {f.x, f.y, f.z};
+    for (int k = 0; k < 3; ++k) {
+      if (energy) *energy -= r.weight * fc[k] * coordinate(q, r.vertex, k);
+      const int j = index_[3 * r.vertex + k];
+      if (force && j >= 0) force[j] += r.weight * fc[k];
+    }
+  }
+}
+
+void MirroredSheet::conservative_acceleration(double /*t*/, const double* q, double* a) const {
+  std::fill(a, a + dof(), 0.0);
+  assemble<false>(q, nullptr, a, nullptr);
+  for (int i = 0; i < dof(); ++i) a[i] /= mass_[i];
+}
+
+void MirroredSheet::constant_acceleration(double /*t*/, double* a) const {
+  std::fill(a, a + dof(), 0.0);
+  for (const Rep& r : reps_) {
+    const Vec3 f = sheet_->vertex_mass_[r.vertex] * sheet_->params().gravity +
+                   sheet_->vertex_load_[r.vertex];
+    const double fc[3] = {f.x, f.y, f.z};
+    for (int k = 0; k < 3; ++k) {
+      const int j = index_[3 * r.vertex + k];
+      if (j >= 0) a[j] += r.weight * fc[k];
+    }
+  }
+  for (int i = 0; i < dof(); ++i) a[i] /= mass_[i];
+}
+
+void MirroredSheet::stiffness_values(double /*t*/, const double* q, double* values) const {
+  std::fill(values, values + pattern_.nnz(), 0.0);
+  assemble<true>(q, nullptr, nullptr, values);
+}
+
+double MirroredSheet::static_residual(double /*t*/, const double* q) const {
+  std::vector<double> f(dof(), 0.0);
+  assemble<false>(q, nullptr, f.data(), nullptr);
+  double worst = 0.0;
+  for (const Rep& r : reps_) {
+    double sum = 0.0;
+    for (int j = r.first; j < r.first + r.count; ++j)
+      sum += f[j] * f[j] / (r.weight * r.weight * mult_[j]);
+    worst = std::max(worst, std::sqrt(sum));
+  }
+  return worst / sheet_->force_scale_;
+}
+
+double MirroredSheet::potential_energy(double /*t*/, const double* q) const {
+  double e = 0.0;
+  assemble<false>(q, &e, nullptr, nullptr);
+  return e;
+}
+
+std::string MirroredSheet::describe() const {
+  const int order = mirrors_.order();
+  return sheet_->describe() + ", " +
+         (order == 8 ? "an eighth" : order == 4 ? "a quarter" : order == 2 ? "a half" : "whole") +
+         " by its mirrors (" + std::to_string(reps_.size()) + " representatives)";
 }
 
 }  // namespace knitsim

@@ -49,6 +49,7 @@
 //   std::invalid_argument naming the field and its range; evaluation never throws.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -99,6 +100,8 @@ struct MaterialSheetParams {
   int cells_y() const;  // cells_length, or max(1, round(cells L / W)) where it is 0
 };
 
+struct SheetMirrors;
+
 class MaterialSheet final : public MechanicalSystem {
  public:
   explicit MaterialSheet(MaterialSheetParams params);
@@ -140,6 +143,8 @@ class MaterialSheet final : public MechanicalSystem {
   };
 
  private:
+  friend class MirroredSheet;
+  friend std::string sheet_lacks(const MaterialSheet& sheet, SheetMirrors m);
   template <bool Hessian>
   void assemble(const double* x, double* energy, double* force, double* values) const;
 
@@ -163,5 +168,82 @@ class MaterialSheet final : public MechanicalSystem {
 };
 
 const char* to_string(SheetEdge e);  // x_min | x_max | y_min | y_max
+
+// Mirrors of a sheet (docs/material_drape.md, "Symmetry"): x, x -> W - x; y, y -> L - y;
+// diagonal, (x, y) -> (y, x) (needs x and y: the square's dihedral group, an eighth). The group
+// they generate has order() elements: 1, 2 (a half), 4 (a quarter) or 8 (an eighth).
+struct SheetMirrors {
+  bool x = false, y = false, diagonal = false;
+  int order() const { return (x ? 2 : 1) * (y ? 2 : 1) * (diagonal ? 2 : 1); }
+};
+
+// Why `sheet` lacks one of the mirrors `m` ("" if it has them all). A mirror is the sheet's when
+// it maps the clamped vertices, the masses, the edge loads, gravity and every element's
+// stiffness onto themselves: the x and y mirrors hold for any orthotropic sheet (its axes are
+// the grid's) under symmetric clamps; the diagonal also needs a square sheet with A_w = A_c and
+// B_w = B_c exactly (shear and Poisson map onto themselves), so an anisotropic sheet never has it.
+std::string sheet_lacks(const MaterialSheet& sheet, SheetMirrors m);
+// The largest group `sheet` has: x, y and diagonal; else x and y; else x; else y; else none.
+SheetMirrors largest_mirrors(const MaterialSheet& sheet);
+
+// MirroredSheet: a MaterialSheet with a mirror group G, run on one orbit representative per
+// vertex orbit (the fundamental domain 2 j <= n_x, 2 i <= n_y, and i <= j with the diagonal),
+// the exact restriction of the whole sheet's equations to symmetric states (as MirrorReduced
+// does for paper 1's networks, models/mirror_reduced.hpp):
+//   unknowns q: each free representative's coordinates, less what its mirrors fix: on x = W/2
+//     its x is W/2, on y = L/2 its y is L/2, on the diagonal its y is its x (one entry, carrying
+//     two coordinates: multiplicity 2); every vertex's coordinate is then x_k = s_k q_j + o_k
+//     (s_k = +-1, or the constant o_k), its representative's mirrored.
+//   energy E_R(q) = E(x(q)) / |G| = sum over element orbits (|O| / |G|) E_e(one element of O)
+//     + the external potential of the representatives weighted |orbit| / |G|; forces -dE_R/dq
+//     and the Jacobian by the chain rule through x(q) (the elements' derivatives as the whole
+//     sheet's), masses M_j = mult_j w_r m_r, so that the accelerations are the whole sheet's.
+//   static residual: the whole sheet's criterion at the unfolded state, max over representatives
+//     of |F_r| / F_ref, |F_r|^2 = sum over r's entries f_j^2 / (w_r^2 mult_j).
+// Throws std::invalid_argument (sheet_lacks' reason) when the sheet lacks a mirror of `m`.
+class MirroredSheet final : public MechanicalSystem {
+ public:
+  MirroredSheet(std::shared_ptr<const MaterialSheet> sheet, SheetMirrors m);
+
+  int dof() const override { return static_cast<int>(mass_.size()); }
+  void initial_state(double* q, double* v) const override;
+  void conservative_acceleration(double t, const double* q, double* a) const override;
+  void constant_acceleration(double t, double* a) const override;
+  const std::vector<double>& damping_rate() const override { return gamma_; }
+  const std::vector<double>& mass() const override { return mass_; }
+  const CscPattern& stiffness_pattern() const override { return pattern_; }
+  void stiffness_values(double t, const double* q, double* values) const override;
+  double static_residual(double t, const double* q) const override;
+  double potential_energy(double t, const double* q) const override;
+  std::string describe() const override;
+
+  const MaterialSheet& sheet() const { return *sheet_; }
+  SheetMirrors mirrors() const { return mirrors_; }
+  // The whole sheet's state (length sheet().dof()) of the symmetric state q.
+  void unfold(const double* q, double* x_full) const;
+
+ private:
+  template <bool Hessian>
+  void assemble(const double* q, double* energy, double* force, double* values) const;
+  double coordinate(const double* q, int vertex, int k) const;
+
+  std::shared_ptr<const MaterialSheet> sheet_;
+  SheetMirrors mirrors_;
+  // Per vertex and coordinate (3 v + k): x = sign q[index] + offset, or offset (index -1).
+  std::vector<int> index_;
+  std::vector<double> sign_, offset_;
+  struct Rep {
+    int vertex;
+    double weight;   // |orbit| / |G|
+    int first, count;  // its entries of q
+  };
+  std::vector<Rep> reps_;
+  std::vector<int> mult_;  // per entry of q: the coordinates it carries (1, or 2 on the diagonal)
+  std::vector<int> triangles_, stencils_;  // one element of each orbit (indices into the sheet's)
+  std::vector<double> tri_weight_, stencil_weight_;  // |O| / |G|
+  std::vector<int> tri_slots_, stencil_slots_;       // 81 per element: pattern entry, or -1
+  std::vector<double> mass_, gamma_;
+  CscPattern pattern_;
+};
 
 }  // namespace knitsim

@@ -5,6 +5,7 @@
 // prints (lines starting "cantilever").
 #include <catch2/catch.hpp>
 #include <chrono>
+#include <memory>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -451,4 +452,162 @@ TEST_CASE("material sheet: corner patches hold their vertices; derivatives with 
   // A patch smaller than a cell holds one row: refused.
   p.patches = {{0.0, 0.0, 0.004, 0.004}};
   CHECK_THROWS_WITH(MaterialSheet(p), Catch::Matchers::Contains("at least 2 x 2 vertices"));
+}
+
+// ---- mirrors (MirroredSheet) ------------------------------------------------------------------
+
+namespace {
+
+// A square sheet under four corner patches (four_corner_material's shape), n cells a side.
+MaterialSheetParams corner_sheet(int n, double bending_wale, double membrane_wale,
+                                 double patch = 0.05) {
+  MaterialSheetParams p;
+  p.width = p.length = 0.5;
+  p.cells = n;
+  p.areal_density = 41.65;
+  p.membrane_wale = membrane_wale;
+  p.membrane_course = 1000.0;
+  p.membrane_shear = 300.0;
+  p.poisson_cw = 0.3;
+  p.bending_wale = bending_wale;
+  p.bending_course = 1e-5;
+  p.damping_rate = 1e5;
+  const double a = patch * 1.0000001;  // the patch's side, past round-off of the cell count
+  p.patches = {{0.0, 0.0, a, a}, {0.5 - a, 0.0, 0.5, a}, {0.0, 0.5 - a, a, 0.5},
+               {0.5 - a, 0.5 - a, 0.5, 0.5}};
+  return p;
+}
+
+// The mean height of the 1, 2 or 4 vertices nearest the centre, in the whole sheet's state x.
+double centre_sag(const MaterialSheet& s, const std::vector<double>& x) {
+  double z = 0.0;
+  int count = 0;
+  for (int i : {s.ny() / 2, (s.ny() + 1) / 2})
+    for (int j : {s.nx() / 2, (s.nx() + 1) / 2}) z += s.position(x.data(), s.vertex(i, j)).z, ++count;
+  return -z / count;
+}
+
+// The equilibrium of the sheet (mirrors none) or of its reduction, unfolded; its sag.
+double solved_sag(const std::shared_ptr<const MaterialSheet>& sheet, SheetMirrors m,
+                  RunStats* stats = nullptr) {
+  IntegratorOptions opt;
+  opt.t_max = 1e7;
+  opt.equilibrium_tol = 1e-8;
+  opt.position_tol = 1e-10;
+  std::vector<double> q, v, x(sheet->dof());
+  RunStats st;
+  if (m.order() == 1) {
+    st = run_to_equilibrium(*sheet, "equilibrium", opt, q, v);
+    x = q;
+  } else {
+    const MirroredSheet r(sheet, m);
+    st = run_to_equilibrium(r, "equilibrium", opt, q, v);
+    r.unfold(q.data(), x.data());
+  }
+  if (stats) *stats = st;
+  return centre_sag(*sheet, x);
+}
+
+}  // namespace
+
+TEST_CASE("mirrored sheet: the reduction's forces and Jacobian are the whole sheet's",
+          "[material_sheet][mirrors]") {
+  for (int n : {8, 9}) {  // mirror planes on grid lines (8) and through cell centres (9)
+    for (SheetMirrors m : {SheetMirrors{true, false, false}, SheetMirrors{true, true, false},
+                           SheetMirrors{true, true, true}}) {
+      auto sheet = std::make_shared<const MaterialSheet>(corner_sheet(n, 1e-5, 1000.0, 0.125));
+      const MirroredSheet r(sheet, m);
+      INFO("n " << n << " group " << m.order());
+      // A random symmetric state, well off rest.
+      std::vector<double> q(r.dof()), v(r.dof());
+      r.initial_state(q.data(), v.data());
+      std::mt19937 rng(7);
+      std::uniform_real_distribution<double> u(-0.02, 0.02);
+      for (double& qi : q) qi += u(rng);
+      const JacobianCheck c = check_stiffness_jacobian(r, 0.0, q.data());
+      CHECK(c.max_relative_error < 1e-6);
+      // Its accelerations are the whole sheet's at the unfolded state, coordinate by coordinate,
+      // and its energy and residual the whole sheet's (energy / |G|).
+      std::vector<double> x(sheet->dof()), a_full(sheet->dof()), a(r.dof());
+      r.unfold(q.data(), x.data());
+      sheet->conservative_acceleration(0.0, x.data(), a_full.data());
+      r.conservative_acceleration(0.0, q.data(), a.data());
+      double worst = 0.0, scale = 0.0;
+      for (int v0 = 0; v0 < sheet->vertex_count(); ++v0) {
+        const int f = sheet->free_index(v0);
+        if (f < 0) continue;
+        for (int k = 0; k < 3; ++k) scale = std::max(scale, std::abs(a_full[3 * f + k]));
+      }
+      const double e_full = sheet->potential_energy(0.0, x.data());
+      CHECK(r.potential_energy(0.0, q.data()) * m.order() == Approx(e_full).epsilon(1e-12));
+      CHECK(r.static_residual(0.0, q.data()) ==
+            Approx(sheet->static_residual(0.0, x.data())).epsilon(1e-9));
+      // The reduced accelerations appear among the whole sheet's: each equals one of them.
+      for (int j = 0; j < r.dof(); ++j) {
+        double nearest = 1e300;
+        for (double af : a_full) nearest = std::min(nearest, std::abs(af - a[j]));
+        worst = std::max(worst, nearest);
+      }
+      CHECK(worst < 1e-9 * scale);
+    }
+  }
+}
+
+TEST_CASE("mirrored sheet: a quarter's and an eighth's sag are the whole sheet's to round-off",
+          "[material_sheet][mirrors]") {
+  for (int n : {20, 21}) {
+    auto sheet = std::make_shared<const MaterialSheet>(corner_sheet(n, 1e-5, 1000.0));
+    RunStats whole_stats, quarter_stats, eighth_stats;
+    const double whole = solved_sag(sheet, {}, &whole_stats);
+    const double quarter = solved_sag(sheet, {true, true, false}, &quarter_stats);
+    const double eighth = solved_sag(sheet, {true, true, true}, &eighth_stats);
+    const double half = solved_sag(sheet, {true, false, false});
+    std::printf("mirrors n %d sag whole %.15g half %.15g quarter %.15g eighth %.15g m\n", n,
+                whole, half, quarter, eighth);
+    CHECK(whole_stats.status == RunStatus::Equilibrium);
+    CHECK(quarter_stats.status == RunStatus::Equilibrium);
+    CHECK(eighth_stats.status == RunStatus::Equilibrium);
+    CHECK(whole > 0.01);
+    CHECK(std::abs(quarter - whole) < 1e-12);
+    CHECK(std::abs(eighth - whole) < 1e-12);
+    CHECK(std::abs(half - whole) < 1e-12);
+  }
+  // Anisotropic (B_w = 2 B_c): the quarter still equals the whole sheet.
+  auto aniso = std::make_shared<const MaterialSheet>(corner_sheet(20, 2e-5, 1000.0));
+  const double whole = solved_sag(aniso, {});
+  const double quarter = solved_sag(aniso, {true, true, false});
+  std::printf("mirrors anisotropic sag whole %.15g quarter %.15g m\n", whole, quarter);
+  CHECK(std::abs(quarter - whole) < 1e-12);
+}
+
+TEST_CASE("mirrored sheet: no diagonal mirror on an anisotropic sheet",
+          "[material_sheet][mirrors]") {
+  const MaterialSheet iso(corner_sheet(10, 1e-5, 1000.0));
+  CHECK(largest_mirrors(iso).order() == 8);
+  for (auto [bw, aw] : {std::pair{2e-5, 1000.0}, std::pair{1e-5, 1500.0},
+                        std::pair{1e-5 * (1 + 1e-15), 1000.0}}) {
+    auto sheet = std::make_shared<const MaterialSheet>(corner_sheet(10, bw, aw));
+    const SheetMirrors m = largest_mirrors(*sheet);
+    CHECK(m.x);
+    CHECK(m.y);
+    CHECK_FALSE(m.diagonal);
+    CHECK_THAT(sheet_lacks(*sheet, {true, true, true}), Catch::Contains("isotropic"));
+    CHECK_THROWS_WITH(MirroredSheet(sheet, {true, true, true}), Catch::Contains("isotropic"));
+  }
+  // A rectangle has no diagonal; asymmetric clamps have no mirror at all across them.
+  MaterialSheetParams p = corner_sheet(10, 1e-5, 1000.0);
+  p.length = 0.6;
+  const double a = 0.05 * 1.0000001;
+  p.patches = {{0.0, 0.0, a, a}, {0.5 - a, 0.0, 0.5, a}, {0.0, 0.6 - a, a, 0.6},
+               {0.5 - a, 0.6 - a, 0.5, 0.6}};
+  CHECK(largest_mirrors(MaterialSheet(p)).order() == 4);
+  p.patches.pop_back();  // three corners: neither x nor y maps the clamps onto themselves
+  CHECK(largest_mirrors(MaterialSheet(p)).order() == 1);
+  CHECK_THAT(sheet_lacks(MaterialSheet(p), {true, false, false}), Catch::Contains("clamps"));
+  // The cantilever's jaw along y = 0: the x mirror only.
+  MaterialSheetParams c = corner_sheet(8, 1e-5, 1000.0);
+  c.patches = {{0.0, 0.0, 0.5, 0.1}};
+  const SheetMirrors mc = largest_mirrors(MaterialSheet(c));
+  CHECK(mc.x);
+  CHECK_FALSE(mc.y);
 }

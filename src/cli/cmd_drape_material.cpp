@@ -25,9 +25,17 @@ std::string human_summary(const Scene& scene, const MaterialDrapeResult& r,
   const MaterialSheet& sheet = *r.sheet;
   Table t;
   t.columns = {"drape", scene.name + " (" + scene.source + ", model.kind = material)"};
-  t.rows = {{"mesh", std::to_string(sheet.nx()) + " x " + std::to_string(sheet.ny()) + " cells, " +
-                         std::to_string(sheet.vertex_count()) + " vertices, " +
-                         std::to_string(sheet.dof()) + " dof"}};
+  t.rows = {{"mesh", std::to_string(sheet.nx()) + " x " + std::to_string(sheet.ny()) +
+                         " cells, " + std::to_string(sheet.vertex_count()) + " vertices, " +
+                         std::to_string(sheet.dof()) + " dof" +
+                         (r.integrated_dof != sheet.dof()
+                              ? " (" + std::to_string(r.integrated_dof) + " integrated: " +
+                                    (r.mirrors.order() == 8   ? "eighth"
+                                     : r.mirrors.order() == 4 ? "quarter"
+                                                              : "half") +
+                                    (r.whole_sheet_checked ? ", certified on the whole sheet" : "") +
+                                    ")"
+                              : "")}};
   const auto run = run_rows(s, scene.options.position_tol);
   t.rows.insert(t.rows.end(), run.begin(), run.end());
   if (scene.material.clamps == ClampLayout::Corners) {

@@ -25,7 +25,12 @@ nlohmann::json material_summary(const Scene& scene, const MaterialDrapeResult& r
   for (int v = 0; v < s.vertex_count(); ++v) clamped += s.free_index(v) < 0;
   j["mesh"] = {{"cells_x", s.nx()}, {"cells_y", s.ny()},     {"hx_m", s.hx()},
                {"hy_m", s.hy()},    {"vertices", s.vertex_count()}, {"clamped", clamped},
-               {"dof", s.dof()}};
+               {"dof", s.dof()}, {"integrated_dof", r.integrated_dof}};
+  // The mirrors the run integrated by (model.symmetry resolved), as paper 1's drapes say it.
+  const int order = r.mirrors.order();
+  j["symmetry"] = order == 8 ? "eighth" : order == 4 ? "quarter" : order == 2 ? "half" : "none";
+  if (order == 2) j["mirror"] = r.mirrors.x ? "x" : "y";
+  j["whole_sheet_certified"] = r.whole_sheet_checked;
   const bool meaningful = r.stats.status != RunStatus::Diverged;
   const auto figure = [meaningful](double v) {
     return meaningful && std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
@@ -55,6 +60,7 @@ nlohmann::json material_summary(const Scene& scene, const MaterialDrapeResult& r
        {"centre_sag_m, tip_run_m, tip_drop_m", "m"},
        {"chord_angle_deg, tip_slope_deg", "degrees below the horizontal"},
        {"mesh", "cells, m (hx_m, hy_m), counts"},
+       {"symmetry", "the mirror group integrated (none, half, quarter, eighth); mirror: a half's"},
        {"params", "the unit is in each name: _m, _N_m (N/m), _Nm (N m), _g_m2, _per_s"}});
   j["units"]["options"] = units_text(KeyModel::Both, field_names(j["options"]));
   return j;

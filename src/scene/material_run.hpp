@@ -1,5 +1,5 @@
 // One drape of the material model (model.kind = material; docs/material_drape.md): the scene's
-// MaterialSheet run to equilibrium with the named integrator, and what its reports show.
+// MaterialSheet (or its mirror reduction, model.symmetry) run to equilibrium with the named integrator, and what its reports show.
 #pragma once
 
 #include <memory>
@@ -18,6 +18,12 @@ struct MaterialDrapeResult {
   std::vector<Vec3> positions;  // every vertex (clamped ones at rest) at t_final, m
   std::vector<Vec3> rest;       // every vertex at t = 0, m
   std::vector<double> state_x, state_v;  // the integrated unknowns at t_final
+  // The mirrors the run integrated by (model.symmetry resolved: auto takes the largest group
+  // the sheet has, sheet_lacks; none after a whole-sheet continuation), the unknowns it
+  // integrated, and whether auto's reduced equilibrium was certified on the whole sheet.
+  SheetMirrors mirrors;
+  int integrated_dof = 0;
+  bool whole_sheet_checked = false;
   double energy = 0.0;      // J: the potential energy at t_final (membrane + bending + gravity)
   double max_strain = 0.0;  // largest (l - h) / h of a grid-line segment (rows and columns)
   // The same over the segments whose rest midpoint is at least clamps.size from every clamp:
@@ -33,8 +39,13 @@ struct MaterialDrapeResult {
 };
 
 // Validates `scene` (model.kind must be material), builds its sheet, runs it from the flat
-// sheet at rest (throws std::invalid_argument for an unknown integrator or an option the run
-// refuses) and measures the result; a run that does not reach equilibrium is a status.
+// sheet at rest (throws std::invalid_argument for an unknown integrator, an option the run
+// refuses, or a model.symmetry whose mirror the sheet lacks) and measures the result; a run
+// that does not reach equilibrium is a status. model.symmetry: none runs the whole sheet; half
+// (the x mirror, else the y mirror), quarter (x and y) and eighth (and the diagonal) run the
+// MirroredSheet; auto the largest group the sheet has, its equilibrium then certified on the
+// whole sheet as paper 1's auto (src/scene/scene.cpp): where the whole sheet's K has a negative
+// pivot the run goes on on the whole sheet from the unfolded state moved along that mode.
 MaterialDrapeResult run_material_drape(const Scene& scene, const std::string& integrator,
                                        RunObserver* observer = nullptr);
 

@@ -54,10 +54,14 @@ void MaterialScene::validate(const DrapeParams& params) const {
   positive("clamps.size", clamp_size, 100.0, "m");
   positive("clamps.overhang", overhang, 100.0, "m");
   if (kind != DrapeModelKind::Material) return;
-  if (params.symmetry != DrapeSymmetry::Auto && params.symmetry != DrapeSymmetry::None)
-    throw std::invalid_argument(std::string("model.symmetry = ") + to_string(params.symmetry) +
-                                ": must be auto or none with model.kind = material (it runs the "
-                                "whole sheet)");
+  // The diagonal mirror (an eighth) needs an isotropic sheet; the rest of what a mirror needs
+  // (symmetric clamps, a square mesh) is checked on the sheet itself (sheet_lacks).
+  if (params.symmetry == DrapeSymmetry::Eighth &&
+      !(membrane_wale == membrane_course && bending_wale == bending_course))
+    throw std::invalid_argument(
+        "model.symmetry = eighth: the sheet has no diagonal mirror (it needs "
+        "material.membrane_wale = material.membrane_course and material.bending_wale = "
+        "material.bending_course; use quarter or auto)");
   const double width = params.width, len = length > 0.0 ? length : width;
   if (clamps == ClampLayout::Corners && !(2.0 * clamp_size < std::min(width, len))) {
     std::ostringstream os;

@@ -42,8 +42,9 @@ struct MaterialScene {
 
   // Ranges of every field (InvalidField named by its scene key); where kind = material also
   // what depends on the paper's shared keys (`params`: width, symmetry): the clamps fit the
-  // sheet, and model.symmetry is auto or none (the material model runs the whole sheet: no
-  // mirror is assumed that an anisotropic sheet may not have).
+  // sheet, and model.symmetry = eighth only on an isotropic sheet (A_w = A_c, B_w = B_c: an
+  // anisotropic sheet has no diagonal mirror; the sheet's other mirrors are checked on the
+  // sheet by run_material_drape).
   void validate(const DrapeParams& params) const;
   // The sheet this scene makes (validated first).
   MaterialSheetParams sheet(const DrapeParams& params) const;
