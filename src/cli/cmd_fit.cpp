@@ -36,6 +36,7 @@
 #include <cmath>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <optional>
 #include <nlohmann/json.hpp>
@@ -48,9 +49,11 @@
 #include "src/base/table.hpp"
 #include "src/base/text.hpp"
 #include "src/cli/cli_options.hpp"
+#include "src/cli/cmd_fit_material.hpp"
 #include "src/cli/commands.hpp"
 #include "src/fit/drape_fit.hpp"
 #include "src/fit/lm_fit.hpp"
+#include "src/fit/material_fit.hpp"
 #include "src/fit/targets.hpp"
 #include "src/io/drape_outputs.hpp"
 #include "src/io/fit_outputs.hpp"
@@ -82,7 +85,36 @@ struct FitArgs {
   bool quiet = false;
   bool no_pictures = false;  // the fitted drape without drape.png
   std::vector<std::string> ignored;  // flags given that the chosen optimizer does not read
+  // The material fit's box and fitted parameters given as flags (--membrane-wale-min ...,
+  // --fit-parameters; rows fit.* of the key table): flag -> text, applied as --set of the row's
+  // key after the scene's own, so the command line wins.
+  std::map<std::string, std::string> box_flags;
 };
+
+// The fit.* rows of the key table that have a flag (the material fit's box).
+std::vector<const Key*> box_rows() {
+  std::vector<const Key*> rows;
+  for (const Key& k : key_table())
+    if (k.name.rfind("fit.", 0) == 0 && !k.flag.empty()) rows.push_back(&k);
+  return rows;
+}
+
+// The scene with the box flags applied: a bad value is refused under its flag.
+Scene load_fit_scene(const FitArgs& args) {
+  std::vector<std::string> sets = args.sets;
+  std::vector<std::pair<std::string, std::string>> names;
+  for (const Key* k : box_rows()) {
+    const auto given = args.box_flags.find(k->flag);
+    if (given == args.box_flags.end()) continue;
+    sets.push_back(k->name + "=" + given->second);
+    names.emplace_back(k->name, k->flag);
+  }
+  try {
+    return load_scene(args.scene, sets);
+  } catch (const std::invalid_argument& e) {
+    rethrow_with_flag_names(e, names);
+  }
+}
 
 constexpr const char* kLmOptionGroup = "LM options (--optimizer lm)";
 
@@ -356,6 +388,34 @@ void run_ica_fit(const FitArgs& args, const Scene& base, const DrapeFitProblem& 
     throw CLI::RuntimeError(3);
 }
 
+// model.kind = material: the material fit (src/cli/cmd_fit_material.hpp); no checkpoint.
+void run_material(const FitArgs& args, const Scene& base, const Target& target) {
+  if (args.resume) throw std::invalid_argument("--resume: only with model.kind = paper");
+  MaterialFitCommand m;
+  m.optimizer = args.optimizer;
+  m.target = args.target;
+  m.sets = args.sets;
+  m.integrator = args.integrator;
+  m.starts = args.lm;
+  m.lm = args.lm.lm;
+  m.ica = args.ica;
+  m.quiet = args.quiet;
+  std::unique_ptr<MaterialFitProblem> check;  // set-up errors before the folder is made
+  try {
+    check = std::make_unique<MaterialFitProblem>(base, target, args.integrator);
+  } catch (const std::invalid_argument& e) {
+    rethrow_with_flag_names(e, {{"integrator", "--integrator"}});
+  }
+  const std::filesystem::path dir = make_output_dir(args.out, "fit-" + base.name);
+  if (!args.ignored.empty()) {
+    std::string list;
+    for (const std::string& flag : args.ignored) list += (list.empty() ? "" : ", ") + flag;
+    warn(list + (args.ignored.size() == 1 ? " is" : " are") + " not read by --optimizer " +
+         args.optimizer);
+  }
+  run_material_fit_command(base, target, m, dir);
+}
+
 void run(const FitArgs& args) {
   if (args.optimizer != "ica" && args.optimizer != "lm")
     throw std::invalid_argument("--optimizer = " + args.optimizer + ": accepted: ica, lm");
@@ -364,12 +424,16 @@ void run(const FitArgs& args) {
   } catch (const std::invalid_argument& e) {
     rethrow_as_typed(e);  // under the flags of the LM rows of key_table()
   }
-  Scene base = load_scene(args.scene, args.sets);
+  Scene base = load_fit_scene(args);
   base.options.rtol = args.rtol;
   base.options.atol = args.atol;
   base.options.velocity_atol = args.velocity_atol;
   base.validate();
   const Target target = read_target_csv(args.target);
+  if (base.material.kind == DrapeModelKind::Material) return run_material(args, base, target);
+  if (!args.box_flags.empty())
+    warn(args.box_flags.begin()->first +
+         " is not read with model.kind = paper (paper 1's box is Table 3's; docs/fitting.md)");
   DrapeFitOptions options;
   options.ica = args.ica;
   options.integrator = args.integrator;
@@ -443,6 +507,13 @@ void register_fit_command(CLI::App& app) {
   cmd->add_flag("--resume", args->resume,
                 "Continue the interrupted fit in --out from its ica_checkpoint.json (same "
                 "options needed; any --jobs); starts afresh if there is none");
+  for (const Key* k : box_rows()) {
+    const std::string range = key_range(*k);
+    cmd->add_option_function<std::string>(
+           k->flag, [args, flag = k->flag](const std::string& v) { args->box_flags[flag] = v; },
+           k->meaning + " (scene key " + k->name + (range.empty() ? "" : "; " + range) + ")")
+        ->group("Material fit (model.kind = material)");
+  }
   cmd->add_flag("--no-pictures", args->no_pictures, "Skip the fitted drape's drape.png");
   cmd->add_flag("--quiet", args->quiet, "Nothing on stdout");
   cmd->callback([args, cmd] {

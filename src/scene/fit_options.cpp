@@ -58,6 +58,73 @@ void SyntheticOptions::validate() const {
 
 namespace {
 
+constexpr const char* kMaterialParameterNames[MaterialFitBox::kParameters] = {
+    "membrane_wale", "membrane_course", "membrane_shear",
+    "poisson",       "bending_wale",    "bending_course"};
+
+// The fitted names of `list` (comma-separated, spaces ignored), in the order given.
+std::vector<std::string> split_names(const std::string& list) {
+  std::vector<std::string> names(1);
+  for (char c : list) {
+    if (c == ',')
+      names.emplace_back();
+    else if (c != ' ')
+      names.back() += c;
+  }
+  return names;
+}
+
+}  // namespace
+
+double MaterialFitBox::lower(int parameter) const {
+  const double v[kParameters] = {membrane_wale_min, membrane_course_min, membrane_shear_min,
+                                 poisson_min,       bending_wale_min,    bending_course_min};
+  return v[parameter];
+}
+
+double MaterialFitBox::upper(int parameter) const {
+  const double v[kParameters] = {membrane_wale_max, membrane_course_max, membrane_shear_max,
+                                 poisson_max,       bending_wale_max,    bending_course_max};
+  return v[parameter];
+}
+
+bool MaterialFitBox::fitted(int parameter) const {
+  for (const std::string& name : split_names(parameters))
+    if (name == kMaterialParameterNames[parameter]) return true;
+  return false;
+}
+
+void MaterialFitBox::validate() const {
+  for (int g = 0; g < kParameters; ++g) {
+    const std::string name = std::string("fit.") + kMaterialParameterNames[g];
+    const double lo = lower(g), hi = upper(g);
+    const bool poisson = g == 3;
+    const std::string range = poisson ? "must be in [0, 0.99]" : "must be finite and > 0";
+    if (!(poisson ? lo >= 0.0 && lo <= 0.99 : lo > 0.0 && std::isfinite(lo)))
+      bad_field(name + "_min", lo, range);
+    if (!(poisson ? hi >= 0.0 && hi <= 0.99 : hi > 0.0 && std::isfinite(hi)))
+      bad_field(name + "_max", hi, range);
+    if (!(lo <= hi))
+      bad_field(name + "_max", hi, "must be >= " + name + "_min (" + format_number(lo, 6) + ")");
+  }
+  const std::vector<std::string> names = split_names(parameters);
+  std::string known;
+  for (const char* n : kMaterialParameterNames) known += (known.empty() ? "" : ", ") + std::string(n);
+  for (size_t i = 0; i < names.size(); ++i) {
+    bool ok = false;
+    for (const char* n : kMaterialParameterNames) ok = ok || names[i] == n;
+    for (size_t j = 0; j < i; ++j) ok = ok && names[j] != names[i];
+    if (!ok) bad_field("fit.parameters", parameters, "must be distinct names of " + known);
+  }
+  for (int g = 0; g < kParameters; ++g)
+    if (fitted(g) && !(lower(g) < upper(g)))
+      bad_field(std::string("fit.") + kMaterialParameterNames[g] + "_max", upper(g),
+                std::string("must be > fit.") + kMaterialParameterNames[g] + "_min (" +
+                    format_number(lower(g), 6) + "): the parameter is fitted");
+}
+
+namespace {
+
 // A row of a fitting command's flag, bound to `member` of its options struct S (the value the
 // struct's validate() names `field`), of `unit` ("1" for counts and ratios, "" for a flag that
 // takes no value), with its --help text.

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace knitsim {
@@ -82,6 +83,37 @@ struct SyntheticOptions {
   unsigned seed = 2017;   // base seed; each (sample, set, scene) draws from its own stream
   // Throws InvalidField "noise_mm = X: must be finite and >= 0 mm" or
   // "photos = P: must be in 1..10000".
+  void validate() const;
+};
+
+// The material model's fit (model.kind = material; src/fit/material_fit.hpp): the search box of
+// its six material parameters, in material units, and which of them are fitted. A parameter not
+// fitted keeps the base scene's value. Rows of the key table: scene keys fit.<parameter>_min and
+// fit.<parameter>_max (e.g. fit.membrane_wale_min), the flags --<parameter>-min/-max
+// (--membrane-wale-min), and fit.parameters / --fit-parameters.
+// Parameter order (MaterialGene, src/fit/material_fit.hpp): membrane_wale, membrane_course,
+// membrane_shear (N/m), poisson (1), bending_wale, bending_course (N m).
+struct MaterialFitBox {
+  static constexpr int kParameters = 6;
+  // Defaults: knitted and woven fabrics' ranges (docs/fitting.md, "The material model"):
+  // membrane 5..5000 N/m, shear 1..2000 N/m, Poisson 0..0.9, bending 1e-7..1e-3 N m.
+  double membrane_wale_min = 5.0, membrane_wale_max = 5000.0;
+  double membrane_course_min = 5.0, membrane_course_max = 5000.0;
+  double membrane_shear_min = 1.0, membrane_shear_max = 2000.0;
+  double poisson_min = 0.0, poisson_max = 0.9;
+  double bending_wale_min = 1e-7, bending_wale_max = 1e-3;
+  double bending_course_min = 1e-7, bending_course_max = 1e-3;
+  // The fitted parameters, comma-separated names (a non-empty subset of the six); the default
+  // is what a hanging four-corner drape's edges determine (docs/fitting.md).
+  std::string parameters = "membrane_wale,membrane_course";
+
+  // Pointers to the bounds in parameter order.
+  double lower(int parameter) const;
+  double upper(int parameter) const;
+  bool fitted(int parameter) const;  // named in `parameters`
+  // Throws InvalidField naming the bound (fit.membrane_wale_min, ...): finite, min <= max,
+  // membrane and bending min > 0, poisson in [0, 0.99]; `parameters` known names, no repeat,
+  // at least one; a fitted parameter's min < max.
   void validate() const;
 };
 

@@ -266,6 +266,59 @@ std::vector<Key> make_table() {
            "material: side of a corner patch, or depth of the edge's jaw");
   material("clamps.overhang", &MaterialScene::overhang, "m",
            "material, clamps.layout = edge: the strip's free length beyond the jaw");
+  // The material model's fit: the search box in material units and the fitted parameters
+  // (MaterialFitBox, src/scene/fit_options.hpp; knitsim fit, docs/fitting.md). Each is a scene
+  // key and a flag of knitsim fit.
+  {
+    using B = MaterialFitBox;
+    struct Bound {
+      const char* name;
+      const char* flag;
+      double B::*field;
+      const char* unit;
+    };
+    const Bound bounds[] = {
+        {"fit.membrane_wale_min", "--membrane-wale-min", &B::membrane_wale_min, "N/m"},
+        {"fit.membrane_wale_max", "--membrane-wale-max", &B::membrane_wale_max, "N/m"},
+        {"fit.membrane_course_min", "--membrane-course-min", &B::membrane_course_min, "N/m"},
+        {"fit.membrane_course_max", "--membrane-course-max", &B::membrane_course_max, "N/m"},
+        {"fit.membrane_shear_min", "--membrane-shear-min", &B::membrane_shear_min, "N/m"},
+        {"fit.membrane_shear_max", "--membrane-shear-max", &B::membrane_shear_max, "N/m"},
+        {"fit.poisson_min", "--poisson-min", &B::poisson_min, "1"},
+        {"fit.poisson_max", "--poisson-max", &B::poisson_max, "1"},
+        {"fit.bending_wale_min", "--bending-wale-min", &B::bending_wale_min, "N m"},
+        {"fit.bending_wale_max", "--bending-wale-max", &B::bending_wale_max, "N m"},
+        {"fit.bending_course_min", "--bending-course-min", &B::bending_course_min, "N m"},
+        {"fit.bending_course_max", "--bending-course-max", &B::bending_course_max, "N m"}};
+    for (const Bound& b : bounds) {
+      const std::string end = std::string(b.name).substr(std::string(b.name).size() - 3);
+      const std::string meaning =
+          std::string("material fit: the search box's ") + (end == "min" ? "lower" : "upper") +
+          " bound of material." + std::string(b.name).substr(4, std::string(b.name).size() - 8);
+      number(
+          b.name, [field = b.field](Scene& s) -> double& { return s.fit_box.*field; }, b.unit,
+          meaning.c_str());
+      k.back().flag = b.flag;
+    }
+    other(
+        "fit.parameters", Kind::Text,
+        [](Scene& s, const std::string& v) {
+          MaterialFitBox names;  // the default bounds are valid: only the names are checked
+          names.parameters = v;
+          try {
+            names.validate();
+          } catch (const InvalidField&) {
+            return false;
+          }
+          s.fit_box.parameters = v;
+          return true;
+        },
+        "distinct names, comma-separated, of membrane_wale, membrane_course, membrane_shear, "
+        "poisson, bending_wale, bending_course",
+        [](const Scene& s) { return s.fit_box.parameters; },
+        "material fit: the parameters fitted (the others keep the scene's values)");
+    k.back().flag = "--fit-parameters";
+  }
   // The knit's keys (models/knit_loops.hpp, docs/knit.md).
   auto knit = [&number](const char* name, double KnitParams::*field, const char* unit,
                         const char* meaning) {
@@ -518,6 +571,7 @@ std::string validated_range(const Key& key) {
       probe.knit.validate();
       probe.material.validate(probe.params);
       probe.yarn.validate();
+      probe.fit_box.validate();
     }
   } catch (const InvalidField& e) {
     const std::string must = "must be ";
@@ -728,6 +782,7 @@ void Scene::validate() const {
       params.validate();
     }
     material.validate(params);
+    fit_box.validate();
     options.validate();
     knit.validate();
     yarn.validate();

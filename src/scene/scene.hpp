@@ -47,6 +47,7 @@
 #include "src/base/table.hpp"
 #include "src/core/invalid_field.hpp"
 #include "src/core/vec3.hpp"
+#include "src/scene/fit_options.hpp"
 #include "src/scene/material_scene.hpp"
 
 namespace knitsim {
@@ -63,6 +64,8 @@ struct Scene {
   // The material model's keys (model.kind = material; src/scene/material_scene.hpp): used
   // with fabric.width and fabric.areal_density from `params` when kind is material.
   MaterialScene material;
+  // The material model's fit: its search box and fitted parameters (fit.* keys; knitsim fit).
+  MaterialFitBox fit_box;
   // Run options: the scene sets t_max and equilibrium_tol ([run]); the command line may set
   // the integrator's tolerances, step and caps. Everything else keeps its default.
   IntegratorOptions options;
