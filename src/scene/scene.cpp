@@ -388,10 +388,10 @@ std::vector<Key> make_table() {
       "knit.clamps", Kind::Text,
       [](Scene& s, const std::string& v) { return (s.knit.clamps = parse_knit_clamps(v), true); },
       "clamps separated by ';': bottom|top|left|right|wales A-B|courses A-B, then fixed, move "
-      "DX,DY (m) or path S:DX,DY ... (0 < S <= 1)",
+      "DX,DY (m), path S:DX,DY ... (0 < S <= 1) or force FX,FY[,FZ] (N, each in [-1000, 1000])",
       [](const Scene& s) { return knit_clamps_text(s.knit.clamps); },
-      "held points beside knit.pins, fixed or moved along a path in the load fraction "
-      "(docs/knit.md, \"Under load\"); \"\" = none",
+      "held points beside knit.pins, fixed, moved along a path in the load fraction, or a rigid "
+      "bar under a force (docs/knit.md, \"Under load\"); \"\" = none",
       KeyModel::Knit);
   other(
       "knit.forces", Kind::Text,
