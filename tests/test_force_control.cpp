@@ -215,3 +215,50 @@ TEST_CASE("bad forces and load steps: one line, exit 2, nothing written", "[forc
     CHECK(!fs::exists(out));
   }
 }
+
+// Through the command line, from a scene file: loads.csv one row per load step, summary.json's
+// `loads` with the balance, the console's balance row; without load keys none of them.
+TEST_CASE("a knit scene under load writes loads.csv and the balance", "[force]") {
+  TempDir tmp("force-cli");
+  const fs::path scene = tmp.path / "hung.toml";
+  std::ofstream(scene) << "[knit]\nchart_text = \"\"\"\n"
+                       << plain(5, 5)
+                       << "\"\"\"\npins = \"top\"\ngravity = \"on\"\ncontact = 0\n"
+                          "clamps = \"bottom force 0,-4e-3\"\n"
+                          "forces = \"wale 2 course 2 lower 1e-3,0\"\nload_steps = 3\n";
+  const fs::path out = tmp.path / "out";
+  const Run run = run_knitsim(
+      "knit --scene '" + scene.string() + "' --no-pictures --out '" + out.string() + "'", tmp);
+  INFO(run.err);
+  REQUIRE(run.status == 0);
+  CHECK(run.out.find("balance           reactions (") != std::string::npos);
+  std::ifstream csv(out / "loads.csv");
+  std::string header, line;
+  std::getline(csv, header);
+  CHECK(header.rfind("step,load,status,newton_steps,residual,clamp_0_displacement_x_m", 0) == 0);
+  CHECK(header.find(",clamp_1_reaction_y_N,") != std::string::npos);
+  CHECK(header.find(",balance_z_N") == header.size() - 12);
+  int rows = 0;
+  while (std::getline(csv, line)) {
+    ++rows;
+    CHECK(line.find(",equilibrium,") != std::string::npos);
+  }
+  CHECK(rows == 3);
+  const nlohmann::json s = nlohmann::json::parse(slurp(out / "summary.json"));
+  CHECK(s["loads"]["steps"] == 3);
+  CHECK(s["loads"]["applied_N"][0].get<double>() == Approx(1e-3));
+  CHECK(s["loads"]["applied_N"][1].get<double>() == Approx(-4e-3));
+  CHECK(std::abs(s["loads"]["balance_N"][0].get<double>()) < 1e-8);
+  CHECK(std::abs(s["loads"]["balance_N"][1].get<double>()) < 1e-8);
+  CHECK(s["clamps"]["balance_N"] == s["loads"]["balance_N"]);
+
+  // The same chart without load keys: no loads.csv (a stale one removed), no `loads`.
+  std::ofstream(scene) << "[knit]\nchart_text = \"\"\"\n"
+                       << plain(5, 5) << "\"\"\"\npins = \"top\"\ngravity = \"on\"\ncontact = 0\n";
+  REQUIRE(run_knitsim("knit --scene '" + scene.string() + "' --no-pictures --quiet --out '" +
+                          out.string() + "'",
+                      tmp)
+              .status == 0);
+  CHECK(!fs::exists(out / "loads.csv"));
+  CHECK(!nlohmann::json::parse(slurp(out / "summary.json")).contains("loads"));
+}
