@@ -12,7 +12,17 @@
 //   fixed      (the default) held at rest
 //   move DX,DY displaced by (DX, DY) m at the last load step, linearly in the load fraction
 //   path ...   piecewise linear through (0, 0) and (S_k, (DX_k, DY_k)), 0 < S_1 < ... <= 1
-// A point two clamps select belongs to the first. Units: m.
+//   force FX,FY[,FZ]  a rigid bar under the force (N at the last load step, linearly in the
+//              load fraction; models/force_control.hpp): its points move together, free along
+//              the non-zero components (|F| <= kMaxKnitForce each), held at rest along the others
+// A point two clamps select belongs to the first. Units: m, N.
+//
+// Forces on points (knit.forces): separated by ';', each
+//     wale W course C lower|upper FX,FY[,FZ]
+// a dead load (N at the last load step) on the loop's lower point O (a knit's) or upper point U
+// (where its yarn turns over the loop above: for a held loop, higher up) of chart cell (W, C);
+// refused (select_knit_point_forces, models/knit_loads.hpp) for a cell out of range, a miss
+// (no loop), a tuck's lower point (it has none) or a held point.
 //
 // Failure modes: std::invalid_argument (InvalidField of knit.clamps, one line naming the clamp
 // and the accepted syntax or range) from parse_knit_clamps for bad text, and from
@@ -33,12 +43,26 @@ struct KnitClampSpec {
   Where where = Where::Bottom;
   int first = 0, last = 0;  // Wales, Courses: the range, inclusive
   ClampPath path;
+  Vec3 force{};      // force: N at load fraction 1 (zero: displacement control)
   std::string text;  // the clamp as given, trimmed: its name in outputs and messages
+};
+
+// The largest force component a clamp or point takes, N (a knit swatch carries ~1 N).
+inline constexpr double kMaxKnitForce = 1e3;
+
+struct KnitPointForce {
+  int wale = 0, course = 0;
+  bool upper = false;  // the loop's upper point U, else its lower point O
+  Vec3 force;          // N at load fraction 1
+  std::string text;    // as given, trimmed
 };
 
 // Parses knit.clamps ("" = none); throws InvalidField of "knit.clamps".
 std::vector<KnitClampSpec> parse_knit_clamps(const std::string& text);
 // The clamps as text again (their `text`, joined by "; ").
 std::string knit_clamps_text(const std::vector<KnitClampSpec>& clamps);
+// Parses knit.forces ("" = none); throws InvalidField of "knit.forces".
+std::vector<KnitPointForce> parse_knit_point_forces(const std::string& text);
+std::string knit_point_forces_text(const std::vector<KnitPointForce>& forces);
 
 }  // namespace knitsim

@@ -298,6 +298,8 @@ void KnitParams::validate() const {
     bad_field("knit.bending", bending_ratio,
               "must be 0 with knit.contact > 0 (the contact, on by default, keeps the chart in its "
               "plane; set knit.contact=0 to bend it out of the plane)");
+  if (!(load_steps >= 0 && load_steps <= 1000))
+    bad_field("knit.load_steps", load_steps, "must be a whole number in [0, 1000]");
   if (max_points < 1) bad_field("max_points", static_cast<double>(max_points), "must be >= 1");
 }
 
@@ -579,7 +581,7 @@ std::vector<Clamp> hold_points(const KnitChart& chart, const KnitParams& p,
       throw InvalidField("knit.clamps", k.text,
                          "courses must be in 0 to " + std::to_string(C - 1) + " (the chart has " +
                              std::to_string(C) + ")");
-    Clamp clamp{k.text, {}, k.path};
+    Clamp clamp{k.text, {}, k.path, k.force};
     for (size_t id = 0; id < points.size(); ++id) {
       const KnitPoint& q = points[id];
       const bool in = k.where == Where::Bottom    ? q.level == 0

@@ -72,6 +72,12 @@ struct KnitParams {
   KnitPins pins = KnitPins::None;  // shorthand for the common clamps: held before `clamps`
   // Clamps (knit.clamps; models/knit_clamps.hpp, docs/knit.md "Under load").
   std::vector<KnitClampSpec> clamps;
+  // Forces on points (knit.forces; models/knit_clamps.hpp), N at the last load step.
+  std::vector<KnitPointForce> point_forces;
+  // knit.load_steps, [0, 1000]: N equal load steps to load fraction 1, each an equilibrium
+  // warm-started from the last, the reactions written per step (src/scene/knit_load_steps.hpp);
+  // 0 (the default) = one step, as before (docs/knit.md, "Under load").
+  int load_steps = 0;
   // Which network (docs/knit.md, "Networks"): the stabilised default, or paper 2's bare network.
   KnitNetwork network = KnitNetwork::Stabilised;
   // s, dimensionless, in [0, 1]: stiffness of the stabiliser's shear and bending springs
@@ -92,7 +98,7 @@ struct KnitParams {
 
   // Throws std::invalid_argument naming the field by its `knit --set` key (knit.loop_radius,
   // knit.wale_stiffness, knit.course_stiffness, knit.damping, knit.areal_density,
-  // knit.stabiliser, knit.bending; max_points has none) and the accepted range with units.
+  // knit.stabiliser, knit.bending, knit.load_steps; max_points has none) and the accepted range with units.
   void validate() const;
   // True when the network has no stabiliser (paper 2's mechanism): network Paper or s = 0.
   bool mechanism() const { return network == KnitNetwork::Paper || stabiliser_ratio == 0.0; }

@@ -9,6 +9,7 @@
 // any status but equilibrium still writes everything and exits 3 -- or 128 + the signal (130, 143)
 // when Ctrl-C or SIGTERM stopped it (status interrupted, src/cli/interrupt.hpp).
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <filesystem>
 #include <iostream>
 #include <map>
@@ -22,6 +23,7 @@
 #include "src/cli/commands.hpp"
 #include "src/core/stop_request.hpp"
 #include "src/io/drape_outputs.hpp"
+#include "src/io/knit_load_outputs.hpp"
 #include "src/io/knit_outputs.hpp"
 #include "src/io/progress.hpp"
 #include "src/io/run_state.hpp"
@@ -94,6 +96,13 @@ std::string human_summary(const KnitScene& scene, const KnitResult& r, const std
     t.rows.push_back({"reactions", text + "; with the weight they sum to (" +
                                        format_number(balance.x, 3) + ", " +
                                        format_number(balance.y, 3) + ") N"});
+  }
+  if (!r.load_steps.empty()) {  // a run under load: the balance with the applied loads
+    const KnitLoadStep& last = r.load_steps.back();
+    t.rows.push_back({"load steps", std::to_string(r.load_steps.size()) + " of " +
+                                        std::to_string(std::max(1, scene.params.load_steps)) +
+                                        " (loads.csv), load " + format_number(last.load, 4)});
+    t.rows.push_back({"balance", knit_balance_text(last.balance)});
   }
   t.rows.push_back({"outputs", dir + "/"});
   return t.text();

@@ -79,6 +79,10 @@ void run(const TensileArgs& args) {
         std::string(scene.params.pins != KnitPins::None ? "knit.pins" : "knit.clamps") +
         ": tensile clamps the specimen itself (--direction); leave knit.pins and knit.clamps "
         "unset");
+  if (!scene.params.point_forces.empty() || scene.params.load_steps > 0)
+    throw std::invalid_argument(
+        std::string(scene.params.load_steps > 0 ? "knit.load_steps" : "knit.forces") +
+        ": tensile steps its own clamp (--steps) and applies no force; leave it unset");
 
   bool created = false;
   const fs::path dir = make_output_dir(args.out, "tensile-" + scene.name, &created);
@@ -90,7 +94,7 @@ void run(const TensileArgs& args) {
     fs::create_directories(dir / name);
     KnitScene at = scene;
     at.chart = r.specimen;
-    KnitResult kr{r.model, kept.stats, 0.0, kept.x, v, kept.positions, {}, {}, nullptr};
+    KnitResult kr{r.model, kept.stats, 0.0, kept.x, v, kept.positions, {}, {}, nullptr, {}};
     // The yarn measures of this state alone (a knit run's are over its whole run).
     const YarnPolylines rest_lines = yarn_polylines(r.model, r.model.rest_positions());
     const YarnPolylines lines = yarn_polylines(r.model, kept.positions);

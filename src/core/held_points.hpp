@@ -50,11 +50,15 @@ struct ClampPath {
   Vec3 at(double load) const;
 };
 
-// A clamp: a set of held points (indices into HeldPoints) moved together along a path.
+// A clamp: a set of held points (indices into HeldPoints) moved together along a path, or a
+// rigid bar under a force (force control, models/force_control.hpp): its non-zero components are
+// loaded (the bar's position along them an unknown), the others held where the path puts them.
 struct Clamp {
   std::string name;       // as the user named it ("top", "wales 0-3")
   std::vector<int> held;  // indices into the model's held points
   ClampPath path;
+  Vec3 force{};  // N at load fraction 1 (applied as load x force); zero: displacement control
+  bool forced() const { return force.x != 0.0 || force.y != 0.0 || force.z != 0.0; }
 };
 
 // Holds every clamp's points at rest[k] + path.at(load) (rest: every held point's rest position,

@@ -1,3 +1,4 @@
+#include "src/io/knit_load_outputs.hpp"
 #include "src/io/knit_outputs.hpp"
 
 #include <algorithm>
@@ -322,6 +323,13 @@ nlohmann::json knit_summary(const KnitScene& scene, const KnitResult& r,
           {"options", to_json(scene.options)},
           {"units", knit_units(params_json(m.params), to_json(scene.options))}};
   if (!m.clamps.empty()) summary["clamps"] = clamps_json(m, stats.t_final, r.x);
+  if (!r.load_steps.empty()) {  // a run under load: the balance counts the applied loads
+    summary["loads"] = knit_loads_json(r);
+    if (!m.clamps.empty()) {
+      summary["clamps"]["applied_N"] = summary["loads"]["applied_N"];
+      summary["clamps"]["balance_N"] = summary["loads"]["balance_N"];
+    }
+  }
   if (r.yarn) add_yarn_knit_summary(*r.yarn, r.x.size(), summary);  // knit.model = yarn
   return summary;
 }
@@ -332,6 +340,10 @@ void write_knit_outputs(const fs::path& dir, const KnitScene& scene, const KnitR
   const RunStats& stats = r.stats;
   write_points_csv(dir / "points.csv", m, r.positions);
   write_typevalue_csv(dir / "typevalue.csv", m, r.positions);
+  if (!r.load_steps.empty())
+    write_file_atomic(dir / "loads.csv", knit_loads_csv(r));
+  else
+    remove_stale_output(dir / "loads.csv");
   CenterlineCache centerlines(m);
   // knit.model = yarn: the yarn's own polylines and measures, not curves through the points.
   const std::vector<CurveSamples>& lines =

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "src/base/text.hpp"
+#include "src/scene/knit_load_steps.hpp"
 #include "src/scene/yarn_knit_run.hpp"
 
 namespace knitsim {
@@ -101,16 +102,22 @@ KnitStart start_knit(const KnitScene& scene) {
       throw std::invalid_argument(
           "knit.model = yarn holds its first and last courses itself: knit.pins, knit.clamps and "
           "knit.gravity apply to knit.model = network only (docs/yarn_model.md)");
+    if (knit_load_stepped(scene.params))
+      throw std::invalid_argument(
+          "knit.forces and knit.load_steps apply to knit.model = network only (docs/knit.md, "
+          "\"Under load\")");
     return start_yarn_knit(scene);
   }
   KnitStart s{build_knit(scene.chart, scene.params), 0.0, {}, {}, nullptr};  // validates params
   refuse_overlap_at_rest(s.model);
+  validate_knit_loads(s.model);
   s.x.resize(s.model.network.dof());
   s.v.resize(s.model.network.dof());
   s.model.network.initial_state(s.x.data(), s.v.data());
   // Moving clamps stand at their path's end (load fraction 1): a knit run is one load step
-  // (knitsim tensile steps through them).
-  const bool moves = std::any_of(s.model.clamps.begin(), s.model.clamps.end(),
+  // (knitsim tensile steps through them; so does a run under load, from rest).
+  const bool moves = !knit_load_stepped(scene.params) &&
+                     std::any_of(s.model.clamps.begin(), s.model.clamps.end(),
                                  [](const Clamp& c) { return !c.path.fixed(); });
   if (moves) {
     HeldPoints& held = *s.model.system().held_points();
@@ -124,6 +131,10 @@ KnitStart start_knit(const KnitScene& scene) {
 void continue_knit(KnitStart& start, const RunState& from) {
   if (start.yarn)
     throw std::invalid_argument("knit.model = yarn cannot go on from a saved state yet");
+  if (knit_load_stepped(start.model.params))
+    throw std::invalid_argument(
+        "a run under load (knit.forces, a clamp's force, knit.load_steps) steps from rest; it "
+        "cannot go on from a saved state");
   if (from.x.size() != start.x.size())  // same chart and parameters: only a corrupt file gets here
     throw std::invalid_argument("the state has " + std::to_string(from.x.size()) +
                                 " unknowns; this chart has " + std::to_string(start.x.size()));
@@ -141,7 +152,7 @@ KnitResult run_knit(KnitStart start, const KnitScene& scene, const std::string& 
   if (start.yarn) return run_yarn_knit(std::move(start), scene, integrator, observer);
   std::unique_ptr<Integrator> integ = make_integrator(integrator);
   KnitResult r{std::move(start.model), {}, start.t, std::move(start.x), std::move(start.v),
-               {}, {}, {}, nullptr};
+               {}, {}, {}, nullptr, {}};
   const KnitModel& model = r.model;
   const int dof = model.network.dof();
   const YarnPolylines rest_lines = yarn_polylines(model, model.rest_positions());
@@ -154,8 +165,11 @@ KnitResult run_knit(KnitStart start, const KnitScene& scene, const std::string& 
   ClearanceOverRun clearance(model, &recorder, kClearanceResample);
   clearance.observe(r.t_start, r.x.data(), true);
   const double measure_cpu_before = clearance.cpu_seconds();
-  r.stats = run_to_equilibrium(r.model.system(), *integ, scene.options, r.x, r.v, &clearance,
-                               r.t_start);
+  r.stats = knit_load_stepped(scene.params)
+                ? run_knit_load_steps(r.model, *integ, scene.options, r.x, r.v, &clearance,
+                                      r.load_steps)
+                : run_to_equilibrium(r.model.system(), *integ, scene.options, r.x, r.v,
+                                     &clearance, r.t_start);
   measures.measure_cpu_seconds = clearance.cpu_seconds() - measure_cpu_before;
   clearance.observe(r.stats.t_final, r.x.data(), true);
   measures.min_clearance = clearance.minimum();

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "models/knit_loads.hpp"
 #include "models/knit_loops.hpp"
 #include "models/yarn_knit.hpp"
 #include "solvers/integrator.hpp"
@@ -86,6 +87,25 @@ KnitStart start_knit(const KnitScene& scene);
 // has N unknowns; this chart has M", or that its yarns lie inside the contact's core).
 void continue_knit(KnitStart& start, const RunState& from);
 
+// Each clamp's reaction at (t, x) (src/core/held_points.hpp): the force the clamp exerts on the
+// fabric, N, its points, and its displacement from rest, m.
+struct ClampReaction {
+  std::string name;
+  int points = 0;
+  Vec3 displacement;
+  Vec3 reaction;
+};
+
+// One load step's end (src/scene/knit_load_steps.hpp): its load fraction, its run's statistics,
+// each clamp's displacement and reaction, and the balance (models/knit_loads.hpp).
+struct KnitLoadStep {
+  int step = 0;       // 1..N
+  double load = 0.0;  // step / N
+  RunStats stats;
+  std::vector<ClampReaction> clamps;
+  KnitBalance balance;
+};
+
 // One knit run and what its reports show.
 struct KnitResult {
   KnitModel model;
@@ -98,6 +118,8 @@ struct KnitResult {
   // knit.model = yarn: what the yarn run adds (x, v are then the yarn's; positions, frames and
   // measures the interlacing points read off it); null for the network.
   std::shared_ptr<const YarnKnitRun> yarn;
+  // A run under load (knit_load_stepped): each load step's end, in order; empty otherwise.
+  std::vector<KnitLoadStep> load_steps;
 };
 
 // Runs `start` with the named integrator (make_integrator: throws std::invalid_argument for an
@@ -110,14 +132,6 @@ KnitResult run_knit(KnitStart start, const KnitScene& scene, const std::string& 
 KnitResult run_knit(const KnitScene& scene, const std::string& integrator,
                     RunObserver* observer = nullptr, const RunState* from = nullptr);
 
-// Each clamp's reaction at (t, x) (src/core/held_points.hpp): the force the clamp exerts on the
-// fabric, N, its points, and its displacement from rest, m.
-struct ClampReaction {
-  std::string name;
-  int points = 0;
-  Vec3 displacement;
-  Vec3 reaction;
-};
 std::vector<ClampReaction> knit_clamp_reactions(const KnitModel& m, double t,
                                                 const std::vector<double>& x);
 // The whole chart's weight, N (zero without gravity): at an equilibrium the clamps' reactions

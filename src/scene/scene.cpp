@@ -441,10 +441,33 @@ std::vector<Key> make_table() {
       "knit.clamps", Kind::Text,
       [](Scene& s, const std::string& v) { return (s.knit.clamps = parse_knit_clamps(v), true); },
       "clamps separated by ';': bottom|top|left|right|wales A-B|courses A-B, then fixed, move "
-      "DX,DY (m) or path S:DX,DY ... (0 < S <= 1)",
+      "DX,DY (m), path S:DX,DY ... (0 < S <= 1) or force FX,FY[,FZ] (N, each in [-1000, 1000])",
       [](const Scene& s) { return knit_clamps_text(s.knit.clamps); },
-      "held points beside knit.pins, fixed or moved along a path in the load fraction "
-      "(docs/knit.md, \"Under load\"); \"\" = none",
+      "held points beside knit.pins, fixed, moved along a path in the load fraction, or a rigid "
+      "bar under a force (docs/knit.md, \"Under load\"); \"\" = none",
+      KeyModel::Knit);
+  other(
+      "knit.forces", Kind::Text,
+      [](Scene& s, const std::string& v) {
+        return (s.knit.point_forces = parse_knit_point_forces(v), true);
+      },
+      "forces separated by ';': wale W course C lower|upper FX,FY[,FZ] (N, each in [-1000, "
+      "1000])",
+      [](const Scene& s) { return knit_point_forces_text(s.knit.point_forces); },
+      "dead loads on free points at the last load step (docs/knit.md, \"Under load\"); \"\" = "
+      "none",
+      KeyModel::Knit);
+  other(
+      "knit.load_steps", Kind::Integer,
+      [](Scene& s, const std::string& v) {
+        auto digit = [](unsigned char c) { return std::isdigit(c) != 0; };
+        if (v.empty() || v.size() > 9 || !std::all_of(v.begin(), v.end(), digit)) return false;
+        s.knit.load_steps = std::stoi(v);
+        return true;
+      },
+      "an integer in 0..1000", [](const Scene& s) { return std::to_string(s.knit.load_steps); },
+      "equal load steps to the clamps' paths' ends and the full forces, each an equilibrium "
+      "warm-started from the last, reactions per step in loads.csv (0 = one step, no loads.csv)",
       KeyModel::Knit);
   other(
       "knit.chart", Kind::Text,

@@ -105,6 +105,10 @@ TensileResult run_tensile(const KnitScene& scene, const TensileOptions& o, RunOb
         std::string(scene.params.pins != KnitPins::None ? "knit.pins" : "knit.clamps") +
         ": tensile clamps the specimen itself (--direction); leave knit.pins and knit.clamps "
         "unset");
+  if (!scene.params.point_forces.empty() || scene.params.load_steps > 0)
+    throw std::invalid_argument(
+        std::string(scene.params.load_steps > 0 ? "knit.load_steps" : "knit.forces") +
+        ": tensile steps its own clamp (--steps) and applies no force; leave it unset");
   const bool wale = o.direction == "wale";
   KnitScene spec_scene = scene;
   spec_scene.chart = tensile_specimen(scene.chart, o, scene.params);

@@ -102,7 +102,7 @@ KnitResult run_yarn_knit(KnitStart start, const KnitScene& scene, const std::str
   const double d = yk->d;
   const auto wall0 = std::chrono::steady_clock::now();
   const double cpu0 = cpu_now();
-  KnitResult r{std::move(start.model), {}, 0.0, {}, {}, {}, {}, {}, nullptr};
+  KnitResult r{std::move(start.model), {}, 0.0, {}, {}, {}, {}, {}, nullptr, {}};
   auto run = std::make_shared<YarnKnitRun>();
   run->knit = yk;
   run->clearance_start_over_d = yk->start_clearance / d;
