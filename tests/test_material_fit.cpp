@@ -6,14 +6,20 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "src/fit/lm_fit.hpp"
 #include "src/fit/material_fit.hpp"
 #include "src/scene/scene.hpp"
+#include "tests/cli_runner.hpp"
 
 using namespace knitsim;
+using namespace knitsim::test;
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -186,4 +192,52 @@ TEST_CASE("material fit: the ICA's result carries the same identifiability as LM
   const std::string text = identifiability_text(problem, fit);
   CHECK(text.find("not determined:") != std::string::npos);
   CHECK(text.find("not determined by the edges") != std::string::npos);
+}
+
+TEST_CASE("knitsim fit on the material model: the box from flags and keys, bad values refused "
+          "under their names, the outputs and the bound warning",
+          "[material_fit][cli]") {
+  TempDir tmp("material-fit-cli");
+  const std::string out = (tmp.path / "out").string();
+  const std::string base = std::string("fit --scene four_corner_material --set mesh.cells=10 ") +
+                           "--target '" + KNITSIM_INTERLOCK_TARGET + "' --optimizer lm --no-pictures";
+  struct Bad {
+    std::string args, message;
+  };
+  const std::vector<Bad> bad = {
+      {"--membrane-wale-min=-1", "--membrane-wale-min = -1: must be finite and > 0"},
+      {"--poisson-max=2", "--poisson-max = 2: must be in [0, 0.99]"},
+      {"--set fit.poisson_max=2", "fit.poisson_max = 2: must be in [0, 0.99]"},
+      {"--bending-course-max=1e-8", "--bending-course-max = 1e-8: must be >= fit.bending_course_min (1e-07)"},
+      {"--fit-parameters=membrane_wale,membrane_wale",
+       "--fit-parameters = membrane_wale,membrane_wale: must be distinct names, comma-separated, "
+       "of membrane_wale, membrane_course, membrane_shear, poisson, bending_wale, bending_course"}};
+  for (const Bad& b : bad) {
+    const Run r = run_knitsim(base + " --out '" + out + "' " + b.args, tmp);
+    CAPTURE(b.args);
+    CHECK(r.status == 2);
+    CHECK(r.err == "knitsim: error: " + b.message + "\n");
+    CHECK(!fs::exists(out));
+  }
+  // A box whose course stiffness cannot reach the interlock's (above 11 N/m on this mesh): the
+  // warning, on stderr and in summary.json; the wale stiffness, in the same small box, ends inside
+  // it (6.5 N/m, making up for the course's).
+  const Run r = run_knitsim(
+      base + " --out '" + out + "' --membrane-course-max 8 --set fit.membrane_wale_max=8", tmp);
+  REQUIRE(r.status == 0);
+  CHECK(r.err.find("knitsim fit: warning: membrane_course = 8 N/m ends on its upper bound "
+                   "(fit.membrane_course_max)") != std::string::npos);
+  CHECK(r.err.find("warning: membrane_wale") == std::string::npos);
+  CHECK(r.out.find("determined:     ") != std::string::npos);
+  std::ifstream in(tmp.path / "out" / "summary.json");
+  const nlohmann::json s = nlohmann::json::parse(in);
+  CHECK(s["model"] == "material");
+  CHECK(s["bounds"]["membrane_course_N_m"][1].get<double>() == 8.0);
+  CHECK(s["params"]["membrane_course_N_m"].get<double>() == Approx(8.0));
+  CHECK(s["bounds"]["membrane_wale_N_m"][1].get<double>() == 8.0);  // from the scene key
+  CHECK(s["warnings"].size() == 1);
+  CHECK(s["identifiability"]["parameters"]["membrane_course"]["on_bound"] == true);
+  CHECK(fs::exists(tmp.path / "out" / "drape" / "edges.csv"));
+  CHECK(fs::exists(tmp.path / "out" / "drape" / "target_edges.csv"));
+  CHECK(fs::exists(tmp.path / "out" / "manifest.json"));
 }

@@ -419,6 +419,7 @@ MaterialFitResult fit_material_lm(const MaterialFitProblem& problem, const LmSta
                                       : a.at.objective < b.at.objective;
   });
   MaterialResiduals best_at;
+  out.parameters = material_parameters(problem.base());  // until a start evaluates
   for (int k = 0; k < starts.refine && k < static_cast<int>(screened.size()); ++k) {
     Start& st = screened[k];
     if (st.at.failed) break;
@@ -452,7 +453,7 @@ MaterialFitResult fit_material_lm(const MaterialFitProblem& problem, const LmSta
                   std::to_string(std::min<int>(starts.refine, screened.size())) +
                   " refined, " + std::to_string(out.evaluations) + " drape evaluations";
   } else {
-    out.message = "every start failed to evaluate";
+    out.message = "every start failed to evaluate (the first: " + screened.front().at.message + ")";
   }
   out.wall_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
@@ -467,6 +468,7 @@ MaterialFitResult fit_material_ica(const MaterialFitProblem& problem, const IcaO
   out.message = r.message;
   out.evaluations = r.evaluations;
   out.failed_evaluations = r.failed_evaluations;
+  out.parameters = material_parameters(problem.base());  // until the best point evaluates
   if (r.status != IcaStatus::AllFailed) {
     out.u = r.best_x;
     const MaterialResiduals at = problem.evaluate(out.u);  // the sensitivities at the best
