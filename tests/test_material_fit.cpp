@@ -23,7 +23,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const char* kAll = "membrane_wale,membrane_course,membrane_shear,poisson,bending_wale,bending_course";
+const char* kAll =
+    "membrane_wale,membrane_course,membrane_shear,poisson,bending_wale,bending_course";
 
 Scene material_scene(int cells, const std::string& fitted, std::vector<std::string> sets = {}) {
   sets.push_back("mesh.cells=" + std::to_string(cells));
@@ -62,9 +63,10 @@ TEST_CASE("material fit: the analytic sensitivities match finite differences of 
   }
 }
 
-TEST_CASE("material fit: a four-corner drape's edges determine the two membrane stiffnesses, "
-          "not the shear, Poisson or bending",
-          "[material_fit]") {
+TEST_CASE(
+    "material fit: a four-corner drape's edges determine the two membrane stiffnesses, "
+    "not the shear, Poisson or bending",
+    "[material_fit]") {
   const Scene s = material_scene(20, kAll);
   const MaterialFitProblem problem(s, material_target(s), "");
   const std::vector<double> u0 = problem.u_of(material_parameters(s));
@@ -80,9 +82,10 @@ TEST_CASE("material fit: a four-corner drape's edges determine the two membrane 
   CHECK(id.combinations[2].edge_change_percent < 0.1 * MaterialIdentifiability::kDeterminedPercent);
 }
 
-TEST_CASE("material fit: the invented interlock (course edges 22 mm, wale edges 30 mm) fits "
-          "with A_w < A_c; paper 1's model cannot fit it",
-          "[material_fit]") {
+TEST_CASE(
+    "material fit: the invented interlock (course edges 22 mm, wale edges 30 mm) fits "
+    "with A_w < A_c; paper 1's model cannot fit it",
+    "[material_fit]") {
   const Target target = read_target_csv(KNITSIM_INTERLOCK_TARGET);
   const MaterialFitProblem problem(material_scene(20, "membrane_wale,membrane_course"), target, "");
   const MaterialFitResult fit = fit_material_lm(problem, LmStartOptions{}, LmOptions{}, 1);
@@ -104,9 +107,10 @@ TEST_CASE("material fit: the invented interlock (course edges 22 mm, wale edges 
   CHECK(p.objective > 10.0 * fit.objective);
 }
 
-TEST_CASE("material fit: parameters fitted on one mesh are recovered on another and predict "
-          "another specimen size",
-          "[material_fit]") {
+TEST_CASE(
+    "material fit: parameters fitted on one mesh are recovered on another and predict "
+    "another specimen size",
+    "[material_fit]") {
   const std::string fitted = "membrane_wale,membrane_course";
   // "Measured": the truth on a 20-cell mesh.
   const Target measured = material_target(material_scene(20, fitted, kTruth));
@@ -124,16 +128,16 @@ TEST_CASE("material fit: parameters fitted on one mesh are recovered on another 
   const std::vector<double> u_star = problem.u_of(truth);
   const MaterialResiduals mesh_error = problem.evaluate(u_star);
   REQUIRE_FALSE(mesh_error.failed);
-  const Eigen::VectorXd du =
-      -mesh_error.J.completeOrthogonalDecomposition().solve(mesh_error.r);
-  printf("mesh error 20 -> 30 cells at the truth: %.4g %% (Eq. 5); predicted shift of ln A_w "
-         "%.4g, ln A_c %.4g\n",
-         mesh_error.objective, du(0), du(1));
+  const Eigen::VectorXd du = -mesh_error.J.completeOrthogonalDecomposition().solve(mesh_error.r);
+  printf(
+      "mesh error 20 -> 30 cells at the truth: %.4g %% (Eq. 5); predicted shift of ln A_w "
+      "%.4g, ln A_c %.4g\n",
+      mesh_error.objective, du(0), du(1));
   for (int a = 0; a < 2; ++a) {
     const double off = fit.u[a] - u_star[a];
     printf("%s: fitted %.5g, truth %.5g, ln ratio %.4g (predicted %.4g)\n",
-           material_gene_names()[problem.fitted()[a]], std::exp(fit.u[a]), std::exp(u_star[a]),
-           off, du(a));
+           material_gene_names()[problem.fitted()[a]], std::exp(fit.u[a]), std::exp(u_star[a]), off,
+           du(a));
     CHECK(std::abs(off) <= 1.5 * std::abs(du(a)) + 0.005);
     CHECK(std::abs(off) <= 0.05);  // and within 5 %: the parameters carry over
   }
@@ -154,11 +158,11 @@ TEST_CASE("material fit: parameters fitted on one mesh are recovered on another 
   Eigen::VectorXd du_fit(2);
   for (int a = 0; a < 2; ++a) du_fit(a) = fit.u[a] - u_star[a];
   const MaterialResiduals at_truth = predict.evaluate(predict.u_of(truth));
-  const double bound =
-      100.0 * std::sqrt((at_truth.J * du_fit).squaredNorm() / at_truth.r.size());
-  printf("0.4 m specimen: fitted parameters' edges off the truth's by %.4g %% (linear bound %.4g "
-         "%%); the isotropic mean's by %.4g %%\n",
-         predicted.objective, bound, naive.objective);
+  const double bound = 100.0 * std::sqrt((at_truth.J * du_fit).squaredNorm() / at_truth.r.size());
+  printf(
+      "0.4 m specimen: fitted parameters' edges off the truth's by %.4g %% (linear bound %.4g "
+      "%%); the isotropic mean's by %.4g %%\n",
+      predicted.objective, bound, naive.objective);
   REQUIRE_FALSE(predicted.failed);
   CHECK(predicted.objective <= 1.5 * bound + 0.01);
   CHECK(predicted.objective < 0.2 * naive.objective);
@@ -194,13 +198,15 @@ TEST_CASE("material fit: the ICA's result carries the same identifiability as LM
   CHECK(text.find("not determined by the edges") != std::string::npos);
 }
 
-TEST_CASE("knitsim fit on the material model: the box from flags and keys, bad values refused "
-          "under their names, the outputs and the bound warning",
-          "[material_fit][cli]") {
+TEST_CASE(
+    "knitsim fit on the material model: the box from flags and keys, bad values refused "
+    "under their names, the outputs and the bound warning",
+    "[material_fit][cli]") {
   TempDir tmp("material-fit-cli");
   const std::string out = (tmp.path / "out").string();
   const std::string base = std::string("fit --scene four_corner_material --set mesh.cells=10 ") +
-                           "--target '" + KNITSIM_INTERLOCK_TARGET + "' --optimizer lm --no-pictures";
+                           "--target '" + KNITSIM_INTERLOCK_TARGET +
+                           "' --optimizer lm --no-pictures";
   struct Bad {
     std::string args, message;
   };
@@ -208,7 +214,8 @@ TEST_CASE("knitsim fit on the material model: the box from flags and keys, bad v
       {"--membrane-wale-min=-1", "--membrane-wale-min = -1: must be finite and > 0"},
       {"--poisson-max=2", "--poisson-max = 2: must be in [0, 0.99]"},
       {"--set fit.poisson_max=2", "fit.poisson_max = 2: must be in [0, 0.99]"},
-      {"--bending-course-max=1e-8", "--bending-course-max = 1e-8: must be >= fit.bending_course_min (1e-07)"},
+      {"--bending-course-max=1e-8",
+       "--bending-course-max = 1e-8: must be >= fit.bending_course_min (1e-07)"},
       {"--fit-parameters=membrane_wale,membrane_wale",
        "--fit-parameters = membrane_wale,membrane_wale: must be distinct names, comma-separated, "
        "of membrane_wale, membrane_course, membrane_shear, poisson, bending_wale, bending_course"}};
