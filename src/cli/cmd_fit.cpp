@@ -32,6 +32,9 @@
 // an uninterrupted one. A second signal kills at once (src/cli/interrupt.hpp).
 // Exit 3 (after writing) when every evaluation failed or the fitted drape's re-run does not
 // reach equilibrium.
+// model.kind = material: the material parameters in material units, the box from the fit.* keys
+// and their flags (--membrane-wale-min ...), outputs as src/cli/cmd_fit_material.hpp says; no
+// checkpoint (--resume is refused).
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <fstream>
@@ -339,9 +342,11 @@ void print_ica_start(const FitArgs& args, const Scene& base, const DrapeFitProbl
 }
 
 // The ICA fit's console report: the history, the status and the fitted parameters.
+// With the fitted drape (a finished fit), also LM's line on what the edges do not determine,
+// from the sensitivities at the best country (one more drape, not counted in the fit's).
 void print_ica_result(const FitArgs& args, const Scene& base, const DrapeFitProblem& problem,
                       const DrapeFitResult& fit, const Table& history,
-                      const std::filesystem::path& dir) {
+                      const std::filesystem::path& dir, const DrapeResult* drape) {
   std::cout << history.text() << "\nstatus: " << fit.message << "\n";
   Table t;
   t.columns = {"parameter", "fitted"};
@@ -355,7 +360,14 @@ void print_ica_result(const FitArgs& args, const Scene& base, const DrapeFitProb
                                 std::to_string(fit.failed_evaluations) + " failed)"},
             {"wall", format_number(fit.wall_seconds, 4) + " s"},
             {"outputs", dir.string() + "/"}};
-  std::cout << t.text() << mesh_note(base, fit.params) << std::flush;
+  std::cout << t.text() << mesh_note(base, fit.params);
+  if (drape && drape->stats.status == RunStatus::Equilibrium) {
+    const DrapeResiduals at = drape_residuals(problem, fit.best_x, args.lm.polish);
+    if (!at.failed)
+      std::cout << not_determined_line(identifiability(at, fit.best_x), drape->max_strain,
+                                       fit.params);
+  }
+  std::cout << std::flush;
   warn_if_upside_down(problem, args.target);
 }
 
@@ -375,7 +387,8 @@ void run_ica_fit(const FitArgs& args, const Scene& base, const DrapeFitProblem& 
       ica_fit_report(base, args.sets, args.target, problem, fit, drape ? &drape->result : nullptr,
                      resumed_from ? resumed_from->decade : -1);
   write_fit(dir, report, problem, drape, !args.no_pictures);
-  if (!args.quiet) print_ica_result(args, base, problem, fit, report.table, dir);
+  if (!args.quiet)
+    print_ica_result(args, base, problem, fit, report.table, dir, drape ? &drape->result : nullptr);
   if (fit.status == IcaStatus::Interrupted) {
     std::cerr << "knitsim fit: interrupted by " << interrupt->signal_name() << " after decade "
               << fit.history.back().decade << " of " << args.ica.decades
@@ -476,8 +489,9 @@ void register_fit_command(CLI::App& app) {
   IcaOptions& o = args->ica;
   CLI::App* cmd = app.add_subcommand(
       "fit",
-      "Fit the drape model's parameters (Table 3 box) to a target with the ICA; writes "
-      "summary.json, history.csv, the fitted drape and manifest.json into --out");
+      "Fit the drape model's parameters (paper 1: Table 3 box; model.kind = material: material "
+      "units, the fit.* box) to a target with the ICA or LM; writes summary.json, the fitted "
+      "drape and manifest.json into --out");
   cmd->add_option("--scene", args->scene,
                   "Base scene (four_corner, two_corner, two_corner_slack or a TOML file): "
                   "fabric, pins and run options")

@@ -125,12 +125,14 @@ void run_material_fit_command(const Scene& base, const Target& target,
     Table t;
     t.columns = {"parameter", "fitted", "box", "relative standard error",
                  "if the others were known"};
-    auto rel = [](double v) { return std::isfinite(v) ? format_number(100.0 * v, 3) + " %" : "none"; };
+    auto rel = [](double v) {
+      return std::isfinite(v) ? format_number(100.0 * v, 3) + " %" : "none";
+    };
     for (int g = 0; g < kMaterialGenes; ++g) {
-      std::vector<std::string> row = {material_gene_names()[g],
-                                      format_number(fit.parameters[g], 5) + " " +
-                                          material_gene_units()[g],
-                                      "held (scene)", "", ""};
+      std::vector<std::string> row = {
+          material_gene_names()[g],
+          format_number(fit.parameters[g], 5) + " " + material_gene_units()[g], "held (scene)", "",
+          ""};
       for (size_t a = 0; a < problem.fitted().size() && fit.ok; ++a)
         if (problem.fitted()[a] == g) {
           row[2] = format_number(base.fit_box.lower(g), 3) + " .. " +
@@ -140,8 +142,8 @@ void run_material_fit_command(const Scene& base, const Target& target,
         }
       t.rows.push_back(row);
     }
-    t.rows.push_back({"objective", fit.ok ? format_number(fit.objective, 6) + " %" : "-", "", "",
-                      ""});
+    t.rows.push_back(
+        {"objective", fit.ok ? format_number(fit.objective, 6) + " %" : "-", "", "", ""});
     t.rows.push_back({"evaluations",
                       std::to_string(fit.evaluations) + " (" +
                           std::to_string(fit.failed_evaluations) + " failed)",

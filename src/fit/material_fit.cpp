@@ -18,9 +18,9 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kForceStep = 1e-4;         // in u, for dF/du
+constexpr double kForceStep = 1e-4;            // in u, for dF/du
 constexpr double kMeasureDisplacement = 1e-7;  // m, for the measurement's tangent
-constexpr double kOnBound = 1e-3;             // of the box's width in u
+constexpr double kOnBound = 1e-3;              // of the box's width in u
 
 bool is_log(int gene) { return gene != kPoisson; }
 
@@ -60,9 +60,9 @@ std::vector<Vec3> all_positions(const MaterialSheet& sheet, const std::vector<do
 }  // namespace
 
 const std::array<const char*, kMaterialGenes>& material_gene_names() {
-  static const std::array<const char*, kMaterialGenes> names = {
-      "membrane_wale", "membrane_course", "membrane_shear",
-      "poisson",       "bending_wale",    "bending_course"};
+  static const std::array<const char*, kMaterialGenes> names = {"membrane_wale",  "membrane_course",
+                                                                "membrane_shear", "poisson",
+                                                                "bending_wale",   "bending_course"};
   return names;
 }
 
@@ -186,8 +186,7 @@ Scene MaterialFitProblem::scene_of(const std::vector<double>& u) const {
   return with_material_parameters(base_, parameters_of(u));
 }
 
-MaterialResiduals MaterialFitProblem::evaluate(const std::vector<double>& u,
-                                               bool jacobian) const {
+MaterialResiduals MaterialFitProblem::evaluate(const std::vector<double>& u, bool jacobian) const {
   MaterialResiduals out;
   out.objective = kNaN;
   MaterialDrapeResult run;
@@ -237,8 +236,8 @@ MaterialResiduals MaterialFitProblem::evaluate(const std::vector<double>& u,
         for (int side : {1, -1}) {
           std::array<double, kMaterialGenes> q = p;
           q[g] = is_log(g) ? p[g] * std::exp(side * kForceStep) : p[g] + side * kForceStep;
-          const MaterialSheet moved(with_material_parameters(base_, q).material.sheet(
-              base_.params));
+          const MaterialSheet moved(
+              with_material_parameters(base_, q).material.sheet(base_.params));
           std::vector<double> fq(n);
           moved.net_force(x.data(), fq.data());
           for (int i = 0; i < n; ++i)
@@ -257,9 +256,8 @@ MaterialResiduals MaterialFitProblem::evaluate(const std::vector<double>& u,
         for (size_t e = 0; e < edges.size(); ++e)
           for (int i = 0; i <= kEdgePolynomialDegree; ++i)
             dcoef(e * (kEdgePolynomialDegree + 1) + i, a) =
-                eps > 0.0
-                    ? (plus[e].coefficients[i] - minus[e].coefficients[i]) / (2.0 * eps)
-                    : 0.0;
+                eps > 0.0 ? (plus[e].coefficients[i] - minus[e].coefficients[i]) / (2.0 * eps)
+                          : 0.0;
       }
     } else {
       edges = measure_material_edges(sheet, run.positions);
@@ -367,7 +365,8 @@ std::vector<std::string> bound_warnings(const MaterialFitProblem& problem,
     if (!fit.identifiability.parameters[a].on_bound) continue;
     const int g = problem.fitted()[a];
     const bool low = fit.u[a] - lo[a] < hi[a] - fit.u[a];
-    const std::string key = std::string("fit.") + material_gene_names()[g] + (low ? "_min" : "_max");
+    const std::string key =
+        std::string("fit.") + material_gene_names()[g] + (low ? "_min" : "_max");
     out.push_back(std::string(material_gene_names()[g]) + " = " +
                   format_number(fit.parameters[g], 4) + " " + material_gene_units()[g] +
                   " ends on its " + (low ? "lower" : "upper") + " bound (" + key +
@@ -419,6 +418,7 @@ MaterialFitResult fit_material_lm(const MaterialFitProblem& problem, const LmSta
                                       : a.at.objective < b.at.objective;
   });
   MaterialResiduals best_at;
+  out.parameters = material_parameters(problem.base());  // until a start evaluates
   for (int k = 0; k < starts.refine && k < static_cast<int>(screened.size()); ++k) {
     Start& st = screened[k];
     if (st.at.failed) break;
@@ -449,10 +449,10 @@ MaterialFitResult fit_material_lm(const MaterialFitProblem& problem, const LmSta
   if (out.ok) {
     finish(problem, out, best_at);
     out.message = std::to_string(screened.size()) + " start(s), " +
-                  std::to_string(std::min<int>(starts.refine, screened.size())) +
-                  " refined, " + std::to_string(out.evaluations) + " drape evaluations";
+                  std::to_string(std::min<int>(starts.refine, screened.size())) + " refined, " +
+                  std::to_string(out.evaluations) + " drape evaluations";
   } else {
-    out.message = "every start failed to evaluate";
+    out.message = "every start failed to evaluate (the first: " + screened.front().at.message + ")";
   }
   out.wall_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
@@ -467,6 +467,7 @@ MaterialFitResult fit_material_ica(const MaterialFitProblem& problem, const IcaO
   out.message = r.message;
   out.evaluations = r.evaluations;
   out.failed_evaluations = r.failed_evaluations;
+  out.parameters = material_parameters(problem.base());  // until the best point evaluates
   if (r.status != IcaStatus::AllFailed) {
     out.u = r.best_x;
     const MaterialResiduals at = problem.evaluate(out.u);  // the sensitivities at the best
@@ -491,8 +492,7 @@ std::string identifiability_text(const MaterialFitProblem& problem, const Materi
       if (std::abs(w) < 0.05) continue;
       const int g = problem.fitted()[a];
       s += (s.empty() ? (w < 0 ? "-" : "") : (w < 0 ? " - " : " + ")) +
-           format_number(std::abs(w), 2) + (is_log(g) ? " ln " : " ") +
-           material_gene_names()[g];
+           format_number(std::abs(w), 2) + (is_log(g) ? " ln " : " ") + material_gene_names()[g];
     }
     return s;
   };

@@ -86,34 +86,34 @@ Target material_target(const Scene& scene, const std::string& integrator = "");
 struct MaterialResiduals {
   bool failed = true;
   std::string message;
-  double objective = 0.0;  // 100 rms(r), percent
-  Eigen::VectorXd r;       // measured - simulated coefficients
-  Eigen::MatrixXd J;       // dr/du over the fitted parameters (columns in MaterialGene order)
+  double objective = 0.0;   // 100 rms(r), percent
+  Eigen::VectorXd r;        // measured - simulated coefficients
+  Eigen::MatrixXd J;        // dr/du over the fitted parameters (columns in MaterialGene order)
   int negative_pivots = 0;  // of -K (0: a stable equilibrium)
   double residual = 0.0;    // static residual after the polish
   double centre_sag = 0.0;  // m
 };
 
 struct MaterialDetermined {
-  double singular_value = 0.0;     // of the relative Jacobian
-  std::vector<double> combination;  // right singular vector over the fitted parameters
+  double singular_value = 0.0;       // of the relative Jacobian
+  std::vector<double> combination;   // right singular vector over the fitted parameters
   double edge_change_percent = 0.0;  // Eq. 5 change for a 10 % change of the combination
-  bool determined = false;          // edge_change_percent >= kDeterminedPercent
+  bool determined = false;           // edge_change_percent >= kDeterminedPercent
 };
 
 struct MaterialParameterError {
   double value = 0.0;
-  double relative_standard_error = 0.0;  // of ln p (nu: absolute); +inf when not determined
+  double relative_standard_error = 0.0;     // of ln p (nu: absolute); +inf when not determined
   double conditional_relative_error = 0.0;  // the same with the others known
-  bool on_bound = false;                 // within 1e-3 (in u, relative to the box) of a bound
+  bool on_bound = false;                    // within 1e-3 (in u, relative to the box) of a bound
 };
 
 struct MaterialIdentifiability {
   static constexpr double kDeterminedPercent = 0.1;
-  std::vector<int> fitted;                      // MaterialGene of each column
-  std::vector<MaterialDetermined> combinations;  // by decreasing singular value
+  std::vector<int> fitted;                         // MaterialGene of each column
+  std::vector<MaterialDetermined> combinations;    // by decreasing singular value
   std::vector<MaterialParameterError> parameters;  // per fitted parameter
-  double sigma = 0.0;                           // residual standard deviation s
+  double sigma = 0.0;                              // residual standard deviation s
   int residuals = 0, determined = 0;
 };
 
@@ -124,7 +124,7 @@ class MaterialFitProblem {
   MaterialFitProblem(Scene base, const Target& target, std::string integrator);
 
   const std::vector<int>& fitted() const { return fitted_; }  // MaterialGene per coordinate
-  std::vector<double> lower() const;  // box in u (ln p, or nu)
+  std::vector<double> lower() const;                          // box in u (ln p, or nu)
   std::vector<double> upper() const;
   std::vector<double> u_of(const std::array<double, kMaterialGenes>& p) const;
   std::array<double, kMaterialGenes> parameters_of(const std::vector<double>& u) const;

@@ -107,7 +107,7 @@ struct MaterialFitBox {
   // is what a hanging four-corner drape's edges determine (docs/fitting.md).
   std::string parameters = "membrane_wale,membrane_course";
 
-  // Pointers to the bounds in parameter order.
+  // The bounds of parameter g (the order above).
   double lower(int parameter) const;
   double upper(int parameter) const;
   bool fitted(int parameter) const;  // named in `parameters`

@@ -1033,8 +1033,8 @@ DrapeResult run_drape(const Scene& scene, const std::string& integrator, RunObse
   scene.validate();
   if (scene.material.kind == DrapeModelKind::Material)
     throw std::invalid_argument(
-        "model.kind = material: only knitsim drape runs the material model so far (fit, repro "
-        "and the Python module run paper 1's)");
+        "model.kind = material: only knitsim drape and knitsim fit run the material model so far "
+        "(repro and the Python module run paper 1's)");
   auto integ = make_integrator(integrator);
   DrapeResult r{build_drape_grid(scene.params), 0, RunStats{}, {}, {}, 0.0, 0.0, {}, {}, 0.0};
   const SpringNetwork& net = r.grid.network;
