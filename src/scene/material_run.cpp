@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 
 #include "solvers/equilibrium_check.hpp"
@@ -85,14 +86,25 @@ MaterialDrapeResult run_material_drape(const Scene& scene, const std::string& in
   r.sheet = sheet;
   const MaterialSheet& s = *sheet;
   r.mirrors = requested_mirrors(s, scene.params.symmetry);
+  std::unique_ptr<MirroredSheet> reduced;
+  std::vector<double> q, qv;
   if (r.mirrors.order() > 1) {
-    const MirroredSheet reduced(sheet, r.mirrors);
-    std::vector<double> q, qv;
-    r.stats = run_to_equilibrium(reduced, *integ, scene.options, q, qv, observer, 0.0);
-    r.integrated_dof = reduced.dof();
+    reduced = std::make_unique<MirroredSheet>(sheet, r.mirrors);
+    try {
+      r.stats = run_to_equilibrium(*reduced, *integ, scene.options, q, qv, observer, 0.0);
+    } catch (const std::invalid_argument&) {
+      // auto: an integrator option that needs the whole sheet (cvode-bdf-gmres's block-Jacobi
+      // preconditioner) refuses the reduction at its start: run whole instead (as paper 1's).
+      if (scene.params.symmetry != DrapeSymmetry::Auto) throw;
+      reduced.reset();
+      r.mirrors = SheetMirrors{};
+    }
+  }
+  if (reduced) {
+    r.integrated_dof = reduced->dof();
     r.state_x.assign(s.dof(), 0.0);
     r.state_v.assign(s.dof(), 0.0);
-    reduced.unfold(q.data(), r.state_x.data());
+    reduced->unfold(q.data(), r.state_x.data());
     if (scene.params.symmetry == DrapeSymmetry::Auto && r.stats.status == RunStatus::Equilibrium)
       certify_whole_sheet(scene, s, *integ, observer, r);
   } else {
