@@ -8,9 +8,10 @@
 four_corner_material (a 50 x 50 cm sheet, four 5 cm corner clamps) at mesh.cells = n for
 n = 10, 20, 40, 50, 80, 100, 160, 200 (--quick: 10, 20, 40), each by the default `equilibrium`
 solver (every end state certified), and paper 1's four_corner at the same cell count
-(model.natural_length = 0.5 m / n, the model's default reduction). Writes material_mesh.csv
-(model, n, h, centre sag, energy, largest strain, largest strain at least clamps.size from
-the clamps, steps, CPU s) and material_mesh.md (the
+(model.natural_length = 0.5 m / n), both at model.symmetry = auto: the largest mirror group
+each has (an eighth here, its equilibrium certified on the whole sheet). Writes
+material_mesh.csv (model, n, h, the group integrated, centre sag, energy, largest strain,
+largest strain at least clamps.size from the clamps, steps, CPU s) and material_mesh.md (the
 table, the observed order p = log2((s_n - s_2n) / (s_2n - s_4n)) of each triple n, 2n, 4n
 and its Richardson limit s_4n + (s_4n - s_2n) / (2^p - 1), for the sag, the energy and the
 largest strain). --quick exits 1 if a material run is not certified or its sag's successive
@@ -62,20 +63,22 @@ def main():
     rows = []
     if "--table" in sys.argv:  # the table again from a material_mesh.csv, nothing run
         with open(sys.argv[sys.argv.index("--table") + 1]) as f:
-            rows = [{k: (v if k in ("model", "status", "certificate") or v == ""
+            rows = [{k: (v if k in ("model", "symmetry", "status", "certificate") or v == ""
                          else int(v) if k in ("n", "steps") else float(v))
                      for k, v in r.items()} for r in csv.DictReader(f)]
         cells = []
     for n in cells:
         m = run(knitsim, "four_corner_material", [f"mesh.cells={n}"], os.path.join(work, f"m{n}"))
-        rows.append({"model": "material", "n": n, "h_m": 0.5 / n, "status": m["status"],
+        rows.append({"model": "material", "n": n, "h_m": 0.5 / n,
+                     "symmetry": m.get("symmetry", "none"), "status": m["status"],
                      "certificate": m.get("certificate", ""), "centre_sag_m": m["centre_sag_m"],
                      "energy_J": m["energy_J"], "max_strain": m["max_strain"],
                      "max_strain_away": m["max_strain_away_from_clamps"],
                      "steps": m["steps"], "cpu_s": m["cpu_seconds"]})
         p = run(knitsim, "four_corner", [f"model.natural_length={0.5 / n!r}"],
                 os.path.join(work, f"p{n}"))
-        rows.append({"model": "paper", "n": n, "h_m": 0.5 / n, "status": p["status"],
+        rows.append({"model": "paper", "n": n, "h_m": 0.5 / n,
+                     "symmetry": p.get("symmetry", "none"), "status": p["status"],
                      "certificate": p.get("certificate", ""), "centre_sag_m": p["centre_sag_m"],
                      "energy_J": "", "max_strain": p["max_strain"], "max_strain_away": "", "steps": p["steps"],
                      "cpu_s": p["cpu_seconds"]})
@@ -87,12 +90,12 @@ def main():
         w.writeheader()
         w.writerows(rows)
     lines = ["# The mesh dimension: material model and paper 1's, four corners, 50 x 50 cm", "",
-             "| model | n | h (mm) | status | centre sag (mm) | energy (mJ) | max strain (%) | "
-             "away from the clamps (%) | steps | CPU s |", "|---|---|---|---|---|---|---|---|---|---|"]
+             "| model | n | h (mm) | group | status | centre sag (mm) | energy (mJ) | max strain (%) | "
+             "away from the clamps (%) | steps | CPU s |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         e = "" if r["energy_J"] == "" else f"{1e3 * r['energy_J']:.6f}"
         a = "" if r["max_strain_away"] == "" else f"{100 * r['max_strain_away']:.5f}"
-        lines.append(f"| {r['model']} | {r['n']} | {1e3 * r['h_m']:.2f} | {r['status']} "
+        lines.append(f"| {r['model']} | {r['n']} | {1e3 * r['h_m']:.2f} | {r.get('symmetry', '')} | {r['status']} "
                      f"({r['certificate']}) | {1e3 * r['centre_sag_m']:.5f} | {e} | "
                      f"{100 * r['max_strain']:.4f} | {a} | {r['steps']} | {r['cpu_s']:.2f} |")
     lines += ["", "Observed order p of the triple n, 2n, 4n and its Richardson limit:", "",

@@ -3,9 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 
-#include "solvers/equilibrium_check.hpp"
+#include "src/scene/whole_sheet_check.hpp"
 
 namespace knitsim {
 
@@ -38,40 +39,6 @@ SheetMirrors requested_mirrors(const MaterialSheet& s, DrapeSymmetry symmetry) {
   return m;
 }
 
-// model.symmetry = auto: the reduced run cannot see the antisymmetric modes, so its unfolded
-// equilibrium x is certified on the whole sheet (as paper 1's, src/scene/scene.cpp): a whole
-// K with a negative pivot sends the run on over the whole sheet from x moved 1 mm along the
-// most negative mode (or from the flat start where none is found).
-void certify_whole_sheet(const Scene& scene, const MaterialSheet& s, Integrator& integ,
-                         RunObserver* observer, MaterialDrapeResult& r) {
-  std::vector<double>& x = r.state_x;
-  const double t = r.stats.t_final;
-  detail::StiffnessProbe probe(s, scene.options.factorization);
-  const detail::StiffnessProbe::Result p =
-      probe.probe(t, x.data(), detail::StiffnessProbe::Measure::Spectrum);
-  r.whole_sheet_checked = true;
-  r.stats.factorisations += probe.factorisations();
-  if (p.factored && !p.singular && p.negative_pivots == 0) {
-    r.stats.min_eigenvalue = p.min_eigenvalue;  // the whole sheet's, not the reduction's
-    r.stats.eigenvalue_threshold = p.threshold;
-    return;
-  }
-  std::vector<double>& v = r.state_v;
-  v.assign(x.size(), 0.0);
-  std::string how = "is not a minimum of the whole sheet: continued on it";
-  if (!probe.leave_saddle(t, x.data(), 1e-3)) {  // m
-    s.initial_state(x.data(), v.data());
-    how = "is not certified on the whole sheet (K singular or nearly so): the whole sheet was "
-          "solved from its start";
-  }
-  const RunStats reduced = r.stats;
-  r.stats = run_to_equilibrium(s, integ, scene.options, x, v, observer, t);
-  add_counters(r.stats, reduced);
-  r.stats.message += "; the reduced equilibrium " + how;
-  r.mirrors = SheetMirrors{};
-  r.integrated_dof = s.dof();
-}
-
 }  // namespace
 
 MaterialDrapeResult run_material_drape(const Scene& scene, const std::string& integrator,
@@ -85,16 +52,35 @@ MaterialDrapeResult run_material_drape(const Scene& scene, const std::string& in
   r.sheet = sheet;
   const MaterialSheet& s = *sheet;
   r.mirrors = requested_mirrors(s, scene.params.symmetry);
+  std::unique_ptr<MirroredSheet> reduced;
+  std::vector<double> q, qv;
   if (r.mirrors.order() > 1) {
-    const MirroredSheet reduced(sheet, r.mirrors);
-    std::vector<double> q, qv;
-    r.stats = run_to_equilibrium(reduced, *integ, scene.options, q, qv, observer, 0.0);
-    r.integrated_dof = reduced.dof();
+    reduced = std::make_unique<MirroredSheet>(sheet, r.mirrors);
+    try {
+      r.stats = run_to_equilibrium(*reduced, *integ, scene.options, q, qv, observer, 0.0);
+    } catch (const std::invalid_argument&) {
+      // auto: an integrator option that needs the whole sheet (cvode-bdf-gmres's block-Jacobi
+      // preconditioner) refuses the reduction at its start: run whole instead (as paper 1's).
+      if (scene.params.symmetry != DrapeSymmetry::Auto) throw;
+      reduced.reset();
+      r.mirrors = SheetMirrors{};
+    }
+  }
+  if (reduced) {
+    r.integrated_dof = reduced->dof();
     r.state_x.assign(s.dof(), 0.0);
     r.state_v.assign(s.dof(), 0.0);
-    reduced.unfold(q.data(), r.state_x.data());
-    if (scene.params.symmetry == DrapeSymmetry::Auto && r.stats.status == RunStatus::Equilibrium)
-      certify_whole_sheet(scene, s, *integ, observer, r);
+    reduced->unfold(q.data(), r.state_x.data());
+    if (scene.params.symmetry == DrapeSymmetry::Auto && r.stats.status == RunStatus::Equilibrium) {
+      r.whole_sheet_checked = true;
+      const int order = r.mirrors.order();
+      if (continue_on_whole_sheet(s, *integ, scene.options, observer, 0.0,
+                                  order == 8 ? "eighth" : order == 4 ? "quarter" : "half",
+                                  r.state_x, r.state_v, r.stats)) {
+        r.mirrors = SheetMirrors{};
+        r.integrated_dof = s.dof();
+      }
+    }
   } else {
     r.stats = run_to_equilibrium(s, *integ, scene.options, r.state_x, r.state_v, observer, 0.0);
     r.integrated_dof = s.dof();

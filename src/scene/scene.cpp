@@ -30,7 +30,7 @@
 
 #include "models/mirror_reduced.hpp"
 #include "src/scene/fit_options.hpp"
-#include "solvers/equilibrium_check.hpp"
+#include "src/scene/whole_sheet_check.hpp"
 #include "src/base/files.hpp"
 #include "src/base/text.hpp"
 
@@ -984,42 +984,15 @@ std::optional<MirrorReduced> largest_reduction(const DrapeGrid& grid, DrapeSymme
   return std::nullopt;
 }
 
-// model.symmetry = auto: the reduced model cannot see the antisymmetric modes, so its unfolded
-// equilibrium is certified on the whole sheet. Where the whole sheet's K has a negative pivot,
-// the state is moved 1 mm along the most negative mode (largest component positive) and the
-// whole sheet runs on from there; where no negative mode is found (a singular K), the whole
-// sheet is solved from its start. The certificate is the whole sheet's either way.
+// model.symmetry = auto: the unfolded equilibrium x certified on the whole sheet
+// (continue_on_whole_sheet); where the run went on over it, the result is the whole sheet's.
 void certify_whole_sheet(const Scene& scene, const SpringNetwork& net, Integrator& integ,
                          RunObserver* observer, std::vector<double>& x, DrapeResult& r) {
-  const double t = r.stats.t_final;
-  detail::StiffnessProbe probe(net, scene.options.factorization);
-  // Its inertia and smallest eigenvalue: the stop (the Newton correction) was the reduction's.
-  const detail::StiffnessProbe::Result p =
-      probe.probe(t, x.data(), detail::StiffnessProbe::Measure::Spectrum);
   r.whole_sheet_checked = true;
-  if (p.factored && !p.singular && p.negative_pivots == 0) {
-    r.stats.min_eigenvalue = p.min_eigenvalue;  // the whole sheet's, not the reduction's
-    r.stats.eigenvalue_threshold = p.threshold;
+  std::vector<double> v;
+  if (!continue_on_whole_sheet(net, integ, scene.options, observer, r.t_start,
+                               to_string(r.symmetry), x, v, r.stats))
     return;
-  }
-  std::vector<double> v(x.size(), 0.0);
-  double from = t;
-  std::string how = "is not a minimum of the whole sheet: continued on it";
-  if (!probe.leave_saddle(t, x.data(), 1e-3)) {  // m
-    // No negative mode to leave along (a singular K, or a negative pivot too small for the
-    // power iteration): the flow would stay on the symmetric state, which the stop cannot
-    // certify. The whole sheet is solved from its own start instead.
-    net.initial_state(x.data(), v.data());
-    from = r.t_start;
-    how =
-        "is not certified on the whole sheet (K singular or nearly so): the whole sheet was "
-        "solved from its start";
-  }
-  IntegratorOptions options = scene.options;
-  const RunStats reduced = r.stats;
-  r.stats = run_to_equilibrium(net, integ, options, x, v, observer, from);
-  add_counters(r.stats, reduced);
-  r.stats.message += "; the " + std::string(to_string(r.symmetry)) + "'s equilibrium " + how;
   r.symmetry = DrapeSymmetry::None;
   r.state_x = x;
   r.state_v = v;
