@@ -18,8 +18,9 @@ namespace {
 // Steps of one round (above): short enough that the pattern follows the contacts.
 constexpr long kYarnRoundSteps = 50;
 // A ramp stage's carried start must keep every pair the contact sees this far apart (in d; the
-// barrier's core is at YarnParams::core_fraction = 0.7 d), else the stage is halved, at most
-// kYarnCarrySplits times.
+// barrier's core is at YarnParams::core_fraction = 0.7 d), or half its gap to the core where the
+// yarn is closer already; else the stage is halved, at most kYarnCarrySplits times, and then run
+// whole without the carry.
 constexpr double kYarnCarryClearance = 0.75;
 constexpr int kYarnCarrySplits = 4;
 
@@ -241,18 +242,30 @@ KnitResult run_yarn_knit(KnitStart start, const KnitScene& scene, const std::str
     // The stage's state: the yarn carried to the stage's scale (the held groups with it). A
     // carry that would put a pair near the barrier's core is halved (a stage inserted) up to
     // kYarnCarrySplits times; past that the stage starts where the last one ended.
-    double f = static_cast<double>(s) / stages;
+    const double f_stage = static_cast<double>(s) / stages;
+    double f = f_stage;
     std::vector<Vec3> moved = pos;
     if (ramp) {
+      // The floor: kYarnCarryClearance d, or half the way from the stage's clearance to the
+      // core where the yarn already sits closer.
+      double floor = kYarnCarryClearance * d;
+      {
+        const YarnRods here(yk->spec_at(f_done, pos));
+        std::vector<double> hx(here.dof()), hv(here.dof());
+        here.initial_state(hx.data(), hv.data());
+        const double core = here.spec().yarn.core_fraction * d;
+        floor = std::min(floor, core + 0.5 * (here.min_clearance(hx.data()) - core));
+      }
       for (int split = 0;; ++split) {
         moved = yk->carried(pos, yk->ramp_scale(f_done), yk->ramp_scale(f));
         const YarnRods probe(yk->spec_at(f, moved));
         std::vector<double> px(probe.dof()), pv(probe.dof());
         probe.initial_state(px.data(), pv.data());
         const bool clear = std::isfinite(probe.potential_energy(0.0, px.data())) &&
-                           probe.min_clearance(px.data()) >= kYarnCarryClearance * d;
+                           probe.min_clearance(px.data()) >= floor;
         if (clear) break;
-        if (split == kYarnCarrySplits) {
+        if (split == kYarnCarrySplits) {  // the whole stage, uncarried
+          f = f_stage;
           moved = pos;
           ++run->carries_refused;
           break;
@@ -309,7 +322,7 @@ KnitResult run_yarn_knit(KnitStart start, const KnitScene& scene, const std::str
     run->stages.push_back(stage);
     r.x = x, r.v = v;
     f_done = f;
-    if (f >= static_cast<double>(s) / stages) ++s;
+    if (f >= f_stage) ++s;
     if (last || r.stats.status != RunStatus::Equilibrium) {
       const double end_clearance = rods->min_clearance(x.data());
       min_clearance = std::min(min_clearance, end_clearance);
