@@ -162,45 +162,11 @@ void lay_yarn(YarnKnit& y, std::vector<std::array<double, 4>>& loop_points) {
     }
   }
 
-  // Rest lengths: the start's, and the knitted lengths per cell (by the stitch's type).
-  const int ne = static_cast<int>(y.start.size()) - 1;
-  y.start_length.resize(ne);
-  for (int e = 0; e < ne; ++e) y.start_length[e] = norm(y.start[e + 1] - y.start[e]);
-  std::vector<char> cell_kind(ne, 'K');  // per edge, the stitch of the cell it lies in
-  double sum[3] = {0, 0, 0};
-  int count[3] = {0, 0, 0};
-  auto slot = [](Stitch s) { return s == Stitch::Knit ? 0 : s == Stitch::Tuck ? 1 : 2; };
-  for (int j = 0; j < c.courses; ++j) {
-    const std::vector<int>& idx = y.course_vertices[j];
-    for (int i = 0; i < c.wales; ++i) {
-      const YarnCellMarks& mk = y.marks[j * c.wales + i];
-      double len = 0.0;
-      for (int k = 0; k + 1 < static_cast<int>(idx.size()); ++k) {
-        const double mid = k + 0.5;
-        if (mid < mk.begin || mid >= mk.end) continue;
-        const int e = std::min(idx[k], idx[k + 1]);
-        cell_kind[e] = static_cast<char>(c.at(i, j));
-        len += y.start_length[e];
-      }
-      sum[slot(c.at(i, j))] += len;
-      ++count[slot(c.at(i, j))];
-    }
-  }
-  const double wanted[3] = {y.params.stitch_length, y.params.tuck_length, y.params.miss_length};
-  double ratio[3] = {1.0, 1.0, 1.0};
-  if (wanted[0] > 0.0 && count[0] > 0) ratio[0] = wanted[0] / (sum[0] / count[0]);
-  for (int t = 1; t < 3; ++t)
-    ratio[t] = wanted[t] > 0.0 && count[t] > 0 ? wanted[t] / (sum[t] / count[t]) : ratio[0];
-  y.target_length.resize(ne);
-  for (int e = 0; e < ne; ++e) {
-    const int t = turn_edge[e] ? 0 : slot(static_cast<Stitch>(cell_kind[e]));
-    y.target_length[e] = y.start_length[e] * ratio[t];
-  }
-
   // Held: both ends of the yarn and the heads of the first and last courses' loops. Measured:
   // with only the last course held, a frictionless yarn unravels from the bottom (bending
   // straightens the first courses: their loops shrink and slip, the yarn kept at its length).
-  y.pins = {0, ne};
+  const int ne = static_cast<int>(y.start.size()) - 1;
+  y.held_groups = {{0}, {ne}};
   for (int held : {0, c.courses - 1}) {
     for (int i = 0; i < c.wales; ++i) {
       const int l = m.loop(i, held);
@@ -209,24 +175,86 @@ void lay_yarn(YarnKnit& y, std::vector<std::array<double, 4>>& loop_points) {
       // loop it holds slip over it).
       const double a = loop_points[l][2], b = loop_points[l][3];
       if (!std::isfinite(a) || !std::isfinite(b)) continue;
+      std::vector<int> group;
       for (long k = std::lround(std::min(a, b)); k <= std::lround(std::max(a, b)); ++k) {
         const int v = y.course_vertices[held][static_cast<int>(k)];
-        if (std::find(y.pins.begin(), y.pins.end(), v) == y.pins.end()) y.pins.push_back(v);
+        bool seen = false;
+        for (const auto& g : y.held_groups) seen = seen || std::find(g.begin(), g.end(), v) != g.end();
+        if (!seen) group.push_back(v);
       }
+      if (!group.empty()) y.held_groups.push_back(std::move(group));
     }
   }
+  y.pins.clear();
+  std::vector<int> group_of(y.start.size(), -1);
+  for (std::size_t g = 0; g < y.held_groups.size(); ++g)
+    for (int v : y.held_groups[g]) {
+      y.pins.push_back(v);
+      group_of[v] = static_cast<int>(g);
+    }
   std::sort(y.pins.begin(), y.pins.end());
+  y.centre = Vec3{0.0, 0.0, 0.0};
+  for (const Vec3& p : y.start) y.centre = y.centre + p;
+  y.centre = (1.0 / static_cast<double>(y.start.size())) * y.centre;
+
+  // Rest lengths: the start's, and the knitted lengths per cell (by the stitch's type). A held
+  // group's edges keep their start length (the needle holds the loop at its size); the cell's
+  // other edges take up the difference, so every cell of a type knits the same yarn.
+  y.start_length.resize(ne);
+  for (int e = 0; e < ne; ++e) y.start_length[e] = norm(y.start[e + 1] - y.start[e]);
+  auto held_edge = [&](int e) { return group_of[e] >= 0 && group_of[e] == group_of[e + 1]; };
+  std::vector<char> cell_kind(ne, 'K');  // per edge, the stitch of the cell it lies in
+  std::vector<int> cell_of(ne, -1);      // per edge, its cell (course * wales + wale), -1: a turn
+  std::vector<double> cell_start(y.marks.size(), 0.0), cell_held(y.marks.size(), 0.0);
+  double sum[3] = {0, 0, 0};
+  int count[3] = {0, 0, 0};
+  auto slot = [](Stitch s) { return s == Stitch::Knit ? 0 : s == Stitch::Tuck ? 1 : 2; };
+  for (int j = 0; j < c.courses; ++j) {
+    const std::vector<int>& idx = y.course_vertices[j];
+    for (int i = 0; i < c.wales; ++i) {
+      const int cell = j * c.wales + i;
+      const YarnCellMarks& mk = y.marks[cell];
+      for (int k = 0; k + 1 < static_cast<int>(idx.size()); ++k) {
+        const double mid = k + 0.5;
+        if (mid < mk.begin || mid >= mk.end) continue;
+        const int e = std::min(idx[k], idx[k + 1]);
+        cell_kind[e] = static_cast<char>(c.at(i, j));
+        cell_of[e] = cell;
+        cell_start[cell] += y.start_length[e];
+        if (held_edge(e)) cell_held[cell] += y.start_length[e];
+      }
+      sum[slot(c.at(i, j))] += cell_start[cell];
+      ++count[slot(c.at(i, j))];
+    }
+  }
+  const double wanted[3] = {y.params.stitch_length, y.params.tuck_length, y.params.miss_length};
+  double ratio[3] = {1.0, 1.0, 1.0};
+  if (wanted[0] > 0.0 && count[0] > 0) ratio[0] = wanted[0] / (sum[0] / count[0]);
+  for (int t = 1; t < 3; ++t)
+    ratio[t] = wanted[t] > 0.0 && count[t] > 0 ? wanted[t] / (sum[t] / count[t]) : ratio[0];
+  y.knit_ratio = ratio[0];
+  y.target_length.resize(ne);
+  for (int e = 0; e < ne; ++e) {
+    const int t = cell_of[e] < 0 ? 0 : slot(static_cast<Stitch>(cell_kind[e]));
+    double q = ratio[t];
+    if (held_edge(e)) {
+      q = 1.0;
+    } else if (q != 1.0 && cell_of[e] >= 0 && cell_held[cell_of[e]] > 0.0) {
+      const double s = cell_start[cell_of[e]], h = cell_held[cell_of[e]];
+      q = std::max(0.1, (ratio[t] * s - h) / (s - h));
+    }
+    y.target_length[e] = y.start_length[e] * q;
+  }
 }
 
 }  // namespace
 
-YarnRodsSpec YarnKnit::spec(int s, int n, const std::vector<Vec3>& initial) const {
+YarnRodsSpec YarnKnit::spec_at(double f, const std::vector<Vec3>& initial) const {
   YarnRodsSpec out;
   out.yarn = params.yarn;
   // The rest lengths as a straight polyline (only its lengths matter: the yarn is straight at
   // rest, kappa0 = 0).
   std::vector<Vec3> straight{Vec3{0.0, 0.0, 0.0}};
-  const double f = n > 0 ? static_cast<double>(s) / n : 1.0;
   double x = 0.0;
   for (std::size_t e = 0; e < start_length.size(); ++e) {
     x += start_length[e] + f * (target_length[e] - start_length[e]);
@@ -244,6 +272,21 @@ YarnRodsSpec YarnKnit::spec(int s, int n, const std::vector<Vec3>& initial) cons
   // The Jacobian pattern's radius (kYarnPatternRadius): the run makes the rods afresh every few
   // steps (src/scene/yarn_knit_run.cpp), so the pattern follows the yarn.
   out.yarn.pattern_radius = std::max(out.yarn.pattern_radius, kYarnPatternRadius);
+  return out;
+}
+
+std::vector<Vec3> YarnKnit::carried(const std::vector<Vec3>& pos, double from,
+                                    double to) const {
+  const double s = to / from;
+  std::vector<Vec3> out(pos.size());
+  for (std::size_t v = 0; v < pos.size(); ++v) out[v] = centre + s * (pos[v] - centre);
+  for (const std::vector<int>& g : held_groups) {
+    Vec3 c0{0.0, 0.0, 0.0}, c{0.0, 0.0, 0.0};
+    for (int v : g) c0 = c0 + start[v], c = c + pos[v];
+    c0 = (1.0 / g.size()) * c0, c = (1.0 / g.size()) * c;
+    const Vec3 shift = (centre + to * (c0 - centre)) - c;
+    for (int v : g) out[v] = pos[v] + shift;
+  }
   return out;
 }
 

@@ -88,12 +88,31 @@ struct YarnKnit {
   // course (NaN where the loop has none: a tuck's feet).
   std::vector<std::array<double, 4>> loop_points;
   std::vector<int> pins;             // vertex indices held where they start
+  // The held vertices as the ramp moves them: each head arc (T3..T5 of a loop of the first or
+  // last course) and each yarn end is one group, moved as a rigid body (a needle keeps the loop
+  // it holds at its size); a group's edges keep their start lengths.
+  std::vector<std::vector<int>> held_groups;
+  Vec3 centre{0.0, 0.0, 0.0};  // the start's centroid (every vertex), m: the ramp scales to it
+  // The knit cells' knitted over start yarn length (1: no ramp; the fabric's scale at the ramp's
+  // end).
+  double knit_ratio = 1.0;
   double start_clearance = 0.0;      // m, YarnRods::min_clearance at the start
 
-  // The rods at ramp stage s of n (0: the start's rest lengths; n: the target's), started at
-  // `initial` (empty: the start).
-  YarnRodsSpec spec(int s, int n, const std::vector<Vec3>& initial = {}) const;
+  // The rods at the ramp's fraction f in [0, 1] (0: the start's rest lengths; 1: the target's),
+  // started at `initial` (empty: the start); pinned vertices are held where `initial` has them.
+  YarnRodsSpec spec_at(double f, const std::vector<Vec3>& initial = {}) const;
+  // The same at ramp stage s of n (f = s / n).
+  YarnRodsSpec spec(int s, int n, const std::vector<Vec3>& initial = {}) const {
+    return spec_at(n > 0 ? static_cast<double>(s) / n : 1.0, initial);
+  }
   int ramp_stages() const { return static_cast<int>(params.ramp_stages); }
+  // The fabric's scale at ramp fraction f: 1 + f (knit_ratio - 1).
+  double ramp_scale(double f) const { return 1.0 + f * (knit_ratio - 1.0); }
+  // `pos` (every vertex, at ramp scale `from`) carried to scale `to`: the free vertices scaled
+  // about `centre` by to / from, each held group translated so its centroid sits at
+  // centre + to (its start centroid - centre), its shape as at the start. The stage's needles
+  // close up with the fabric, so the held edge courses do not keep the loose start's extent.
+  std::vector<Vec3> carried(const std::vector<Vec3>& pos, double from, double to) const;
   // Each course's polyline (left to right) at the given positions of every vertex.
   std::vector<std::vector<Vec3>> course_polylines(const std::vector<Vec3>& all) const;
   // A course's yarn length at the given positions (its own vertices, without the turns), m.

@@ -152,6 +152,15 @@ TEST_CASE("a relaxed yarn run keeps each course's length within 1 % and stays cl
   }
   CHECK(r.yarn->clearance_min_over_d >= 0.45);  // the barrier's guaranteed floor (d0 - d/4)
   CHECK(r.yarn->clearance_end_over_d >= 0.9);
+  // The structure check ran on the yarn's own crossings, and a lost structure is said in the
+  // status (this chart at 8 edges a cell loses it on the way: docs/yarn_model.md, "The structure
+  // check").
+  INFO("interlock gap max " << r.yarn->structure_end.interlock_gap_max_over_d << " d, "
+                            << r.measures.crossings.changed << " crossings changed");
+  CHECK(r.measures.crossings.designed > 0);
+  CHECK(r.yarn->structure_end.lost() ==
+        (r.stats.message.find("lost its knitted structure") != std::string::npos));
+  CHECK(r.stats.status != RunStatus::Equilibrium || !r.yarn->structure_end.lost());
   // The structure's points read off the yarn: finite, one per point.
   CHECK(r.positions.size() == r.model.points.size());
   CHECK(std::all_of(r.positions.begin(), r.positions.end(), is_finite));
@@ -174,4 +183,57 @@ TEST_CASE("single_tuck with knit.model = yarn ends with a status and its measure
   CHECK(r.frames.size() >= 1);
   for (const FrameRecorder::Frame& f : r.frames)
     CHECK(f.x.size() == static_cast<std::size_t>(r.model.network.dof()));
+}
+
+TEST_CASE("the structure check: kept at the start, lost when a course is pulled out",
+          "[yarn_knit][structure]") {
+  const KnitChart chart = parse_knit_chart(kSmall);
+  const YarnKnit y = build_yarn_knit(chart, KnitParams{}, yarn_params(8, 0.0));
+  const std::vector<YarnCrossing> designed = yarn_designed_crossings(y);
+  REQUIRE(!designed.empty());
+  const YarnStructure start = check_yarn_structure(y, designed, y.start);
+  INFO("start: " << start.crossings.designed << " crossings, " << start.interlocks
+                 << " interlocks, gap max " << start.interlock_gap_max_over_d << " d");
+  CHECK(start.crossings.changed == 0);
+  CHECK(start.interlocks == chart.wales * (chart.courses - 1));  // every knit loop holds one
+  CHECK(start.withdrawn == 0);
+  CHECK(start.interlock_gap_max_over_d < kYarnWithdrawn);
+  CHECK(!start.lost());
+  CHECK(yarn_structure_message(start).empty());
+
+  // The middle course pulled out of the fabric, 6 d in front of it: its loops leave the heads
+  // of the course below, and every crossing with its neighbours now has it in front.
+  std::vector<Vec3> pulled = y.start;
+  for (int v : y.course_vertices[1]) pulled[v].z += 6.0 * y.d;
+  const YarnStructure lost = check_yarn_structure(y, designed, pulled);
+  INFO("pulled: " << lost.crossings.changed << " crossings changed, " << lost.withdrawn
+                  << " withdrawn, gap max " << lost.interlock_gap_max_over_d << " d");
+  CHECK(lost.crossings.changed > 0);
+  CHECK(lost.withdrawn == chart.wales * 2);  // its feet from course 0, course 2's from its heads
+  CHECK(lost.lost());
+
+  // Withdrawn without any crossing changed (as a frictionless yarn may): only the interlocks
+  // see it.
+  YarnStructure only_withdrawn = start;
+  only_withdrawn.withdrawn = 1;
+  CHECK(only_withdrawn.lost());
+
+  // Reported: an equilibrium becomes outside_model_limits with the message; another status
+  // keeps its name and gains it.
+  RunStats eq;
+  eq.status = RunStatus::Equilibrium;
+  report_yarn_structure(lost, eq);
+  CHECK(eq.status == RunStatus::OutsideModelLimits);
+  CHECK(eq.message.find("lost its knitted structure") != std::string::npos);
+  RunStats wall;
+  wall.status = RunStatus::WallLimit;
+  wall.message = "wall";
+  report_yarn_structure(lost, wall);
+  CHECK(wall.status == RunStatus::WallLimit);
+  CHECK(wall.message.find("wall; the yarn lost") == 0);
+  RunStats kept;
+  kept.status = RunStatus::Equilibrium;
+  report_yarn_structure(start, kept);
+  CHECK(kept.status == RunStatus::Equilibrium);
+  CHECK(kept.message.empty());
 }

@@ -32,12 +32,20 @@ void add_yarn_knit_summary(const YarnKnitRun& run, std::size_t dof, nlohmann::js
     knitted.push_back(run.course_knitted[j]);
     if (!(std::abs(c) <= worst)) worst = std::abs(c);
   }
+  const YarnStructure& st = run.structure_end;
+  b["interlocks"] = st.interlocks;
+  b["loops_withdrawn"] = st.withdrawn;
+  b["interlock_gap_max_over_d"] = number_or_null(st.interlock_gap_max_over_d);
+  b["interlock_gap_start_max_over_d"] = number_or_null(run.structure_start.interlock_gap_max_over_d);
+  b["structure"] = st.lost() ? "lost" : "kept";
   b["course_length_knitted_m"] = knitted;
   b["course_length_change"] = change;  // end against knitted, relative
   b["course_length_change_max"] = number_or_null(worst);
   nlohmann::json stages = nlohmann::json::array();
   for (const YarnKnitRun::Stage& s : run.stages)
-    stages.push_back({{"status", to_string(s.status)},
+    stages.push_back({{"fraction", s.fraction},
+                      {"scale", y.ramp_scale(s.fraction)},
+                      {"status", to_string(s.status)},
                       {"steps", s.steps},
                       {"residual", number_or_null(s.residual)},
                       {"cpu_seconds", s.cpu_seconds},
@@ -53,6 +61,15 @@ void add_yarn_knit_summary(const YarnKnitRun& run, std::size_t dof, nlohmann::js
       {"pins", y.pins.size()},
       {"stitch_length_m", y.params.stitch_length},
       {"ramp_stages", stages},
+      {"ramp_carries_refused", run.carries_refused},
+      {"verlet",
+       {{"dt_axial_s", run.verlet.dt_axial},
+        {"dt_estimated_s", number_or_null(run.verlet.dt_estimated)},
+        {"dt_predicted_s", number_or_null(run.verlet.dt_predicted)},
+        {"force_cpu_seconds", run.verlet.force_cpu_seconds},
+        {"steps_to_steady_state", number_or_null(run.verlet.steps_to_steady)},
+        {"cpu_seconds_to_steady_state",
+         number_or_null(run.verlet.steps_to_steady * run.verlet.force_cpu_seconds)}}},
       {"pattern_misses", run.pattern_misses},
       {"tex", p.tex},
       {"fibre_density", p.fibre_density},

@@ -17,6 +17,12 @@ namespace {
 
 // Steps of one round (above): short enough that the pattern follows the contacts.
 constexpr long kYarnRoundSteps = 50;
+// A ramp stage's carried start must keep every pair the contact sees this far apart (in d; the
+// barrier's core is at YarnParams::core_fraction = 0.7 d), or half its gap to the core where the
+// yarn is closer already; else the stage is halved, at most kYarnCarrySplits times, and then run
+// whole without the carry.
+constexpr double kYarnCarryClearance = 0.75;
+constexpr int kYarnCarrySplits = 4;
 
 double cpu_now() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
 
@@ -54,6 +60,25 @@ std::vector<double> structure_state(const KnitModel& m, const std::vector<Vec3>&
   return x;
 }
 
+YarnKnitRun::Verlet verlet_estimate(const YarnRods& rods, double t, const std::vector<double>& x) {
+  YarnKnitRun::Verlet out;
+  const YarnParams& p = rods.spec().yarn;
+  const double c = std::sqrt(p.stretch_stiffness() / p.linear_density());
+  double l_min = std::numeric_limits<double>::infinity();
+  for (const std::vector<Vec3>& rest : rods.spec().rest)
+    for (std::size_t k = 1; k < rest.size(); ++k) l_min = std::min(l_min, norm(rest[k] - rest[k - 1]));
+  out.dt_axial = l_min / c;
+  out.dt_estimated = estimate_stable_dt("verlet", rods, t, x.data());
+  out.dt_predicted = predict_stable_dt("verlet", rods, t, x.data());
+  std::vector<double> a(x.size());
+  constexpr int kRepeats = 5;
+  const double c0 = cpu_now();
+  for (int k = 0; k < kRepeats; ++k) rods.conservative_acceleration(t, x.data(), a.data());
+  out.force_cpu_seconds = (cpu_now() - c0) / kRepeats;
+  out.steps_to_steady = t > 0.0 ? t / out.dt_estimated : std::nan("");
+  return out;
+}
+
 }  // namespace
 
 KnitYarns yarn_knit_yarns(const YarnKnit& y, const std::vector<Vec3>& all) {
@@ -83,6 +108,92 @@ KnitYarns yarn_knit_yarns(const YarnKnit& y, const std::vector<Vec3>& all) {
                     miss ? kNoMark : at(m.loop_end)};
   }
   return out;
+}
+
+namespace {
+
+// The yarn's course polylines as the crossing check reads them: a crossing is looked for up to
+// 2 samples_per_interval edges from where it was designed, here one chart cell.
+YarnPolylines crossing_lines(const YarnKnit& y, const std::vector<Vec3>& all) {
+  YarnPolylines lines = yarn_knit_yarns(y, all).lines;
+  lines.samples_per_interval = std::max(1, static_cast<int>(y.params.vertices_per_loop) / 2);
+  return lines;
+}
+
+}  // namespace
+
+std::vector<YarnCrossing> yarn_designed_crossings(const YarnKnit& y) {
+  return designed_crossings(y.structure, crossing_lines(y, y.start));
+}
+
+YarnStructure check_yarn_structure(const YarnKnit& y, const std::vector<YarnCrossing>& designed,
+                                   const std::vector<Vec3>& all) {
+  YarnStructure out;
+  if (!std::all_of(all.begin(), all.end(), is_finite)) {
+    out.crossings.designed = static_cast<int>(designed.size());
+    out.crossings.changed = -1;
+    return out;
+  }
+  out.crossings = check_crossings(designed, crossing_lines(y, all));
+  const KnitModel& m = y.structure;
+  auto material = [&](int j, double q) {
+    const std::vector<int>& idx = y.course_vertices[j];
+    const int last = static_cast<int>(idx.size()) - 1;
+    const int k = std::clamp(static_cast<int>(std::floor(q)), 0, last - 1);
+    const double s = q - k;
+    return (1.0 - s) * all[idx[k]] + s * all[idx[k + 1]];
+  };
+  // Per interlacing point, the feet of the loops whose lower point it is and the heads of those
+  // whose upper point it is.
+  std::vector<Vec3> feet(m.points.size(), Vec3{0, 0, 0}), heads(m.points.size(), Vec3{0, 0, 0});
+  std::vector<int> n_feet(m.points.size(), 0), n_heads(m.points.size(), 0);
+  for (std::size_t l = 0; l < m.loops.size(); ++l) {
+    const KnitLoop& loop = m.loops[l];
+    const std::array<double, 4>& q = y.loop_points[l];
+    if (loop.lower >= 0 && std::isfinite(q[0]) && std::isfinite(q[1])) {
+      feet[loop.lower] =
+          feet[loop.lower] + 0.5 * (material(loop.course, q[0]) + material(loop.course, q[1]));
+      ++n_feet[loop.lower];
+    }
+    if (loop.upper >= 0 && std::isfinite(q[2]) && std::isfinite(q[3])) {
+      heads[loop.upper] =
+          heads[loop.upper] + 0.5 * (material(loop.course, q[2]) + material(loop.course, q[3]));
+      ++n_heads[loop.upper];
+    }
+  }
+  for (std::size_t p = 0; p < m.points.size(); ++p) {
+    if (n_feet[p] == 0 || n_heads[p] == 0) continue;
+    const double gap =
+        norm((1.0 / n_feet[p]) * feet[p] - (1.0 / n_heads[p]) * heads[p]) / y.d;
+    ++out.interlocks;
+    out.interlock_gap_max_over_d = std::max(out.interlock_gap_max_over_d, gap);
+    if (gap > kYarnWithdrawn) ++out.withdrawn;
+  }
+  return out;
+}
+
+std::string yarn_structure_message(const YarnStructure& s) {
+  if (!s.lost()) return "";
+  std::string text = "the yarn lost its knitted structure:";
+  if (s.crossings.changed < 0)
+    text += " its end state is not finite";
+  else
+    text += " " + std::to_string(s.crossings.changed) + " of " +
+            std::to_string(s.crossings.designed) + " designed crossings changed over/under, " +
+            std::to_string(s.withdrawn) + " of " + std::to_string(s.interlocks) +
+            " loops withdrawn from the head they pass through";
+  return text;
+}
+
+void report_yarn_structure(const YarnStructure& s, RunStats& stats) {
+  if (!s.lost()) return;
+  const std::string lost = yarn_structure_message(s);
+  if (stats.status == RunStatus::Equilibrium) {
+    stats.status = RunStatus::OutsideModelLimits;
+    stats.message = lost;
+  } else {
+    stats.message += (stats.message.empty() ? "" : "; ") + lost;
+  }
 }
 
 KnitStart start_yarn_knit(const KnitScene& scene) {
@@ -123,20 +234,61 @@ KnitResult run_yarn_knit(KnitStart start, const KnitScene& scene, const std::str
   std::unique_ptr<YarnRods> rods;
   std::vector<double> x, v;
   bool done = false;
+  double f_done = 0.0;  // the ramp's fraction reached (relaxed)
   // The frames over the whole ramp, the start first.
   FrameRecorder recorder(scene.frames, 3 * static_cast<int>(pos.size() - yk->pins.size()),
                          observer);
-  for (int s = 1; s <= stages && !done; ++s) {
-    const bool last = s == stages;
+  for (int s = 1; s <= stages && !done;) {
+    // The stage's state: the yarn carried to the stage's scale (the held groups with it). A
+    // carry that would put a pair near the barrier's core is halved (a stage inserted) up to
+    // kYarnCarrySplits times; past that the stage starts where the last one ended.
+    const double f_stage = static_cast<double>(s) / stages;
+    double f = f_stage;
+    std::vector<Vec3> moved = pos;
+    if (ramp) {
+      // The floor: kYarnCarryClearance d, or half the way from the stage's clearance to the
+      // core where the yarn already sits closer.
+      double floor = kYarnCarryClearance * d;
+      {
+        const YarnRods here(yk->spec_at(f_done, pos));
+        std::vector<double> hx(here.dof()), hv(here.dof());
+        here.initial_state(hx.data(), hv.data());
+        const double core = here.spec().yarn.core_fraction * d;
+        floor = std::min(floor, core + 0.5 * (here.min_clearance(hx.data()) - core));
+      }
+      for (int split = 0;; ++split) {
+        moved = yk->carried(pos, yk->ramp_scale(f_done), yk->ramp_scale(f));
+        const YarnRods probe(yk->spec_at(f, moved));
+        std::vector<double> px(probe.dof()), pv(probe.dof());
+        probe.initial_state(px.data(), pv.data());
+        const bool clear = std::isfinite(probe.potential_energy(0.0, px.data())) &&
+                           probe.min_clearance(px.data()) >= floor;
+        if (clear) break;
+        if (split == kYarnCarrySplits) {  // the whole stage, uncarried
+          f = f_stage;
+          moved = pos;
+          ++run->carries_refused;
+          break;
+        }
+        f = 0.5 * (f_done + f);
+      }
+    }
+    const bool last = f >= 1.0;
     const double c0 = cpu_now();
     const auto w0 = std::chrono::steady_clock::now();
     YarnKnitRun::Stage stage;
+    stage.fraction = f;
     for (int round = 0;; ++round) {
       rods.reset();  // one set of rods alive at a time (memory)
-      rods = std::make_unique<YarnRods>(yk->spec(s, stages, pos));
+      rods = std::make_unique<YarnRods>(yk->spec_at(f, round == 0 ? moved : pos));
       x.assign(rods->dof(), 0.0), v.assign(rods->dof(), 0.0);
       rods->initial_state(x.data(), v.data());
-      if (s == 1 && round == 0) recorder.record(t, x.data(), rods->static_residual(t, x.data()));
+      if (round == 0 && run->stages.empty()) {  // the start (before any carry)
+        const YarnRods at_start(yk->spec_at(0.0));
+        std::vector<double> x0(at_start.dof()), v0(at_start.dof());
+        at_start.initial_state(x0.data(), v0.data());
+        recorder.record(t, x0.data(), at_start.static_residual(t, x0.data()));
+      }
       ClearanceWatch watch(*rods, &recorder);
       IntegratorOptions options = scene.options;
       options.max_steps = std::min(steps_left, kYarnRoundSteps);
@@ -169,22 +321,32 @@ KnitResult run_yarn_knit(KnitStart start, const KnitScene& scene, const std::str
         std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
     run->stages.push_back(stage);
     r.x = x, r.v = v;
+    f_done = f;
+    if (f >= f_stage) ++s;
     if (last || r.stats.status != RunStatus::Equilibrium) {
       const double end_clearance = rods->min_clearance(x.data());
       min_clearance = std::min(min_clearance, end_clearance);
       run->clearance_end_over_d = end_clearance / d;
       run->vertices = rods->vertex_count();
+      run->verlet = verlet_estimate(*rods, t, x);
       run->free_vertices = rods->dof() / 3;
       // The frames as states of the structure (its interlacing points read off the yarn).
-      for (FrameRecorder::Frame f : recorder.frames()) {
+      for (FrameRecorder::Frame fr : recorder.frames()) {
         std::vector<Vec3> all;
-        rods->all_positions(f.x.data(), all);
-        f.x = structure_state(r.model, yk->interlacing_points(all));
-        r.frames.push_back(std::move(f));
+        rods->all_positions(fr.x.data(), all);
+        fr.x = structure_state(r.model, yk->interlacing_points(all));
+        r.frames.push_back(std::move(fr));
       }
       done = true;
     }
   }
+  // The structure: the start's designed crossings and interlocks, checked at the end; a run
+  // that lost them ends outside the model's limits, whatever its stop said.
+  const std::vector<YarnCrossing> designed = yarn_designed_crossings(*yk);
+  run->structure_start = check_yarn_structure(*yk, designed, yk->start);
+  run->structure_end = check_yarn_structure(*yk, designed, pos);
+  r.measures.crossings = run->structure_end.crossings;
+  report_yarn_structure(run->structure_end, r.stats);
   run->clearance_min_over_d = min_clearance / d;
   run->clearance_checks = checks;
   run->end = pos;
