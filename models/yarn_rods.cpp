@@ -21,6 +21,8 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // The step filter's reach, in d: a step is cut so that no vertex moves more than
 // kStepReach (1 - step_keep) d, which bounds its broad phase's boxes (admissible_step).
 constexpr double kStepReach = 2.0;
+// Edge pairs whose segments are farther apart than kSkipBeyond d have no sample pair within d.
+constexpr double kSkipBeyond = 1.0 + 1e-9;
 
 // Throws unless value is in the interval (lo or [lo, hi] or hi); `range` names it.
 void check_range(const char* field, double value, double lo, double hi, bool lo_open,
@@ -499,6 +501,11 @@ void YarnRods::contact_terms(const std::vector<Vec3>& pos, Mode mode, Accumulato
   for (const auto& [i, j] : pairs_) {
     if (!may_pair(i, j)) continue;
     const Edge &A = edges_[i], &B = edges_[j];
+    // Every sample pair is at least the segments' distance apart: a pair of edges farther than d
+    // (with a margin for the round-off of the two distances) adds nothing, so its samples are
+    // not visited (most of the broad phase's pairs on a knit: boxes grown by d/2 meet first).
+    if (closest_points(pos[A.a], pos[A.b], pos[B.a], pos[B.b]).distance > kSkipBeyond * d_)
+      continue;
     const int verts[4] = {A.a, A.b, B.a, B.b};
     double local[12][12];  // the pair's energy Hessian over its 4 vertices (Stiffness)
     bool active = false;
