@@ -231,9 +231,11 @@ class YarnRods final : public MechanicalSystem {
 
   void evaluate(const double* x, Mode mode, Accumulator& acc) const;
   void contact_terms(const std::vector<Vec3>& pos, Mode mode, Accumulator& acc) const;
-  // Edge pairs (i < j) whose boxes, grown by `grow` on every side, overlap (the broad phase).
+  // Edge pairs (i < j) whose boxes, grown by `grow` (plus edge_grow[e] for edge e where given)
+  // on every side, overlap (the broad phase).
   void edge_pairs(const std::vector<Vec3>& pos, double grow,
-                  std::vector<std::pair<int, int>>& out) const;
+                  std::vector<std::pair<int, int>>& out,
+                  const std::vector<double>* edge_grow = nullptr) const;
   // True if some sample pair of edges i and j may interact (not wholly inside the same-yarn gap).
   bool may_pair(int i, int j) const;
   bool samples_pair(int i, double si, int j, double sj) const;

@@ -402,6 +402,24 @@ TEST_CASE(
   for (size_t i = 0; i < y.size(); ++i) y[i] = x[i] + dx[i];
   CHECK(std::isinf(sys.potential_energy(0.0, y.data())));  // the whole step: inside the core
   CHECK(sys.min_clearance(y.data()) < 1e-3 * d);
+  // A step 40 d long through the other yarn is cut where the 1.2 d one is: the pair that binds
+  // is found by its own edges' moves (the boxes grow by each edge's move, capped, not by the
+  // largest), and the cut point is the same.
+  for (int i = 0; i < 17; ++i) dx[3 * i + 2] = -40.0 * d;
+  const double admit_far = sys.admissible_step(0.0, x.data(), dx.data());
+  CHECK(std::abs(admit_far * 40.0 - admit * 1.2) < 1e-9 * admit);
+  // Two short yarns (no same-yarn pairs) 10 d apart: a step 40 d long taking one away from the
+  // other is cut to move no vertex more than 2 (1 - step_keep) d = 1.6 d, the filter's reach.
+  YarnRodsSpec s2;
+  s2.yarn = p;
+  s2.rest.push_back(straight({0.0, 0.0, 5.0 * d}, {1.0, 0.0, 0.0}, 0.5 * d, 3));
+  s2.rest.push_back(straight({0.0, 0.0, -5.0 * d}, {1.0, 0.0, 0.0}, 0.5 * d, 3));
+  YarnRods two(s2);
+  std::vector<double> x2 = start_of(two), dx2(two.dof(), 0.0);
+  for (int i = 0; i < 4; ++i) dx2[3 * i + 2] = 40.0 * d;
+  CHECK(std::abs(two.admissible_step(0.0, x2.data(), dx2.data()) * 40.0 - 1.6) < 1e-12);
+  for (int i = 0; i < 4; ++i) dx2[3 * i + 2] = 1.0 * d;  // within the reach: whole
+  CHECK(two.admissible_step(0.0, x2.data(), dx2.data()) == 1.0);
 }
 
 TEST_CASE("yarn rods: cost per evaluation", "[.][cost]") {
