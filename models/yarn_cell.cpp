@@ -567,4 +567,187 @@ std::string YarnCell::describe() const {
   return s.str();
 }
 
+namespace {
+
+// The source polyline's edges per chart cell: fine enough that resampling it is exact to
+// (l / 64)^2 of the curvature.
+constexpr int kSourceVertices = 64;
+
+// Point at arc length a along a polyline with cumulative arcs `arc`.
+Vec3 at_arc(const std::vector<Vec3>& v, const std::vector<double>& arc, double a) {
+  const std::size_t hi = std::clamp<std::size_t>(
+      std::upper_bound(arc.begin(), arc.end(), a) - arc.begin(), 1, arc.size() - 1);
+  const double s = (a - arc[hi - 1]) / (arc[hi] - arc[hi - 1]);
+  return (1.0 - s) * v[hi - 1] + s * v[hi];
+}
+
+}  // namespace
+
+bool YarnCellStart::ramp() const {
+  for (std::size_t c = 0; c < start_length.size(); ++c)
+    for (std::size_t k = 0; k < start_length[c].size(); ++k)
+      if (target_length[c][k] != start_length[c][k]) return true;
+  return false;
+}
+
+double YarnCellStart::knitted_length(int course) const {
+  double L = 0.0;
+  for (double l : target_length[course]) L += l;
+  return L;
+}
+
+YarnCellSpec YarnCellStart::spec(int s, int n, const std::vector<std::vector<Vec3>>& initial,
+                                 double w, double h, CellSize size) const {
+  YarnCellSpec out;
+  out.yarn = params.yarn;
+  out.initial = initial.empty() ? start : initial;
+  out.width = w > 0.0 ? w : width;
+  out.height = h > 0.0 ? h : height;
+  out.size = size;
+  const double f = n > 0 ? static_cast<double>(s) / n : 1.0;
+  out.rest.resize(start_length.size());
+  double sum = 0.0, cells = 0.0;
+  for (std::size_t c = 0; c < start_length.size(); ++c) {
+    for (std::size_t k = 0; k < start_length[c].size(); ++k)
+      out.rest[c].push_back(start_length[c][k] + f * (target_length[c][k] - start_length[c][k]));
+    for (double t : cell_target[c]) sum += t, cells += 1.0;
+  }
+  // F_ref: the bending force of a loop, B / l^2 with l the knitted stitch length (as the swatch).
+  const double l = sum / cells;
+  out.residual_force_scale = params.yarn.bending_rigidity / (l * l);
+  return out;
+}
+
+YarnCellStart build_yarn_cell_start(const KnitChart& repeat, const KnitParams& structure,
+                                    const YarnKnitParams& params) {
+  params.validate();
+  const int p = repeat.wales, q = repeat.courses;
+  if (p < 1 || q < 1 || static_cast<int>(repeat.stitches.size()) != p * q)
+    throw std::invalid_argument("yarn cell: the repeat has no stitches");
+  // Tiled to at least 5 x 5 (an odd number of repeats), the middle repeat interior.
+  const int rx = 2 * ((5 + p - 1) / p / 2) + 1, ry = 2 * ((5 + q - 1) / q / 2) + 1;
+  KnitChart chart;
+  chart.wales = rx * p;
+  chart.courses = ry * q;
+  for (int j = 0; j < chart.courses; ++j)
+    for (int i = 0; i < chart.wales; ++i) chart.stitches.push_back(repeat.at(i % p, j % q));
+  YarnKnitParams fine = params;
+  fine.vertices_per_loop = kSourceVertices;
+  fine.stitch_length = fine.tuck_length = fine.miss_length = 0.0;
+  const YarnKnit yk = build_yarn_knit(chart, structure, fine);
+
+  YarnCellStart out;
+  out.repeat = repeat;
+  out.params = params;
+  out.d = yk.d;
+  const int per = static_cast<int>(params.vertices_per_loop), n = p * per;
+  const int i0 = (rx / 2) * p, j0 = (ry / 2) * q;
+  out.width = p * yk.structure.params.wale_spacing();
+  out.height = q * yk.structure.params.course_spacing();
+  const std::vector<std::vector<Vec3>> lines = yk.course_polylines(yk.start);
+  std::vector<std::vector<double>> cell_arc(q);  // per course, the wales' boundaries (arc)
+  for (int c = 0; c < q; ++c) {
+    const std::vector<Vec3>& v = lines[j0 + c];
+    std::vector<double> arc(v.size(), 0.0);
+    for (std::size_t k = 1; k < v.size(); ++k) arc[k] = arc[k - 1] + norm(v[k] - v[k - 1]);
+    auto arc_of = [&](double index) {
+      const int k = std::clamp(static_cast<int>(std::floor(index)), 0,
+                               static_cast<int>(arc.size()) - 2);
+      return arc[k] + (index - k) * (arc[k + 1] - arc[k]);
+    };
+    for (int i = 0; i < p; ++i)
+      cell_arc[c].push_back(arc_of(yk.marks[(j0 + c) * chart.wales + i0 + i].begin));
+    cell_arc[c].push_back(arc_of(yk.marks[(j0 + c) * chart.wales + i0 + p - 1].end));
+    const double a0 = cell_arc[c].front(), a1 = cell_arc[c].back();
+    std::vector<Vec3> s;
+    for (int k = 0; k <= n; ++k) s.push_back(at_arc(v, arc, a0 + (a1 - a0) * k / n));
+    const Vec3 drift = s[n] - s[0] - Vec3{out.width, 0.0, 0.0};
+    for (int k = 0; k < n; ++k) s[k] = s[k] - (static_cast<double>(k) / n) * drift;
+    s.pop_back();
+    out.start.push_back(std::move(s));
+    for (double& a : cell_arc[c]) a = (a - a0) / (a1 - a0);  // as fractions of the period
+  }
+  // Scaled until clear of every image at d.
+  const double d = out.d;
+  double scale = 1.0, clearance = 0.0;
+  std::vector<std::vector<Vec3>> scaled;
+  for (int pass = 0; pass < 12; ++pass) {
+    scaled = out.start;
+    for (auto& course : scaled)
+      for (Vec3& v : course) v = scale * v;
+    YarnCellSpec cs;
+    cs.yarn = params.yarn;
+    cs.initial = scaled;
+    cs.width = scale * out.width;
+    cs.height = scale * out.height;
+    cs.contact = false;
+    for (const auto& course : scaled) {
+      std::vector<double> l;
+      for (std::size_t k = 0; k < course.size(); ++k)
+        l.push_back(norm((k + 1 < course.size() ? course[k + 1]
+                                                : course[0] + Vec3{cs.width, 0.0, 0.0}) -
+                         course[k]));
+      cs.rest.push_back(l);
+    }
+    const YarnCell cell(cs);
+    std::vector<double> x(cell.dof()), vel(cell.dof());
+    cell.initial_state(x.data(), vel.data());
+    clearance = cell.min_clearance(x.data());
+    if (clearance >= kYarnStartClearance * d && clearance <= kYarnStartClearanceMax * d) break;
+    scale *= std::isfinite(clearance)
+                 ? 0.5 * (kYarnStartClearance + kYarnStartClearanceMax) * d / clearance
+                 : 0.8;
+  }
+  if (!(clearance >= d))
+    throw std::invalid_argument(
+        "yarn cell: the start could not be made intersection-free at the yarn diameter "
+        "(closest pair " + std::to_string(clearance / d) + " d)");
+  out.start = scaled;
+  out.width *= scale;
+  out.height *= scale;
+  out.r = scale * yk.r;
+  out.start_clearance = clearance;
+
+  // Rest lengths: the start's; the targets per the stitch type of the wale each edge lies in.
+  out.start_length.resize(q);
+  std::vector<std::vector<int>> edge_wale(q);
+  for (int c = 0; c < q; ++c) {
+    const auto& v = out.start[c];
+    for (int k = 0; k < n; ++k) {
+      out.start_length[c].push_back(
+          norm((k + 1 < n ? v[k + 1] : v[0] + Vec3{out.width, 0.0, 0.0}) - v[k]));
+      const double mid = (k + 0.5) / n;
+      int i = 0;
+      while (i + 1 < p && mid >= cell_arc[c][i + 1]) ++i;
+      edge_wale[c].push_back(i);
+    }
+  }
+  auto slot = [](Stitch s) { return s == Stitch::Knit ? 0 : s == Stitch::Tuck ? 1 : 2; };
+  double sum[3] = {0, 0, 0};
+  int count[3] = {0, 0, 0};
+  out.cell_start.assign(q, std::vector<double>(p, 0.0));
+  for (int c = 0; c < q; ++c)
+    for (int k = 0; k < n; ++k) out.cell_start[c][edge_wale[c][k]] += out.start_length[c][k];
+  for (int c = 0; c < q; ++c)
+    for (int i = 0; i < p; ++i) {
+      sum[slot(repeat.at(i, c))] += out.cell_start[c][i];
+      ++count[slot(repeat.at(i, c))];
+    }
+  const double wanted[3] = {params.stitch_length, params.tuck_length, params.miss_length};
+  double ratio[3] = {1.0, 1.0, 1.0};
+  if (wanted[0] > 0.0 && count[0] > 0) ratio[0] = wanted[0] / (sum[0] / count[0]);
+  for (int t = 1; t < 3; ++t)
+    ratio[t] = wanted[t] > 0.0 && count[t] > 0 ? wanted[t] / (sum[t] / count[t]) : ratio[0];
+  out.target_length.resize(q);
+  out.cell_target.assign(q, std::vector<double>(p, 0.0));
+  for (int c = 0; c < q; ++c)
+    for (int k = 0; k < n; ++k) {
+      const int i = edge_wale[c][k];
+      const double t = out.start_length[c][k] * ratio[slot(repeat.at(i, c))];
+      out.target_length[c].push_back(t);
+      out.cell_target[c][i] += t;
+    }
+  return out;
+}
+
 }  // namespace knitsim

@@ -42,6 +42,8 @@
 #include <string>
 #include <vector>
 
+#include "models/knit_loops.hpp"
+#include "models/yarn_knit.hpp"
 #include "models/yarn_rods.hpp"
 #include "src/core/mechanical_system.hpp"
 #include "src/core/vec3.hpp"
@@ -146,5 +148,42 @@ class YarnCell final : public MechanicalSystem {
   CscPattern pattern_;
   mutable std::vector<double> hess_;  // dense scratch of a stiffness evaluation
 };
+
+// The cell's start from paper 2's structure model (docs/yarn_model.md, "Periodic cell"): the
+// repeat (p wales x q courses) tiled into a chart at least 5 x 5, made into a yarn by the yarn
+// model's front end (build_yarn_knit: paper 2's NURBS centrelines, scaled clear of d), and one
+// interior period of each course -- the middle repeat's, sinker to sinker -- resampled uniformly
+// in arc length with `vertices_per_loop` edges per wale; the small mismatch of its end with its
+// start's image (the centreline is not exactly periodic) spread linearly along it; W = p w,
+// H = q h of the structure. Then scaled until the least clearance with every image is between
+// kYarnStartClearance d and kYarnStartClearanceMax d. Rest lengths: the start's, and the
+// knitted target per edge (knit.stitch_length over the mean knit cell's start length, likewise
+// tuck_length and miss_length; 0: the knit's ratio; all 0: no ramp).
+struct YarnCellStart {
+  KnitChart repeat;
+  YarnKnitParams params;
+  double d = 0.0;
+  double r = 0.0;  // the structure's loop radius at the start (after the cell's own scale), m
+  std::vector<std::vector<Vec3>> start;  // per course, its vertices
+  std::vector<std::vector<double>> start_length, target_length;  // per course, per edge, m
+  // Per course, per wale of the repeat, the knitted target length of its cell (sinker to
+  // sinker, m) and its start length.
+  std::vector<std::vector<double>> cell_target, cell_start;
+  double width = 0.0, height = 0.0;  // W, H at the start, m
+  double start_clearance = 0.0;      // m
+  // The cell at ramp stage s of n (rest lengths start + s/n (target - start)), started at the
+  // given vertices and size (empty: the start's).
+  YarnCellSpec spec(int s, int n, const std::vector<std::vector<Vec3>>& initial = {},
+                    double width = 0.0, double height = 0.0,
+                    CellSize size = CellSize::Free) const;
+  bool ramp() const;  // any target length differs from the start's
+  // Per course its knitted length in the cell (sum of targets), m.
+  double knitted_length(int course) const;
+};
+
+// Throws std::invalid_argument for a bad repeat or parameters (as build_yarn_knit), or a cell
+// that cannot be made clear at d.
+YarnCellStart build_yarn_cell_start(const KnitChart& repeat, const KnitParams& structure,
+                                    const YarnKnitParams& params);
 
 }  // namespace knitsim

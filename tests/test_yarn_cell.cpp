@@ -3,6 +3,7 @@
 // (a cell of two repeats holds twice the energy of one), a straight yarn's tension against its
 // closed form, infeasible states as +inf energy, and the relaxed plain-jersey cell.
 #include <algorithm>
+#include <ctime>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <random>
@@ -201,4 +202,38 @@ TEST_CASE("yarn cell: infeasible states give +inf energy and NaN forces, never a
                       return b;
                     }()),
                     Catch::Contains("width and height"));
+}
+
+TEST_CASE("yarn cell: probe relax", "[.probe]") {
+  KnitChart repeat;
+  repeat.wales = repeat.courses = 1;
+  repeat.stitches = {Stitch::Knit};
+  YarnKnitParams yp;
+  yp.model = KnitModelKind::Yarn;
+  yp.vertices_per_loop = 16;
+  yp.stitch_length = 3.4e-3;
+  const YarnCellStart st = build_yarn_cell_start(repeat, KnitParams{}, yp);
+  WARN("start W " << st.width * 1e3 << " mm H " << st.height * 1e3 << " r/d " << st.r / st.d
+                  << " clearance " << st.start_clearance / st.d << " course length "
+                  << st.cell_start[0][0] * 1e3 << " -> " << st.cell_target[0][0] * 1e3);
+  std::vector<std::vector<Vec3>> pos = st.start;
+  double W = st.width, H = st.height;
+  const int stages = 4;
+  for (int s = 1; s <= stages; ++s) {
+    YarnCell cell(st.spec(s, stages, pos, W, H));
+    std::vector<double> x, v;
+    const std::clock_t c0 = std::clock();
+    IntegratorOptions o;
+    o.max_wall_seconds = 60;
+    const RunStats rs = run_to_equilibrium(cell, "equilibrium", o, x, v);
+    pos = cell.courses_at(x.data());
+    W = cell.width(x.data()), H = cell.height(x.data());
+    WARN("stage " << s << " " << to_string(rs.status) << " steps " << rs.steps << " cpu "
+                  << double(std::clock() - c0) / CLOCKS_PER_SEC << " W " << W * 1e3 << " H "
+                  << H * 1e3 << " clearance " << cell.min_clearance(x.data()) / st.d
+                  << " length " << cell.course_length(0, x.data()) * 1e3 << " residual "
+                  << rs.residual << " " << rs.message);
+  }
+  const double l = st.knitted_length(0) * 100;
+  WARN("K_c " << 1e-2 / H * l << " K_w " << 1e-2 / W * l);
 }
