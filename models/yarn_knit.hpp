@@ -61,6 +61,9 @@ struct YarnKnitParams {
   double miss_length = 0.0;       // knit.miss_length, m, [0, 0.1]; 0 = the knit's ratio
   double vertices_per_loop = 16;  // knit.yarn_vertices: edges per chart cell, whole, [4, 256]
   double ramp_stages = 4;         // knit.yarn_ramp: relaxed steps of the ramp, whole, [1, 100]
+  // knit.boundary: the chart as a swatch with held edge courses, or as one repeat of a fabric
+  // without edges (a periodic cell whose size is free: models/yarn_cell.hpp).
+  bool periodic = false;
 
   // Throws InvalidField naming the key (yarn.tex, knit.stitch_length, ...) and its range.
   void validate() const;

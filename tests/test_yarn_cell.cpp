@@ -6,10 +6,12 @@
 #include <ctime>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <memory>
 #include <random>
 #include <vector>
 
 #include "models/yarn_cell.hpp"
+#include "src/scene/yarn_cell_run.hpp"
 #include "solvers/integrator.hpp"
 #include "src/core/jacobian_check.hpp"
 #include "tests/corrupted_stiffness.hpp"
@@ -204,36 +206,50 @@ TEST_CASE("yarn cell: infeasible states give +inf energy and NaN forces, never a
                     Catch::Contains("width and height"));
 }
 
-TEST_CASE("yarn cell: probe relax", "[.probe]") {
+namespace {
+
+// One wale x one course of plain jersey at the given stitch length (m) and edges per loop,
+// relaxed from paper 2's structure with the cell free (the ramp in 4 stages).
+YarnCellRun relaxed_jersey(double stitch_length, int vertices) {
   KnitChart repeat;
   repeat.wales = repeat.courses = 1;
   repeat.stitches = {Stitch::Knit};
   YarnKnitParams yp;
   yp.model = KnitModelKind::Yarn;
-  yp.vertices_per_loop = 16;
-  yp.stitch_length = 3.4e-3;
-  const YarnCellStart st = build_yarn_cell_start(repeat, KnitParams{}, yp);
-  WARN("start W " << st.width * 1e3 << " mm H " << st.height * 1e3 << " r/d " << st.r / st.d
-                  << " clearance " << st.start_clearance / st.d << " course length "
-                  << st.cell_start[0][0] * 1e3 << " -> " << st.cell_target[0][0] * 1e3);
-  std::vector<std::vector<Vec3>> pos = st.start;
-  double W = st.width, H = st.height;
-  const int stages = 4;
-  for (int s = 1; s <= stages; ++s) {
-    YarnCell cell(st.spec(s, stages, pos, W, H));
-    std::vector<double> x, v;
-    const std::clock_t c0 = std::clock();
-    IntegratorOptions o;
-    o.max_wall_seconds = 60;
-    const RunStats rs = run_to_equilibrium(cell, "equilibrium", o, x, v);
-    pos = cell.courses_at(x.data());
-    W = cell.width(x.data()), H = cell.height(x.data());
-    WARN("stage " << s << " " << to_string(rs.status) << " steps " << rs.steps << " cpu "
-                  << double(std::clock() - c0) / CLOCKS_PER_SEC << " W " << W * 1e3 << " H "
-                  << H * 1e3 << " clearance " << cell.min_clearance(x.data()) / st.d
-                  << " length " << cell.course_length(0, x.data()) * 1e3 << " residual "
-                  << rs.residual << " " << rs.message);
-  }
-  const double l = st.knitted_length(0) * 100;
-  WARN("K_c " << 1e-2 / H * l << " K_w " << 1e-2 / W * l);
+  yp.vertices_per_loop = vertices;
+  yp.stitch_length = stitch_length;
+  auto start =
+      std::make_shared<const YarnCellStart>(build_yarn_cell_start(repeat, KnitParams{}, yp));
+  return run_yarn_cell(start, "equilibrium", IntegratorOptions{});
+}
+
+}  // namespace
+
+TEST_CASE(
+    "yarn cell: plain jersey relaxes from paper 2's structure to a free cell: yarn length kept, "
+    "no crossing, zero stress") {
+  const double l = 3.4e-3;  // the default yarn at tightness factor 1.47
+  const YarnCellRun run = relaxed_jersey(l, 16);
+  const YarnCellStart& st = *run.start;
+  REQUIRE(run.stats.status == RunStatus::Equilibrium);
+  REQUIRE(run.stages.size() == 4);
+  for (const YarnCellRun::Stage& s : run.stages) CHECK(s.status == RunStatus::Equilibrium);
+  // The start is clear of every image at d; no sample pair ever reaches the barrier's core.
+  CHECK(run.clearance_start_over_d >= kYarnStartClearance);
+  CHECK(run.clearance_min_over_d > st.params.yarn.core_fraction);
+  CHECK(run.stitch_length == Approx(l).epsilon(1e-12));
+  CHECK(std::abs(run.course_end[0] / run.course_knitted[0] - 1.0) < 1e-3);
+  // The ramp took 40 % of the yarn out: the free cell shrank, no jam.
+  CHECK(run.end.width < 0.8 * st.width);
+  CHECK(run.end.height < 0.8 * st.height);
+  // Zero stress across the cell's faces: |dE/dW|, |dE/dH| far below the yarn's bending force
+  // scale B / l^2 (1.9e-4 N here).
+  const double f = st.params.yarn.bending_rigidity / (l * l);
+  CHECK(std::abs(run.size_gradient[0]) < 1e-5 * f);
+  CHECK(std::abs(run.size_gradient[1]) < 1e-5 * f);
+  WARN("relaxed plain jersey, l = 3.4 mm: " << run.courses_per_cm << " courses/cm, "
+                                            << run.wales_per_cm << " wales/cm, K_c " << run.k_c
+                                            << ", K_w " << run.k_w << ", K_s " << run.k_s << ", R "
+                                            << run.r << "; " << run.stats.steps << " steps, "
+                                            << run.stats.cpu_seconds << " s CPU");
 }

@@ -351,6 +351,19 @@ std::vector<Key> make_table() {
       "network: the interlacing-point network (knit.network); yarn: each course's yarn a "
       "discrete elastic rod with contact, one yarn through the chart (docs/yarn_model.md)",
       KeyModel::Knit);
+  other(
+      "knit.boundary", Kind::Text,
+      [](Scene& s, const std::string& v) {
+        if (v != "swatch" && v != "periodic") return false;
+        s.yarn.periodic = v == "periodic";
+        return true;
+      },
+      "one of swatch, periodic",
+      [](const Scene& s) { return std::string(s.yarn.periodic ? "periodic" : "swatch"); },
+      "knit.model = yarn: swatch, the chart with its edge courses held; periodic, the chart as "
+      "one repeat of an endless fabric, a cell whose size is relaxed (docs/yarn_model.md, "
+      "\"Periodic cell\")",
+      KeyModel::Knit);
   auto yarn = [&number](const char* name, double YarnParams::*field, const char* unit,
                         const char* meaning) {
     number(
