@@ -225,6 +225,22 @@ bool YarnCell::samples_pair(const Edge& A, double sa, const Edge& B, double sb, 
   return std::abs(a - b) >= gap_;
 }
 
+bool YarnCell::whole(const Edge& A, const Edge& B, int sx, int sy) const {
+  if (A.course != B.course || sy != 0) return true;
+  const double b0 = B.arc + sx * period_[B.course];
+  return std::max(A.arc, b0) - std::min(A.arc + A.rest, b0 + B.rest) >= gap_;
+}
+
+bool YarnCell::may_pair(const Edge& A, const Edge& B, int sx, int sy) const {
+  if (A.course != B.course || sy != 0) return true;
+  const double off = sx * period_[B.course];
+  const double a_lo = A.arc + 0.5 * A.rest / A.samples,
+               a_hi = A.arc + A.rest - 0.5 * A.rest / A.samples;
+  const double b_lo = B.arc + off + 0.5 * B.rest / B.samples,
+               b_hi = B.arc + off + B.rest - 0.5 * B.rest / B.samples;
+  return std::max(b_hi - a_lo, a_hi - b_lo) >= gap_;
+}
+
 template <class Visit>
 bool YarnCell::for_each_pair(const State& s, double grow, Visit visit) const {
   const int ne = static_cast<int>(edges_.size());
@@ -265,6 +281,7 @@ void YarnCell::contact_terms(const State& s, Mode mode, Accumulator& acc) const 
   const double d2 = d_ * d_;
   const bool ok = for_each_pair(s, 0.5 * d_, [&](int i, int j, int sx, int sy) {
     const Edge &A = edges_[i], &B = edges_[j];
+    if (!may_pair(A, B, sx, sy)) return;
     const Ref refs[4] = {A.a, A.b, {B.a.v, B.a.kx + sx, B.a.ky + sy},
                          {B.b.v, B.b.kx + sx, B.b.ky + sy}};
     const Vec3 pa = s.at(refs[0]), pb = s.at(refs[1]), qa = s.at(refs[2]), qb = s.at(refs[3]);
@@ -438,10 +455,13 @@ double YarnCell::admissible_step(double /*t*/, const double* x, const double* dx
     const double reach =
         std::max(move(refs[0]), move(refs[1])) + std::max(move(refs[2]), move(refs[3]));
     if (!(reach > 0.0)) return;
+    if (!may_pair(A, B, sx, sy)) return;
     const Vec3 pa = s.at(refs[0]), pb = s.at(refs[1]), qa = s.at(refs[2]), qb = s.at(refs[3]);
     const double D = closest_points(pa, pb, qa, qb).distance;
-    if (D - reach >= d_) return;  // cannot come within reach of contact... nor the core
-    if (D > d0_) {
+    if (D - reach >= d_) return;  // cannot come within d, let alone the core
+    // The segment distance bounds every sample pair only where all of them pair (edges of one
+    // pass nearer than the gap along the yarn have excluded parts, as close as they like).
+    if (D > d0_ && whole(A, B, sx, sy)) {
       if (D - reach < d0_ + keep * (D - d0_))
         admit = std::min(admit, (1.0 - keep) * (D - d0_) / reach);
       return;
@@ -497,12 +517,8 @@ double YarnCell::min_clearance(const double* x) const {
     const Ref refs[4] = {A.a, A.b, {B.a.v, B.a.kx + sx, B.a.ky + sy},
                          {B.b.v, B.b.kx + sx, B.b.ky + sy}};
     const Vec3 pa = s.at(refs[0]), pb = s.at(refs[1]), qa = s.at(refs[2]), qb = s.at(refs[3]);
-    bool whole = A.course != B.course || sy != 0;
-    if (!whole) {
-      const double b0 = B.arc + sx * period_[B.course];
-      whole = std::max(A.arc, b0) - std::min(A.arc + A.rest, b0 + B.rest) >= gap_;
-    }
-    if (whole) {
+    if (!may_pair(A, B, sx, sy)) return;
+    if (whole(A, B, sx, sy)) {
       best = std::min(best, closest_points(pa, pb, qa, qb).distance);
       return;
     }

@@ -135,6 +135,10 @@ class YarnCell final : public MechanicalSystem {
   template <class Visit>
   bool for_each_pair(const State& s, double grow, Visit visit) const;
   bool samples_pair(const Edge& A, double sa, const Edge& B, double sb, int sx, int sy) const;
+  // Edge A and edge B shifted by (sx, sy): some sample pair pairs (may_pair); every one does
+  // (whole: different passes, or more than same_yarn_gap apart along the yarn).
+  bool may_pair(const Edge& A, const Edge& B, int sx, int sy) const;
+  bool whole(const Edge& A, const Edge& B, int sx, int sy) const;
 
   YarnCellSpec spec_;
   double d_ = 0.0, d0_ = 0.0, kappa_c_ = 0.0, gap_ = 0.0, residual_scale_ = 1.0;

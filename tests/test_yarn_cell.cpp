@@ -253,3 +253,20 @@ TEST_CASE(
                                             << run.r << "; " << run.stats.steps << " steps, "
                                             << run.stats.cpu_seconds << " s CPU");
 }
+
+TEST_CASE(
+    "yarn cell: halving the edge length from 32 to 64 per loop moves the relaxed courses and "
+    "wales per cm by less than 1 %; the step filter lets edges shorter than the core ramp") {
+  // At 32 edges per loop of 3.4 mm an edge is 0.57 d at the end of the ramp: the segment
+  // distance of two edges of one yarn two apart is below the core while none of their samples
+  // pair (a step filter bounding such a pair by that distance stalled the ramp at 24 % stretch).
+  const YarnCellRun a = relaxed_jersey(3.4e-3, 32), b = relaxed_jersey(3.4e-3, 64);
+  REQUIRE(a.stats.status == RunStatus::Equilibrium);
+  REQUIRE(b.stats.status == RunStatus::Equilibrium);
+  CHECK(std::abs(a.course_end[0] / a.course_knitted[0] - 1.0) < 1e-3);
+  CHECK(std::abs(b.courses_per_cm / a.courses_per_cm - 1.0) < 0.01);
+  CHECK(std::abs(b.wales_per_cm / a.wales_per_cm - 1.0) < 0.01);
+  WARN("32 -> 64 edges per loop: courses/cm " << a.courses_per_cm << " -> " << b.courses_per_cm
+                                              << ", wales/cm " << a.wales_per_cm << " -> "
+                                              << b.wales_per_cm);
+}
