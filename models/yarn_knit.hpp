@@ -64,6 +64,11 @@ struct YarnKnitParams {
   // knit.boundary: the chart as a swatch with held edge courses, or as one repeat of a fabric
   // without edges (a periodic cell whose size is free: models/yarn_cell.hpp).
   bool periodic = false;
+  // knit.cell_pull, knit.cell_strain (knit.boundary = periodic): after relaxing, the cell pulled
+  // along the courses (x, W held) or the wales (y, H held) to this strain in steps of 0.01, the
+  // other length free: 0 none, 1 courses, 2 wales.
+  int cell_pull = 0;
+  double cell_strain = 0.1;  // [0.01, 1]
 
   // Throws InvalidField naming the key (yarn.tex, knit.stitch_length, ...) and its range.
   void validate() const;

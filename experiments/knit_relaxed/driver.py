@@ -12,7 +12,10 @@ Parts (column `part` of runs.csv):
   loop_length  l = 0.8 .. 1.2 x the 1.47 stitch length (--quick: 0.8, 1.0, 1.2);
   convergence  knit.yarn_vertices 8, 16, 32, 64 at the 1.47 stitch length (--quick: 8, 16).
 
-Outputs in --out: runs.csv (one row per run), manifest.json. Called by run.sh; see README.md.
+  pull         the relaxed 1.47 cell pulled along the courses and along the wales to 20 %
+               strain (--quick: 5 %) in steps of 0.01, the other length free (curves.csv).
+
+Outputs in --out: runs.csv (one row per run), curves.csv (the pulls), manifest.json. Called by run.sh; see README.md.
 """
 import math
 import os
@@ -59,6 +62,25 @@ def main():
                          dE_dW_N=c.get("dE_dW_N"), dE_dH_N=c.get("dE_dH_N"),
                          status=c.get("status"), steps=c.get("steps"),
                          cpu_seconds=c.get("cpu_seconds"), dof=c.get("dof")))
+    # Tensile: the relaxed cell pulled along the courses and along the wales (issue 51 item 4).
+    strain = 0.05 if args.quick else 0.2
+    curves, pull_failed = [], []
+    for direction in ("course", "wale"):
+        r = expkit.run_knitsim(args.out, "pull-" + direction, [
+            "knit", "--chart", chart, "--set", "knit.model=yarn", "--set",
+            "knit.boundary=periodic", "--set", "knit.stitch_length=%.6g" % l0, "--set",
+            "knit.yarn_vertices=%d" % n, "--set", "knit.cell_pull=" + direction, "--set",
+            "knit.cell_strain=%g" % strain])
+        p = (r.summary or {}).get("pull") or {}
+        for k, e in enumerate(p.get("strain", [])):
+            curves.append(dict(direction=direction, step=k, strain=e,
+                               force_per_width_N_per_m=p["force_per_width_N_per_m"][k],
+                               reaction_N=p["reaction_N"][k],
+                               lateral_strain=p["lateral_strain"][k], status=p["status"][k],
+                               steps=p["steps"][k], cpu_seconds=p["cpu_seconds"][k]))
+        if not p.get("status") or p["status"][-1] != "equilibrium":
+            pull_failed.append(direction)
+    expkit.write_csv(os.path.join(args.out, "curves.csv"), curves)
     expkit.write_csv(os.path.join(args.out, "runs.csv"), rows)
     expkit.write_manifest(args, "knit_relaxed", first, {"tex": TEX, "l_1.47_m": l0})
     expkit.finish(args)
@@ -66,8 +88,10 @@ def main():
     for r in bad:
         print("knit_relaxed: %s %s ended %s" % (r["part"], r["label"], r["status"]),
               file=sys.stderr)
-    print("knit_relaxed: wrote %s/runs.csv" % args.out)
-    return 1 if bad else 0
+    for d in pull_failed:
+        print("knit_relaxed: the pull along the %ss did not reach its strain" % d, file=sys.stderr)
+    print("knit_relaxed: wrote %s/runs.csv, curves.csv" % args.out)
+    return 1 if bad or pull_failed else 0
 
 
 if __name__ == "__main__":

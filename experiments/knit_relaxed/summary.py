@@ -81,6 +81,31 @@ def build(out):
             "length halves).\n\n" + md_table(
                 ["vertices per loop", "courses/cm", "change", "wales/cm", "change", "steps",
                  "CPU (s)", "status"], rows)))
+    curves = read_rows(out, "curves.csv")
+    if curves:
+        rows = []
+        for direction in ("course", "wale"):
+            c = [x for x in curves if x["direction"] == direction]
+            if len(c) < 2:
+                continue
+            e = [float(x["strain"]) for x in c]
+            fw = [float(x["force_per_width_N_per_m"]) for x in c]
+            lat = [float(x["lateral_strain"]) for x in c]
+            k1 = (fw[1] - fw[0]) / (e[1] - e[0])
+            kn = (fw[-1] - fw[-2]) / (e[-1] - e[-2])
+            rows.append([direction, num(k1, 3), num(kn, 3), num(e[-1], 3), num(fw[-1], 3),
+                         num(-(lat[1] - lat[0]) / (e[1] - e[0]), 3), num(-lat[-1] / e[-1], 3),
+                         c[-1]["status"]])
+        sections.append((
+            "Tensile: the relaxed cell pulled along the courses and the wales (curves.csv)",
+            "The relaxed tightness-1.47 cell stretched in steps of 0.01 along the courses (W "
+            "held, H free) or the wales (H held, W free). Force per rest width: the reaction "
+            "dE/dW over H0, or dE/dH over W0 (N/m). Initial and final tangent stiffness: from "
+            "the first and the last step (N/m per unit strain); Poisson: -lateral strain / "
+            "strain, over the first step and at the end.\n\n" + md_table(
+                ["pulled along", "initial stiffness (N/m)", "final tangent (N/m)", "strain",
+                 "force per width (N/m)", "initial Poisson", "Poisson at the end", "status"],
+                rows)))
     rows = [[r["part"], r["label"], num(r["steps"], 4), num(r["cpu_seconds"], 3),
              num(r["dof"], 4), "%.1e" % f(r, "course_length_change_max"),
              "%.1e" % f(r, "dE_dW_N"), "%.1e" % f(r, "dE_dH_N")] for r in runs]
@@ -93,7 +118,7 @@ def build(out):
                   "dE/dH (N)"], rows)))
     sections.append(("Provenance", provenance(manifest)))
     return ("knit_relaxed: relaxed plain jersey from the periodic yarn cell",
-            ["runs.csv", "manifest.json"], sections)
+            ["runs.csv", "curves.csv", "manifest.json"], sections)
 
 
 def main(argv=None):

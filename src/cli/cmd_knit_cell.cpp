@@ -1,5 +1,6 @@
 #include "src/cli/cmd_knit_cell.hpp"
 
+#include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -29,6 +30,8 @@ void run_knit_cell(const KnitScene& scene, const std::string& integrator, const 
   if (!continue_from.empty())
     throw std::invalid_argument("--continue: not for knit.boundary = periodic (a cell run is "
                                 "short: run it again)");
+  const double e = scene.yarn.cell_strain;
+  check_cell_strain(e);
   auto start = std::make_shared<const YarnCellStart>(
       build_yarn_cell_start(scene.chart, scene.params, scene.yarn));  // validates the keys
   const InterruptScope interrupt;
@@ -40,11 +43,18 @@ void run_knit_cell(const KnitScene& scene, const std::string& integrator, const 
     ProgressLine progress(scene.name + " cell " + integrator, options.equilibrium_tol, !quiet);
     return run_yarn_cell(start, integrator, options, &progress);
   }();
+  std::unique_ptr<YarnCellPull> pull;
+  if (scene.yarn.cell_pull != 0 && run.stats.status == RunStatus::Equilibrium)
+    pull = std::make_unique<YarnCellPull>(pull_yarn_cell(start, integrator, options, run.end,
+                                                         scene.yarn.cell_pull == 1, e));
   write_yarn_cell_outputs(dir, run, integrator,
                           {{"chart", scene.chart_file},
                            {"integrator", integrator},
                            {"boundary", "periodic"},
-                           {"options", to_json(scene.options)}});
+                           {"cell_pull", scene.yarn.cell_pull},
+                           {"cell_strain", e},
+                           {"options", to_json(scene.options)}},
+                          pull.get());
   if (!quiet) {
     Table t;
     t.columns = {"knit cell", scene.name + " (" + scene.chart_file + ")"};
@@ -66,9 +76,20 @@ void run_knit_cell(const KnitScene& scene, const std::string& integrator, const 
                           std::to_string(run.clearance_checks) + " checks, end " +
                           format_number(run.clearance_end_over_d, 3) + " d"},
         {"outputs", dir.string() + "/"}};
+    if (pull && !pull->strain.empty())
+      t.rows.insert(t.rows.end() - 1,
+                    {"pull", std::string(pull->along_courses ? "along the courses" : "along the wales") +
+                                 " to " + format_number(pull->strain.back(), 3) + ": " +
+                                 format_number(pull->force_per_width.back(), 4) +
+                                 " N/m, lateral strain " +
+                                 format_number(pull->lateral_strain.back(), 3) + ", " +
+                                 to_string(pull->status.back())});
     std::cout << t.text() << std::flush;
   }
-  exit_with_run_status("knit", run.stats, interrupt, dir.string());
+  RunStats stats = run.stats;  // a pull step that did not settle ends the run with its status
+  if (pull && !pull->status.empty() && pull->status.back() != RunStatus::Equilibrium)
+    stats.status = pull->status.back();
+  exit_with_run_status("knit", stats, interrupt, dir.string());
 }
 
 }  // namespace knitsim

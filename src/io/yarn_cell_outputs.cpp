@@ -17,7 +17,8 @@ nlohmann::json number_or_null(double v) { return std::isfinite(v) ? nlohmann::js
 
 }  // namespace
 
-nlohmann::json yarn_cell_summary(const YarnCellRun& run, const std::string& integrator) {
+nlohmann::json yarn_cell_summary(const YarnCellRun& run, const std::string& integrator,
+                                 const YarnCellPull* pull) {
   const YarnCellStart& st = *run.start;
   const YarnParams& p = st.params.yarn;
   nlohmann::json change = nlohmann::json::array(), knitted = nlohmann::json::array();
@@ -78,7 +79,21 @@ nlohmann::json yarn_cell_summary(const YarnCellRun& run, const std::string& inte
       {"dof", run.dof},
       {"edges_per_wale", st.params.vertices_per_loop},
       {"start_loop_radius_over_d", st.r / d}};
+  nlohmann::json pulled = nullptr;
+  if (pull) {
+    nlohmann::json status = nlohmann::json::array();
+    for (RunStatus s : pull->status) status.push_back(to_string(s));
+    pulled = {{"direction", pull->along_courses ? "course" : "wale"},
+              {"strain", pull->strain},
+              {"reaction_N", pull->reaction},
+              {"force_per_width_N_per_m", pull->force_per_width},
+              {"lateral_strain", pull->lateral_strain},
+              {"status", status},
+              {"steps", pull->steps},
+              {"cpu_seconds", pull->cpu_seconds}};
+  }
   return {{"command", "knit"},
+          {"pull", pulled},
           {"model", "yarn"},
           {"boundary", "periodic"},
           {"integrator", integrator},
@@ -98,12 +113,25 @@ nlohmann::json yarn_cell_summary(const YarnCellRun& run, const std::string& inte
            {{"cell", "width_m, height_m, stitch_length_m, course_length_knitted_m m; "
                      "courses_per_cm, wales_per_cm 1/cm; K_c, K_w, K_s, R, tightness_factor "
                      "(sqrt(tex) / l in mm) 1; clearance_*_over_d d; course_length_change "
-                     "relative; dE_dW_N, dE_dH_N N per cell; cpu_seconds, wall_seconds s"}}}};
+                     "relative; dE_dW_N, dE_dH_N N per cell; cpu_seconds, wall_seconds s"},
+            {"pull", "strain, lateral_strain 1; reaction_N N per cell; force_per_width_N_per_m "
+                     "N/m (per rest width: H0 along the courses, W0 along the wales)"}}}};
 }
 
 void write_yarn_cell_outputs(const std::filesystem::path& dir, const YarnCellRun& run,
-                             const std::string& integrator, const nlohmann::json& options) {
-  write_json_atomic(dir / "summary.json", yarn_cell_summary(run, integrator));
+                             const std::string& integrator, const nlohmann::json& options,
+                             const YarnCellPull* pull) {
+  write_json_atomic(dir / "summary.json", yarn_cell_summary(run, integrator, pull));
+  if (pull) {
+    std::ostringstream p;
+    p.precision(10);
+    p << "step,strain,reaction_N,force_per_width_N_per_m,lateral_strain,status,steps\n";
+    for (std::size_t k = 0; k < pull->strain.size(); ++k)
+      p << k << ',' << pull->strain[k] << ',' << pull->reaction[k] << ','
+        << pull->force_per_width[k] << ',' << pull->lateral_strain[k] << ','
+        << to_string(pull->status[k]) << ',' << pull->steps[k] << '\n';
+    write_file_atomic(dir / "cell_pull.csv", p.str());
+  }
   std::ostringstream csv;
   csv.precision(10);
   csv << "course,vertex,x_m,y_m,z_m\n";

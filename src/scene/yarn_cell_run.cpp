@@ -7,6 +7,8 @@
 #include <limits>
 #include <utility>
 
+#include "src/core/invalid_field.hpp"
+
 namespace knitsim {
 
 namespace {
@@ -119,6 +121,50 @@ YarnCellRun run_yarn_cell(std::shared_ptr<const YarnCellStart> start,
   run.stats.wall_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   return run;
+}
+
+void check_cell_strain(double strain) {
+  if (!(std::isfinite(strain) && strain >= 0.01 && strain <= 1.0))
+    bad_field("knit.cell_strain", strain, "must be in [0.01, 1]");
+}
+
+YarnCellPull pull_yarn_cell(std::shared_ptr<const YarnCellStart> start,
+                            const std::string& integrator, const IntegratorOptions& options,
+                            const YarnCellState& relaxed, bool along_courses, double strain) {
+  YarnCellPull out;
+  out.along_courses = along_courses;
+  const double W0 = relaxed.width, H0 = relaxed.height;
+  const int n = std::max(1, static_cast<int>(std::ceil(strain / 0.01 - 1e-9)));
+  YarnCellState state = relaxed;
+  for (int k = 0; k <= n; ++k) {
+    const double e = strain * k / n;
+    const double x0 = state.courses[0][0].x, y0 = state.courses[0][0].y;
+    if (along_courses) {
+      const double f = W0 * (1.0 + e) / state.width;
+      for (auto& course : state.courses)
+        for (Vec3& v : course) v.x = x0 + f * (v.x - x0);
+      state.width = W0 * (1.0 + e);
+    } else {
+      const double f = H0 * (1.0 + e) / state.height;
+      for (auto& course : state.courses)
+        for (Vec3& v : course) v.y = y0 + f * (v.y - y0);
+      state.height = H0 * (1.0 + e);
+    }
+    const YarnCellRun r =
+        run_yarn_cell(start, integrator, options, nullptr, &state,
+                      along_courses ? CellSize::WidthHeld : CellSize::HeightHeld, false);
+    state = r.end;
+    const double reaction = along_courses ? r.size_gradient[0] : r.size_gradient[1];
+    out.strain.push_back(e);
+    out.reaction.push_back(reaction);
+    out.force_per_width.push_back(reaction / (along_courses ? H0 : W0));
+    out.lateral_strain.push_back(along_courses ? state.height / H0 - 1.0 : state.width / W0 - 1.0);
+    out.status.push_back(r.stats.status);
+    out.steps.push_back(r.stats.steps);
+    out.cpu_seconds.push_back(r.stats.cpu_seconds);
+    if (r.stats.status != RunStatus::Equilibrium) break;
+  }
+  return out;
 }
 
 }  // namespace knitsim

@@ -57,4 +57,24 @@ YarnCellRun run_yarn_cell(std::shared_ptr<const YarnCellStart> start,
                           RunObserver* observer = nullptr, const YarnCellState* from = nullptr,
                           CellSize size = CellSize::Free, bool ramp = true);
 
+// A tensile test on a relaxed cell: the length along `direction` (x: the courses, W held; y: the
+// wales, H held) stretched from `relaxed` to strain `strain` in steps of at most 0.01 (each step
+// the state stretched affinely along it, which only moves points apart, then relaxed with the
+// other length free). Per step: the strain, the reaction per cell dE/dW or dE/dH (N), the force
+// per rest width (N/m: over H0 pulling along the courses, over W0 along the wales), the lateral
+// strain of the free length, the status, steps and CPU seconds. Stops at a step that does not
+// reach equilibrium.
+// Throws InvalidField "knit.cell_strain = <v>: must be in [0.01, 1]" unless strain is in range.
+void check_cell_strain(double strain);
+
+struct YarnCellPull {
+  bool along_courses = true;
+  std::vector<double> strain, reaction, force_per_width, lateral_strain, cpu_seconds;
+  std::vector<RunStatus> status;
+  std::vector<long> steps;
+};
+YarnCellPull pull_yarn_cell(std::shared_ptr<const YarnCellStart> start,
+                            const std::string& integrator, const IntegratorOptions& options,
+                            const YarnCellState& relaxed, bool along_courses, double strain);
+
 }  // namespace knitsim
