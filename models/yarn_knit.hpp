@@ -61,6 +61,14 @@ struct YarnKnitParams {
   double miss_length = 0.0;       // knit.miss_length, m, [0, 0.1]; 0 = the knit's ratio
   double vertices_per_loop = 16;  // knit.yarn_vertices: edges per chart cell, whole, [4, 256]
   double ramp_stages = 4;         // knit.yarn_ramp: relaxed steps of the ramp, whole, [1, 100]
+  // knit.boundary: the chart as a swatch with held edge courses, or as one repeat of a fabric
+  // without edges (a periodic cell whose size is free: models/yarn_cell.hpp).
+  bool periodic = false;
+  // knit.cell_pull, knit.cell_strain (knit.boundary = periodic): after relaxing, the cell pulled
+  // along the courses (x, W held) or the wales (y, H held) to this strain in steps of 0.01, the
+  // other length free: 0 none, 1 courses, 2 wales.
+  int cell_pull = 0;
+  double cell_strain = 0.1;  // [0.01, 1]
 
   // Throws InvalidField naming the key (yarn.tex, knit.stitch_length, ...) and its range.
   void validate() const;

@@ -1,5 +1,7 @@
 #include "models/yarn_rods.hpp"
 
+#include "models/rod_elements.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -48,6 +50,79 @@ Barrier barrier(double D, double d, double d0, double kappa) {
 }
 
 }  // namespace
+
+ContactBarrier contact_barrier(double D, double d, double d0, double kappa) {
+  const Barrier b = barrier(D, d, d0, kappa);
+  return {b.e, b.de, b.dde};
+}
+
+bool bend_element(const Vec3& x0, const Vec3& x1, const Vec3& x2, double K, double kappa0,
+                  int order, BendElement& out) {
+  const Vec3 e0 = x1 - x0, e1 = x2 - x1;
+  const double a = norm(e0), b = norm(e1), c = dot(e0, e1), q = a * b, s = q + c;
+  if (!(s > 0.0) || !(a > 0.0) || !(b > 0.0)) return false;  // folded back (or degenerate)
+  const double f = 4.0 * (q - c) / s;                         // kappa^2
+  double G, dG, ddG;  // G(f) and its derivatives in f
+  if (kappa0 == 0.0) {
+    G = K * f, dG = K, ddG = 0.0;
+  } else {
+    const double kappa = std::sqrt(f);
+    if (!(kappa > 0.0) && order > 0) return false;  // the cone of a bent rest shape at straight
+    G = K * (kappa - kappa0) * (kappa - kappa0);
+    dG = K * (1.0 - kappa0 / kappa);
+    ddG = K * kappa0 / (2.0 * kappa * kappa * kappa);
+  }
+  out.energy = G;
+  if (order == 0) return true;
+  // Gradients in y = (e0, e1) of q = ab and c, then of f.
+  const double y0[3] = {e0.x, e0.y, e0.z}, y1[3] = {e1.x, e1.y, e1.z};
+  double gq[6], gc[6], gf[6];
+  for (int i = 0; i < 3; ++i) {
+    gq[i] = b * y0[i] / a;
+    gq[3 + i] = a * y1[i] / b;
+    gc[i] = y1[i];
+    gc[3 + i] = y0[i];
+  }
+  const double s2 = s * s, s3 = s2 * s;
+  const double fq = 8.0 * c / s2, fc = -8.0 * q / s2;
+  for (int i = 0; i < 6; ++i) gf[i] = fq * gq[i] + fc * gc[i];
+  // dE/dx0 = -dE/de0, dE/dx1 = dE/de0 - dE/de1, dE/dx2 = dE/de1
+  for (int i = 0; i < 3; ++i) {
+    out.grad[i] = -dG * gf[i];
+    out.grad[3 + i] = dG * (gf[i] - gf[3 + i]);
+    out.grad[6 + i] = dG * gf[3 + i];
+  }
+  if (order == 1) return true;
+  // Hessian in y: f_q H_q + f_c H_c + f_qq gq gq^T + f_cc gc gc^T + f_qc (gq gc^T + gc gq^T),
+  // H_q = b H_a + a H_b + ga gb^T + gb ga^T, H_a = (I - n0 n0^T) / a on the e0 block.
+  const double fqq = -16.0 * c / s3, fcc = 16.0 * q / s3, fqc = 8.0 * (q - c) / s3;
+  double ga[6] = {y0[0] / a, y0[1] / a, y0[2] / a, 0, 0, 0};
+  double gb[6] = {0, 0, 0, y1[0] / b, y1[1] / b, y1[2] / b};
+  double Hy[6][6];
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 6; ++j) {
+      double hq = ga[i] * gb[j] + gb[i] * ga[j];
+      double hc = 0.0;
+      if (i < 3 && j < 3) hq += b * ((i == j ? 1.0 : 0.0) - ga[i] * ga[j]) / a;
+      if (i >= 3 && j >= 3) hq += a * ((i == j ? 1.0 : 0.0) - gb[i] * gb[j]) / b;
+      if ((i < 3) != (j < 3) && i % 3 == j % 3) hc = 1.0;
+      const double hf = fq * hq + fc * hc + fqq * gq[i] * gq[j] + fcc * gc[i] * gc[j] +
+                        fqc * (gq[i] * gc[j] + gc[i] * gq[j]);
+      Hy[i][j] = dG * hf + ddG * gf[i] * gf[j];
+    }
+  // x = (x0, x1, x2): e0 = x1 - x0, e1 = x2 - x1.
+  static constexpr double kMap[2][3] = {{-1.0, 1.0, 0.0}, {0.0, -1.0, 1.0}};
+  for (int r = 0; r < 3; ++r)
+    for (int cc = 0; cc < 3; ++cc)
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+          double sum = 0.0;
+          for (int P = 0; P < 2; ++P)
+            for (int Q = 0; Q < 2; ++Q) sum += kMap[P][r] * kMap[Q][cc] * Hy[3 * P + i][3 * Q + j];
+          out.hess[9 * (3 * r + i) + 3 * cc + j] = sum;
+        }
+  return true;
+}
 
 void YarnParams::validate() const {
   check_range("tex", tex, 0.0, 1e4, true, "(0, 1e4] tex");
@@ -396,85 +471,26 @@ void YarnRods::evaluate(const double* x, Mode mode, Accumulator& acc) const {
 
   for (size_t k = 0; k < bends_.size(); ++k) {
     const Bend& bd = bends_[k];
-    const Vec3 e0 = pos_[bd.v[1]] - pos_[bd.v[0]], e1 = pos_[bd.v[2]] - pos_[bd.v[1]];
-    const double a = norm(e0), b = norm(e1), c = dot(e0, e1), q = a * b, s = q + c;
-    if (!(s > 0.0) || !(a > 0.0) || !(b > 0.0)) {  // folded back on itself (or degenerate)
+    BendElement el;
+    const int order = mode == Mode::Energy ? 0 : (mode == Mode::Force ? 1 : 2);
+    if (!bend_element(pos_[bd.v[0]], pos_[bd.v[1]], pos_[bd.v[2]],
+                      p.bending_rigidity / (2.0 * bd.lbar), bd.kappa0, order, el)) {
       acc.bad = true;
       continue;
     }
-    const double f = 4.0 * (q - c) / s;  // kappa^2
-    const double K = p.bending_rigidity / (2.0 * bd.lbar);
-    double G, dG, ddG;  // G(f) and its derivatives in f
-    if (bd.kappa0 == 0.0) {
-      G = K * f, dG = K, ddG = 0.0;
-    } else {
-      const double kappa = std::sqrt(f);
-      if (!(kappa > 0.0) && mode != Mode::Energy) {  // the cone of a bent rest shape at straight
-        acc.bad = true;
-        continue;
-      }
-      G = K * (kappa - bd.kappa0) * (kappa - bd.kappa0);
-      dG = K * (1.0 - bd.kappa0 / kappa);
-      ddG = K * bd.kappa0 / (2.0 * kappa * kappa * kappa);
-    }
-    acc.energy += G;
+    acc.energy += el.energy;
     if (mode == Mode::Energy) continue;
-    // Gradients in y = (e0, e1) of q = ab and c, then of f.
-    const double y0[3] = {e0.x, e0.y, e0.z}, y1[3] = {e1.x, e1.y, e1.z};
-    double gq[6], gc[6], gf[6];
-    for (int i = 0; i < 3; ++i) {
-      gq[i] = b * y0[i] / a;
-      gq[3 + i] = a * y1[i] / b;
-      gc[i] = y1[i];
-      gc[3 + i] = y0[i];
-    }
-    const double s2 = s * s, s3 = s2 * s;
-    const double fq = 8.0 * c / s2, fc = -8.0 * q / s2;
-    for (int i = 0; i < 6; ++i) gf[i] = fq * gq[i] + fc * gc[i];
     if (mode == Mode::Force) {
-      double g0[3], g1[3], g2[3];  // dE/dx0 = -dE/de0, dE/dx1 = dE/de0 - dE/de1, dE/dx2 = dE/de1
-      for (int i = 0; i < 3; ++i) {
-        g0[i] = -dG * gf[i];
-        g1[i] = dG * (gf[i] - gf[3 + i]);
-        g2[i] = dG * gf[3 + i];
-      }
-      add_force(bd.v[0], g0, 1.0);
-      add_force(bd.v[1], g1, 1.0);
-      add_force(bd.v[2], g2, 1.0);
+      for (int r = 0; r < 3; ++r) add_force(bd.v[r], el.grad + 3 * r, 1.0);
       continue;
     }
-    // Hessian in y: f_q H_q + f_c H_c + f_qq gq gq^T + f_cc gc gc^T + f_qc (gq gc^T + gc gq^T),
-    // H_q = b H_a + a H_b + ga gb^T + gb ga^T, H_a = (I - n0 n0^T) / a on the e0 block.
-    const double fqq = -16.0 * c / s3, fcc = 16.0 * q / s3, fqc = 8.0 * (q - c) / s3;
-    double ga[6] = {y0[0] / a, y0[1] / a, y0[2] / a, 0, 0, 0};
-    double gb[6] = {0, 0, 0, y1[0] / b, y1[1] / b, y1[2] / b};
-    double Hy[6][6];
-    for (int i = 0; i < 6; ++i)
-      for (int j = 0; j < 6; ++j) {
-        double hq = ga[i] * gb[j] + gb[i] * ga[j];
-        double hc = 0.0;
-        if (i < 3 && j < 3) hq += b * ((i == j ? 1.0 : 0.0) - ga[i] * ga[j]) / a;
-        if (i >= 3 && j >= 3) hq += a * ((i == j ? 1.0 : 0.0) - gb[i] * gb[j]) / b;
-        if ((i < 3) != (j < 3) && i % 3 == j % 3) hc = 1.0;
-        const double hf = fq * hq + fc * hc + fqq * gq[i] * gq[j] + fcc * gc[i] * gc[j] +
-                          fqc * (gq[i] * gc[j] + gc[i] * gq[j]);
-        Hy[i][j] = dG * hf + ddG * gf[i] * gf[j];
-      }
-    // x = (x0, x1, x2): e0 = x1 - x0, e1 = x2 - x1.
-    static constexpr double kMap[2][3] = {{-1.0, 1.0, 0.0}, {0.0, -1.0, 1.0}};
     const auto& bl = bend_blocks_[k];
     for (int r = 0; r < 3; ++r)
       for (int cc = 0; cc < 3; ++cc) {
         if (bl[3 * r + cc] < 0) continue;
         double h[9];
         for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j) {
-            double sum = 0.0;
-            for (int P = 0; P < 2; ++P)
-              for (int Q = 0; Q < 2; ++Q)
-                sum += kMap[P][r] * kMap[Q][cc] * Hy[3 * P + i][3 * Q + j];
-            h[3 * i + j] = sum;
-          }
+          for (int j = 0; j < 3; ++j) h[3 * i + j] = el.hess[9 * (3 * r + i) + 3 * cc + j];
         add_block(bl[3 * r + cc], bd.v[r], bd.v[cc], h);
       }
   }

@@ -20,6 +20,7 @@
 #include "src/base/table.hpp"
 #include "src/base/text.hpp"
 #include "src/cli/cli_options.hpp"
+#include "src/cli/cmd_knit_cell.hpp"
 #include "src/cli/commands.hpp"
 #include "src/core/stop_request.hpp"
 #include "src/io/drape_outputs.hpp"
@@ -139,6 +140,8 @@ void run(const KnitArgs& args) {
   if (args.frames < 1)
     throw std::invalid_argument("--frames = " + std::to_string(args.frames) + ": must be >= 1");
   KnitScene scene = make_knit_scene(input, std::move(chart), args.frames);
+  if (scene.yarn.periodic)  // a cell of an endless fabric (src/cli/cmd_knit_cell.hpp)
+    return run_knit_cell(scene, integrator, args.out, args.quiet, args.continue_from);
   KnitStart start = start_knit(scene);  // validates the parameters
   if (!args.continue_from.empty()) {
     const RunState from =

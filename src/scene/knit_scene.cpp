@@ -46,7 +46,8 @@ KnitScene make_knit_scene(const Scene& scene, KnitChart chart, int frames) {
 
 bool yarn_model_key(const std::string& key) {
   return key.rfind("yarn.", 0) == 0 || key == "knit.stitch_length" || key == "knit.tuck_length" ||
-         key == "knit.miss_length" || key == "knit.yarn_vertices" || key == "knit.yarn_ramp";
+         key == "knit.miss_length" || key == "knit.yarn_vertices" || key == "knit.yarn_ramp" ||
+         key == "knit.boundary" || key == "knit.cell_pull" || key == "knit.cell_strain";
 }
 
 nlohmann::json knit_model_keys(const KnitChart& chart, const Scene& scene) {

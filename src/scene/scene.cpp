@@ -31,6 +31,8 @@
 #include "models/mirror_reduced.hpp"
 #include "src/scene/fit_options.hpp"
 #include "src/scene/whole_sheet_check.hpp"
+#include "src/scene/yarn_cell_run.hpp"
+#include "solvers/equilibrium_check.hpp"
 #include "src/base/files.hpp"
 #include "src/base/text.hpp"
 
@@ -404,6 +406,38 @@ std::vector<Key> make_table() {
       "network: the interlacing-point network (knit.network); yarn: each course's yarn a "
       "discrete elastic rod with contact, one yarn through the chart (docs/yarn_model.md)",
       KeyModel::Knit);
+  other(
+      "knit.boundary", Kind::Text,
+      [](Scene& s, const std::string& v) {
+        if (v != "swatch" && v != "periodic") return false;
+        s.yarn.periodic = v == "periodic";
+        return true;
+      },
+      "one of swatch, periodic",
+      [](const Scene& s) { return std::string(s.yarn.periodic ? "periodic" : "swatch"); },
+      "knit.model = yarn: swatch, the chart with its edge courses held; periodic, the chart as "
+      "one repeat of an endless fabric, a cell whose size is relaxed (docs/yarn_model.md, "
+      "\"Periodic cell\")",
+      KeyModel::Knit);
+  other(
+      "knit.cell_pull", Kind::Text,
+      [](Scene& s, const std::string& v) {
+        if (v != "none" && v != "course" && v != "wale") return false;
+        s.yarn.cell_pull = v == "course" ? 1 : v == "wale" ? 2 : 0;
+        return true;
+      },
+      "one of none, course, wale",
+      [](const Scene& s) {
+        return std::string(s.yarn.cell_pull == 1 ? "course" : s.yarn.cell_pull == 2 ? "wale"
+                                                                                    : "none");
+      },
+      "knit.boundary = periodic: after relaxing, pull the cell along the courses or the wales to "
+      "knit.cell_strain in steps of 0.01, the other direction free (a tensile test)",
+      KeyModel::Knit);
+  number(
+      "knit.cell_strain", [](Scene& s) -> double& { return s.yarn.cell_strain; }, "1",
+      "knit.cell_pull: the strain pulled to", KeyModel::Knit);
+  k.back().probe_range = [] { check_cell_strain(std::numeric_limits<double>::quiet_NaN()); };
   auto yarn = [&number](const char* name, double YarnParams::*field, const char* unit,
                         const char* meaning) {
     number(
