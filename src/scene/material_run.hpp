@@ -49,6 +49,9 @@ struct MaterialDrapeResult {
 MaterialDrapeResult run_material_drape(const Scene& scene, const std::string& integrator,
                                        RunObserver* observer = nullptr);
 
+// The mirror group's name as model.symmetry spells it: none, half, quarter or eighth.
+const char* symmetry_name(SheetMirrors m);
+
 // A figure of the result outside what the model stands for ("" if none): not finite, or a sag
 // or drop larger than the sheet (status outside_model_limits, docs/reliability.md).
 std::string material_limit_violation(const MaterialDrapeResult& r);
