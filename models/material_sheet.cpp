@@ -152,6 +152,41 @@ T bending_energy(const std::array<T, 6>& u, double stiffness) {
 
 double edge_weight(int k, int n) { return (k == 0 || k == n) ? 0.5 : 1.0; }
 
+// One element's energy e at its vertices' positions p and its derivatives in their 9
+// coordinates (index 3 a + k: vertex a, coordinate k): g = dE/dx (alpha^T g_u) and, with
+// Hessian, h[9 (3 a + k) + 3 b + l] = d^2E / dx_(a,k) dx_(b,l) (alpha^T H_u alpha).
+template <bool Hessian, class EnergyOf>
+double element_derivatives(const Vec3 (&p)[3], const Alpha& alpha, EnergyOf&& energy_of,
+                           double (&g)[9], double* h) {
+  using J = Jet<6, Hessian>;
+  std::array<J, 6> u;
+  for (int c = 0; c < 2; ++c) {
+    const Vec3 w = alpha[c][0] * p[0] + alpha[c][1] * p[1] + alpha[c][2] * p[2];
+    u[3 * c] = J::variable(w.x, 3 * c);
+    u[3 * c + 1] = J::variable(w.y, 3 * c + 1);
+    u[3 * c + 2] = J::variable(w.z, 3 * c + 2);
+  }
+  const J e = energy_of(u);
+  for (int a = 0; a < 3; ++a)
+    for (int k = 0; k < 3; ++k) g[3 * a + k] = alpha[0][a] * e.g[k] + alpha[1][a] * e.g[3 + k];
+  if constexpr (Hessian) {
+    double hu[36];  // H_u in full from its upper triangle
+    for (int i = 0; i < 6; ++i)
+      for (int j = 0; j < 6; ++j) hu[6 * i + j] = i <= j ? e.h[6 * i + j] : e.h[6 * j + i];
+    for (int a = 0; a < 3; ++a)
+      for (int k = 0; k < 3; ++k)
+        for (int b = 0; b < 3; ++b)
+          for (int l = 0; l < 3; ++l) {
+            double sum = 0.0;
+            for (int c = 0; c < 2; ++c)
+              for (int d = 0; d < 2; ++d)
+                sum += alpha[c][a] * alpha[d][b] * hu[6 * (3 * c + k) + 3 * d + l];
+            h[9 * (3 * a + k) + 3 * b + l] = sum;
+          }
+  }
+  return e.v;
+}
+
 }  // namespace
 
 int MaterialSheetParams::cells_y() const {
@@ -382,26 +417,14 @@ void MaterialSheet::assemble(const double* x, double* energy, double* force, dou
   using J = Jet<6, Hessian>;
   auto element = [&](const int* vs, const int* slot, const Alpha& alpha, auto&& energy_of) {
     const Vec3 p[3] = {position(x, vs[0]), position(x, vs[1]), position(x, vs[2])};
-    std::array<J, 6> u;
-    for (int c = 0; c < 2; ++c) {
-      const Vec3 w = alpha[c][0] * p[0] + alpha[c][1] * p[1] + alpha[c][2] * p[2];
-      u[3 * c] = J::variable(w.x, 3 * c);
-      u[3 * c + 1] = J::variable(w.y, 3 * c + 1);
-      u[3 * c + 2] = J::variable(w.z, 3 * c + 2);
-    }
-    const J e = energy_of(u);
-    if (energy) *energy += e.v;
-    // H_u in full from its upper triangle.
-    double hu[36];
-    if constexpr (Hessian)
-      for (int i = 0; i < 6; ++i)
-        for (int j = 0; j < 6; ++j) hu[6 * i + j] = i <= j ? e.h[6 * i + j] : e.h[6 * j + i];
+    double g[9], h[Hessian ? 81 : 1];
+    const double e = element_derivatives<Hessian>(p, alpha, energy_of, g, h);
+    if (energy) *energy += e;
     for (int a = 0; a < 3; ++a) {
       const int fa = free_index_[vs[a]];
       if (fa < 0) continue;
       if (force)
-        for (int k = 0; k < 3; ++k)
-          force[3 * fa + k] -= alpha[0][a] * e.g[k] + alpha[1][a] * e.g[3 + k];
+        for (int k = 0; k < 3; ++k) force[3 * fa + k] -= g[3 * a + k];
       if constexpr (Hessian) {
         const double inv_m = 1.0 / vertex_mass_[vs[a]];
         for (int b = 0; b < 3; ++b) {
@@ -409,13 +432,9 @@ void MaterialSheet::assemble(const double* x, double* energy, double* force, dou
           if (entry < 0) continue;
           const int fb = free_index_[vs[b]];
           for (int k = 0; k < 3; ++k)
-            for (int l = 0; l < 3; ++l) {
-              double h = 0.0;
-              for (int c = 0; c < 2; ++c)
-                for (int d = 0; d < 2; ++d)
-                  h += alpha[c][a] * alpha[d][b] * hu[6 * (3 * c + k) + 3 * d + l];
-              values[node_block_entry(nodes_, entry, fb, k, l)] -= inv_m * h;
-            }
+            for (int l = 0; l < 3; ++l)
+              values[node_block_entry(nodes_, entry, fb, k, l)] -=
+                  inv_m * h[9 * (3 * a + k) + 3 * b + l];
         }
       }
     }
@@ -756,42 +775,21 @@ void MirroredSheet::assemble(const double* q, double* energy, double* force, dou
     Vec3 p[3];
     for (int a = 0; a < 3; ++a)
       p[a] = {coordinate(q, vs[a], 0), coordinate(q, vs[a], 1), coordinate(q, vs[a], 2)};
-    std::array<J, 6> u;
-    for (int c = 0; c < 2; ++c) {
-      const Vec3 w = alpha[c][0] * p[0] + alpha[c][1] * p[1] + alpha[c][2] * p[2];
-      u[3 * c] = J::variable(w.x, 3 * c);
-      u[3 * c + 1] = J::variable(w.y, 3 * c + 1);
-      u[3 * c + 2] = J::variable(w.z, 3 * c + 2);
-    }
-    const J e = energy_of(u);
-    if (energy) *energy += weight * e.v;
+    double g[9], h[Hessian ? 81 : 1];
+    const double e = element_derivatives<Hessian>(p, alpha, energy_of, g, h);
+    if (energy) *energy += weight * e;
+    // Through the tie x = sign q[index] + offset: dE_R/dq = weight sign g, and likewise H.
     int idx[9];
     double sg[9];
-    for (int a = 0; a < 9; ++a) idx[a] = index_[3 * vs[a / 3] + a % 3], sg[a] = sign_[3 * vs[a / 3] + a % 3];
-    if (force)
-      for (int a = 0; a < 3; ++a)
-        for (int k = 0; k < 3; ++k)
-          if (idx[3 * a + k] >= 0)
-            force[idx[3 * a + k]] -=
-                weight * sg[3 * a + k] * (alpha[0][a] * e.g[k] + alpha[1][a] * e.g[3 + k]);
-    if constexpr (Hessian) {
-      double hu[36];
-      for (int i = 0; i < 6; ++i)
-        for (int j = 0; j < 6; ++j) hu[6 * i + j] = i <= j ? e.h[6 * i + j] : e.h[6 * j + i];
-      for (int a = 0; a < 9; ++a) {
-        if (idx[a] < 0) continue;
+    for (int a = 0; a < 9; ++a)
+      idx[a] = index_[3 * vs[a / 3] + a % 3], sg[a] = sign_[3 * vs[a / 3] + a % 3];
+    for (int a = 0; a < 9; ++a) {
+      if (idx[a] < 0) continue;
+      if (force) force[idx[a]] -= weight * sg[a] * g[a];
+      if constexpr (Hessian) {
         const double row = weight * sg[a] / mass_[idx[a]];
-        const int va = a / 3, k = a % 3;
-        for (int b = 0; b < 9; ++b) {
-          const int entry = slot[9 * a + b];
-          if (entry < 0) continue;
-          const int vb = b / 3, l = b % 3;
-          double h = 0.0;
-          for (int c = 0; c < 2; ++c)
-            for (int d = 0; d < 2; ++d)
-              h += alpha[c][va] * alpha[d][vb] * hu[6 * (3 * c + k) + 3 * d + l];
-          values[entry] -= row * sg[b] * h;
-        }
+        for (int b = 0; b < 9; ++b)
+          if (slot[9 * a + b] >= 0) values[slot[9 * a + b]] -= row * sg[b] * h[9 * a + b];
       }
     }
   };

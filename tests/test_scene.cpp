@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "src/scene/material_run.hpp"
 #include "src/scene/scene.hpp"
 
 using namespace knitsim;
@@ -375,4 +376,37 @@ TEST_CASE("model.kind = material: its keys reach the sheet, and no mirror is ass
                     "mesh.cells = 1: must be in [2, 2000]");
   // Paper 1's scenes do not see the material keys.
   CHECK(load_scene("four_corner").material.kind == DrapeModelKind::Paper);
+}
+
+TEST_CASE("material drapes: auto takes the mirrors the sheet has, never one it lacks",
+          "[material][mirrors]") {
+  // Isotropic: an eighth, certified on the whole sheet; the same sag as the whole sheet.
+  const Scene iso = load_scene("four_corner_material", {"mesh.cells=12"});
+  const MaterialDrapeResult e = run_material_drape(iso, "equilibrium");
+  CHECK(std::string(symmetry_name(e.mirrors)) == "eighth");
+  CHECK(e.whole_sheet_checked);
+  CHECK(e.stats.certificate == "stable_minimum");
+  const MaterialDrapeResult w =
+      run_material_drape(load_scene("four_corner_material", {"mesh.cells=12", "model.symmetry=none"}),
+                         "equilibrium");
+  CHECK(std::string(symmetry_name(w.mirrors)) == "none");
+  CHECK(w.integrated_dof == w.sheet->dof());
+  CHECK(e.integrated_dof < w.integrated_dof / 6);
+  CHECK(std::abs(e.centre_sag - w.centre_sag) < 1e-12);
+  // Anisotropic (B_w = 2 B_c, or A_w != A_c): a quarter, never the diagonal.
+  for (const char* aniso : {"material.bending_wale=2e-5", "material.membrane_wale=1200"}) {
+    const MaterialDrapeResult q =
+        run_material_drape(load_scene("four_corner_material", {"mesh.cells=12", aniso}),
+                           "equilibrium");
+    CHECK(std::string(symmetry_name(q.mirrors)) == "quarter");
+    CHECK_FALSE(q.mirrors.diagonal);
+  }
+  // The cantilever's jaw: the x mirror; a quarter asked for is refused with one line.
+  const MaterialDrapeResult c = run_material_drape(load_scene("cantilever"), "equilibrium");
+  CHECK(std::string(symmetry_name(c.mirrors)) == "half");
+  CHECK(c.mirrors.x);
+  CHECK_THROWS_WITH(
+      run_material_drape(load_scene("cantilever", {"model.symmetry=quarter"}), "equilibrium"),
+      "model.symmetry = quarter: the y mirror: the clamps are not symmetric (use a smaller group, "
+      "auto or none)");
 }

@@ -30,9 +30,7 @@ std::string human_summary(const Scene& scene, const MaterialDrapeResult& r,
                          std::to_string(sheet.dof()) + " dof" +
                          (r.integrated_dof != sheet.dof()
                               ? " (" + std::to_string(r.integrated_dof) + " integrated: " +
-                                    (r.mirrors.order() == 8   ? "eighth"
-                                     : r.mirrors.order() == 4 ? "quarter"
-                                                              : "half") +
+                                    symmetry_name(r.mirrors) +
                                     (r.whole_sheet_checked ? ", certified on the whole sheet" : "") +
                                     ")"
                               : "")}};

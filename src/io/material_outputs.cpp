@@ -27,9 +27,8 @@ nlohmann::json material_summary(const Scene& scene, const MaterialDrapeResult& r
                {"hy_m", s.hy()},    {"vertices", s.vertex_count()}, {"clamped", clamped},
                {"dof", s.dof()}, {"integrated_dof", r.integrated_dof}};
   // The mirrors the run integrated by (model.symmetry resolved), as paper 1's drapes say it.
-  const int order = r.mirrors.order();
-  j["symmetry"] = order == 8 ? "eighth" : order == 4 ? "quarter" : order == 2 ? "half" : "none";
-  if (order == 2) j["mirror"] = r.mirrors.x ? "x" : "y";
+  j["symmetry"] = symmetry_name(r.mirrors);
+  if (r.mirrors.order() == 2) j["mirror"] = r.mirrors.x ? "x" : "y";
   j["whole_sheet_certified"] = r.whole_sheet_checked;
   const bool meaningful = r.stats.status != RunStatus::Diverged;
   const auto figure = [meaningful](double v) {

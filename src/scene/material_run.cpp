@@ -73,9 +73,8 @@ MaterialDrapeResult run_material_drape(const Scene& scene, const std::string& in
     reduced->unfold(q.data(), r.state_x.data());
     if (scene.params.symmetry == DrapeSymmetry::Auto && r.stats.status == RunStatus::Equilibrium) {
       r.whole_sheet_checked = true;
-      const int order = r.mirrors.order();
       if (continue_on_whole_sheet(s, *integ, scene.options, observer, 0.0,
-                                  order == 8 ? "eighth" : order == 4 ? "quarter" : "half",
+                                  symmetry_name(r.mirrors),
                                   r.state_x, r.state_v, r.stats)) {
         r.mirrors = SheetMirrors{};
         r.integrated_dof = s.dof();
@@ -149,6 +148,11 @@ MaterialDrapeResult run_material_drape(const Scene& scene, const std::string& in
     r.centre_sag = r.tip_drop;
   }
   return r;
+}
+
+const char* symmetry_name(SheetMirrors m) {
+  const int order = m.order();
+  return order == 8 ? "eighth" : order == 4 ? "quarter" : order == 2 ? "half" : "none";
 }
 
 std::string material_limit_violation(const MaterialDrapeResult& r) {

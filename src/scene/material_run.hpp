@@ -44,10 +44,13 @@ struct MaterialDrapeResult {
 // that does not reach equilibrium is a status. model.symmetry: none runs the whole sheet; half
 // (the x mirror, else the y mirror), quarter (x and y) and eighth (and the diagonal) run the
 // MirroredSheet; auto the largest group the sheet has, its equilibrium then certified on the
-// whole sheet as paper 1's auto (src/scene/scene.cpp): where the whole sheet's K has a negative
-// pivot the run goes on on the whole sheet from the unfolded state moved along that mode.
+// whole sheet as paper 1's auto (continue_on_whole_sheet, src/scene/whole_sheet_check.hpp);
+// an integrator option that needs the whole sheet then runs it whole.
 MaterialDrapeResult run_material_drape(const Scene& scene, const std::string& integrator,
                                        RunObserver* observer = nullptr);
+
+// The mirror group's name as model.symmetry spells it: none, half, quarter or eighth.
+const char* symmetry_name(SheetMirrors m);
 
 // A figure of the result outside what the model stands for ("" if none): not finite, or a sag
 // or drop larger than the sheet (status outside_model_limits, docs/reliability.md).
