@@ -24,9 +24,7 @@ double component(Vec3 v, int c) { return c == 0 ? v.x : (c == 1 ? v.y : v.z); }
 struct YarnCell::State {
   std::vector<Vec3> pos;  // every cell vertex
   double W = 0.0, H = 0.0;
-  Vec3 at(const Ref& r) const {
-    return pos[r.v] + Vec3{r.kx * W, r.ky * H, 0.0};
-  }
+  Vec3 at(const Ref& r) const { return pos[r.v] + Vec3{r.kx * W, r.ky * H, 0.0}; }
 };
 
 // Where an evaluation writes: the energy; the gradient dE/d(unknowns) (Force, Stiffness), the
@@ -154,8 +152,8 @@ void YarnCell::fold(const Ref* refs, int n, const double* g, const double* h,
     count[a] = 0;
     const int f = free_index_[refs[a].v];
     if (f >= 0)
-      for (int c = 0; c < 3; ++c) idx[a][count[a]] = 3 * f + c, comp[a][count[a]] = c,
-                                  coef[a][count[a]++] = 1.0;
+      for (int c = 0; c < 3; ++c)
+        idx[a][count[a]] = 3 * f + c, comp[a][count[a]] = c, coef[a][count[a]++] = 1.0;
     if (w_index_ >= 0 && refs[a].kx != 0)
       idx[a][count[a]] = w_index_, comp[a][count[a]] = 0, coef[a][count[a]++] = refs[a].kx;
     if (h_index_ >= 0 && refs[a].ky != 0)
@@ -207,13 +205,14 @@ void YarnCell::evaluate(const double* x, Mode mode, Accumulator& acc) const {
   }
   for (const Bend& b : bends_) {
     BendElement el;
-    if (!bend_element(s.at(b.v[0]), s.at(b.v[1]), s.at(b.v[2]),
-                      p.bending_rigidity / (2.0 * b.lbar), 0.0, static_cast<int>(mode), el)) {
+    if (!bend_element(s.at(b.v[0]), s.at(b.v[1]), s.at(b.v[2]), p.bending_rigidity / (2.0 * b.lbar),
+                      0.0, static_cast<int>(mode), el)) {
       acc.bad = true;
       continue;
     }
     acc.energy += el.energy;
-    if (mode != Mode::Energy) fold(b.v, 3, el.grad, mode == Mode::Stiffness ? el.hess : nullptr, acc);
+    if (mode != Mode::Energy)
+      fold(b.v, 3, el.grad, mode == Mode::Stiffness ? el.hess : nullptr, acc);
   }
   if (spec_.contact) contact_terms(s, mode, acc);
 }
@@ -282,8 +281,8 @@ void YarnCell::contact_terms(const State& s, Mode mode, Accumulator& acc) const 
   const bool ok = for_each_pair(s, 0.5 * d_, [&](int i, int j, int sx, int sy) {
     const Edge &A = edges_[i], &B = edges_[j];
     if (!may_pair(A, B, sx, sy)) return;
-    const Ref refs[4] = {A.a, A.b, {B.a.v, B.a.kx + sx, B.a.ky + sy},
-                         {B.b.v, B.b.kx + sx, B.b.ky + sy}};
+    const Ref refs[4] = {
+        A.a, A.b, {B.a.v, B.a.kx + sx, B.a.ky + sy}, {B.b.v, B.b.kx + sx, B.b.ky + sy}};
     const Vec3 pa = s.at(refs[0]), pb = s.at(refs[1]), qa = s.at(refs[2]), qb = s.at(refs[3]);
     const double w = (A.rest / A.samples) * (B.rest / B.samples) / d2;
     double g[12] = {0};
@@ -396,8 +395,8 @@ double YarnCell::residual_roundoff(double /*t*/, const double* x) const {
   double worst = 0.0;
   std::vector<double> floor_(start_.size(), 0.0);
   for (const Edge& e : edges_) {
-    const double r = spec_.yarn.stretch_stiffness() / e.rest * eps *
-                     (norm(s.at(e.a)) + norm(s.at(e.b)));
+    const double r =
+        spec_.yarn.stretch_stiffness() / e.rest * eps * (norm(s.at(e.a)) + norm(s.at(e.b)));
     floor_[e.a.v] += r;
     floor_[e.b.v] += r;
   }
@@ -447,11 +446,10 @@ double YarnCell::admissible_step(double /*t*/, const double* x, const double* dx
   const double kx = std::ceil((hi[0] - lo[0] + 2.0 * g0) / s.W) + 1.0;
   const double ky = std::ceil((hi[1] - lo[1] + 2.0 * g0) / s.H) + 1.0;
   const double grow = g0 + kx * std::abs(dW) + ky * std::abs(dH);
-  const bool ok = for_each_pair(s, grow,
-                                [&](int i, int j, int sx, int sy) {
+  const bool ok = for_each_pair(s, grow, [&](int i, int j, int sx, int sy) {
     const Edge &A = edges_[i], &B = edges_[j];
-    const Ref refs[4] = {A.a, A.b, {B.a.v, B.a.kx + sx, B.a.ky + sy},
-                         {B.b.v, B.b.kx + sx, B.b.ky + sy}};
+    const Ref refs[4] = {
+        A.a, A.b, {B.a.v, B.a.kx + sx, B.a.ky + sy}, {B.b.v, B.b.kx + sx, B.b.ky + sy}};
     const double reach =
         std::max(move(refs[0]), move(refs[1])) + std::max(move(refs[2]), move(refs[3]));
     if (!(reach > 0.0)) return;
@@ -514,8 +512,8 @@ double YarnCell::min_clearance(const double* x) const {
   double best = kInf;
   const bool ok = for_each_pair(s, d_, [&](int i, int j, int sx, int sy) {
     const Edge &A = edges_[i], &B = edges_[j];
-    const Ref refs[4] = {A.a, A.b, {B.a.v, B.a.kx + sx, B.a.ky + sy},
-                         {B.b.v, B.b.kx + sx, B.b.ky + sy}};
+    const Ref refs[4] = {
+        A.a, A.b, {B.a.v, B.a.kx + sx, B.a.ky + sy}, {B.b.v, B.b.kx + sx, B.b.ky + sy}};
     const Vec3 pa = s.at(refs[0]), pb = s.at(refs[1]), qa = s.at(refs[2]), qb = s.at(refs[3]);
     if (!may_pair(A, B, sx, sy)) return;
     if (whole(A, B, sx, sy)) {
@@ -572,9 +570,9 @@ double YarnCell::contact_energy(const double* x) const {
 
 std::string YarnCell::describe() const {
   std::ostringstream s;
-  s << "yarn cell: " << courses() << " courses, " << start_.size() << " vertices, d = "
-    << d_ * 1e3 << " mm, EA = " << spec_.yarn.stretch_stiffness()
-    << " N, B = " << spec_.yarn.bending_rigidity << " N m^2, size "
+  s << "yarn cell: " << courses() << " courses, " << start_.size() << " vertices, d = " << d_ * 1e3
+    << " mm, EA = " << spec_.yarn.stretch_stiffness() << " N, B = " << spec_.yarn.bending_rigidity
+    << " N m^2, size "
     << (spec_.size == CellSize::Free         ? "free"
         : spec_.size == CellSize::HeightHeld ? "W free, H held"
         : spec_.size == CellSize::WidthHeld  ? "H free, W held"
@@ -667,8 +665,8 @@ YarnCellStart build_yarn_cell_start(const KnitChart& repeat, const KnitParams& s
     std::vector<double> arc(v.size(), 0.0);
     for (std::size_t k = 1; k < v.size(); ++k) arc[k] = arc[k - 1] + norm(v[k] - v[k - 1]);
     auto arc_of = [&](double index) {
-      const int k = std::clamp(static_cast<int>(std::floor(index)), 0,
-                               static_cast<int>(arc.size()) - 2);
+      const int k =
+          std::clamp(static_cast<int>(std::floor(index)), 0, static_cast<int>(arc.size()) - 2);
       return arc[k] + (index - k) * (arc[k + 1] - arc[k]);
     };
     for (int i = 0; i < p; ++i)
@@ -700,9 +698,9 @@ YarnCellStart build_yarn_cell_start(const KnitChart& repeat, const KnitParams& s
     for (const auto& course : scaled) {
       std::vector<double> l;
       for (std::size_t k = 0; k < course.size(); ++k)
-        l.push_back(norm((k + 1 < course.size() ? course[k + 1]
-                                                : course[0] + Vec3{cs.width, 0.0, 0.0}) -
-                         course[k]));
+        l.push_back(
+            norm((k + 1 < course.size() ? course[k + 1] : course[0] + Vec3{cs.width, 0.0, 0.0}) -
+                 course[k]));
       cs.rest.push_back(l);
     }
     const YarnCell cell(cs);
@@ -717,7 +715,8 @@ YarnCellStart build_yarn_cell_start(const KnitChart& repeat, const KnitParams& s
   if (!(clearance >= d))
     throw std::invalid_argument(
         "yarn cell: the start could not be made intersection-free at the yarn diameter "
-        "(closest pair " + std::to_string(clearance / d) + " d)");
+        "(closest pair " +
+        std::to_string(clearance / d) + " d)");
   out.start = scaled;
   out.width *= scale;
   out.height *= scale;

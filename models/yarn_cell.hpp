@@ -120,7 +120,7 @@ class YarnCell final : public MechanicalSystem {
     Ref v[3];
     double lbar;
   };
-  enum class Mode { Energy, Force, Stiffness };
+  enum class Mode { Energy, Force, Stiffness };  // in order: bend_element's order 0, 1, 2
   struct Accumulator;
   struct State;  // positions, W, H of a state
 
@@ -168,7 +168,7 @@ struct YarnCellStart {
   YarnKnitParams params;
   double d = 0.0;
   double r = 0.0;  // the structure's loop radius at the start (after the cell's own scale), m
-  std::vector<std::vector<Vec3>> start;  // per course, its vertices
+  std::vector<std::vector<Vec3>> start;                          // per course, its vertices
   std::vector<std::vector<double>> start_length, target_length;  // per course, per edge, m
   // Per course, per wale of the repeat, the knitted target length of its cell (sinker to
   // sinker, m) and its start length.
@@ -178,8 +178,7 @@ struct YarnCellStart {
   // The cell at ramp stage s of n (rest lengths start + s/n (target - start)), started at the
   // given vertices and size (empty: the start's).
   YarnCellSpec spec(int s, int n, const std::vector<std::vector<Vec3>>& initial = {},
-                    double width = 0.0, double height = 0.0,
-                    CellSize size = CellSize::Free) const;
+                    double width = 0.0, double height = 0.0, CellSize size = CellSize::Free) const;
   bool ramp() const;  // any target length differs from the start's
   // Per course its knitted length in the cell (sum of targets), m.
   double knitted_length(int course) const;

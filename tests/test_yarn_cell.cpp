@@ -3,17 +3,17 @@
 // (a cell of two repeats holds twice the energy of one), a straight yarn's tension against its
 // closed form, infeasible states as +inf energy, and the relaxed plain-jersey cell.
 #include <algorithm>
-#include <ctime>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <ctime>
 #include <memory>
 #include <random>
 #include <vector>
 
 #include "models/yarn_cell.hpp"
-#include "src/scene/yarn_cell_run.hpp"
 #include "solvers/integrator.hpp"
 #include "src/core/jacobian_check.hpp"
+#include "src/scene/yarn_cell_run.hpp"
 #include "tests/corrupted_stiffness.hpp"
 
 using namespace knitsim;
@@ -101,9 +101,8 @@ TEST_CASE(
         INFO("worst (" << c.worst_row << "," << c.worst_col << ") analytic " << c.worst_analytic
                        << " fd " << c.worst_fd);
         CHECK(c.max_relative_error < kJacobianTol);
-        WARN("size mode " << static_cast<int>(size) << ", modulus " << modulus << ", seed "
-                          << seed << ": force vs -dE/dx " << ge << ", Jacobian "
-                          << c.max_relative_error);
+        WARN("size mode " << static_cast<int>(size) << ", modulus " << modulus << ", seed " << seed
+                          << ": force vs -dE/dx " << ge << ", Jacobian " << c.max_relative_error);
       }
     }
   }
@@ -119,7 +118,8 @@ TEST_CASE("yarn cell: a 1 % error in the W or H rows of the Jacobian is caught")
     std::vector<int> entries;
     for (int c = 0; c < n; ++c) entries.push_back(sys.stiffness_pattern().find(row, c));
     test::CorruptedStiffness bad(sys, entries);
-    CHECK(check_stiffness_jacobian(bad, 0.0, x.data(), 1e-8).max_relative_error > 10 * kJacobianTol);
+    CHECK(check_stiffness_jacobian(bad, 0.0, x.data(), 1e-8).max_relative_error >
+          10 * kJacobianTol);
   }
 }
 
@@ -185,7 +185,8 @@ TEST_CASE("yarn cell: infeasible states give +inf energy and NaN forces, never a
   CHECK(std::isnan(f[0]));
   y[sys.dof() - 1] = -1.0;  // H < 0
   CHECK(sys.potential_energy(0, y.data()) == std::numeric_limits<double>::infinity());
-  // A step that would take H there is cut: the admitted fraction keeps the clearance above the core.
+  // A step that would take H there is cut: the admitted fraction keeps the clearance above the
+  // core.
   std::vector<double> dx(sys.dof(), 0.0);
   dx[sys.dof() - 1] = -0.9 * p.diameter();
   const double admit = sys.admissible_step(0, x.data(), dx.data());
@@ -247,11 +248,10 @@ TEST_CASE(
   const double f = st.params.yarn.bending_rigidity / (l * l);
   CHECK(std::abs(run.size_gradient[0]) < 1e-5 * f);
   CHECK(std::abs(run.size_gradient[1]) < 1e-5 * f);
-  WARN("relaxed plain jersey, l = 3.4 mm: " << run.courses_per_cm << " courses/cm, "
-                                            << run.wales_per_cm << " wales/cm, K_c " << run.k_c
-                                            << ", K_w " << run.k_w << ", K_s " << run.k_s << ", R "
-                                            << run.r << "; " << run.stats.steps << " steps, "
-                                            << run.stats.cpu_seconds << " s CPU");
+  WARN("relaxed plain jersey, l = 3.4 mm: "
+       << run.courses_per_cm << " courses/cm, " << run.wales_per_cm << " wales/cm, K_c " << run.k_c
+       << ", K_w " << run.k_w << ", K_s " << run.k_s << ", R " << run.r << "; " << run.stats.steps
+       << " steps, " << run.stats.cpu_seconds << " s CPU");
 }
 
 TEST_CASE(

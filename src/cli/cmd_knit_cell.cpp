@@ -28,8 +28,9 @@ void run_knit_cell(const KnitScene& scene, const std::string& integrator, const 
         "knit.boundary = periodic has no edge to hold: knit.pins, knit.clamps and knit.gravity "
         "apply to knit.boundary = swatch only");
   if (!continue_from.empty())
-    throw std::invalid_argument("--continue: not for knit.boundary = periodic (a cell run is "
-                                "short: run it again)");
+    throw std::invalid_argument(
+        "--continue: not for knit.boundary = periodic (a cell run is "
+        "short: run it again)");
   const double e = scene.yarn.cell_strain;
   check_cell_strain(e);
   auto start = std::make_shared<const YarnCellStart>(
@@ -45,8 +46,8 @@ void run_knit_cell(const KnitScene& scene, const std::string& integrator, const 
   }();
   std::unique_ptr<YarnCellPull> pull;
   if (scene.yarn.cell_pull != 0 && run.stats.status == RunStatus::Equilibrium)
-    pull = std::make_unique<YarnCellPull>(pull_yarn_cell(start, integrator, options, run.end,
-                                                         scene.yarn.cell_pull == 1, e));
+    pull = std::make_unique<YarnCellPull>(
+        pull_yarn_cell(start, integrator, options, run.end, scene.yarn.cell_pull == 1, e));
   write_yarn_cell_outputs(dir, run, integrator,
                           {{"chart", scene.chart_file},
                            {"integrator", integrator},
@@ -63,27 +64,25 @@ void run_knit_cell(const KnitScene& scene, const std::string& integrator, const 
                        std::to_string(start->repeat.courses) + " courses, " +
                        std::to_string(run.dof) + " dof"},
         {"status", std::string(to_string(run.stats.status)) + " (" + run.stats.message + ")"},
-        {"steps", std::to_string(run.stats.steps) + " in " +
-                      std::to_string(run.stages.size()) + " stages, " +
-                      format_number(run.stats.cpu_seconds, 3) + " s CPU"},
+        {"steps", std::to_string(run.stats.steps) + " in " + std::to_string(run.stages.size()) +
+                      " stages, " + format_number(run.stats.cpu_seconds, 3) + " s CPU"},
         {"relaxed", format_number(run.courses_per_cm, 4) + " courses/cm, " +
-                        format_number(run.wales_per_cm, 4) + " wales/cm at l = " +
-                        format_number(run.stitch_length * 1e3, 4) + " mm"},
+                        format_number(run.wales_per_cm, 4) +
+                        " wales/cm at l = " + format_number(run.stitch_length * 1e3, 4) + " mm"},
         {"constants", "K_c " + format_number(run.k_c, 3) + ", K_w " + format_number(run.k_w, 3) +
-                          ", K_s " + format_number(run.k_s, 3) + ", R " +
-                          format_number(run.r, 3)},
+                          ", K_s " + format_number(run.k_s, 3) + ", R " + format_number(run.r, 3)},
         {"clearance", "min " + format_number(run.clearance_min_over_d, 3) + " d over " +
                           std::to_string(run.clearance_checks) + " checks, end " +
                           format_number(run.clearance_end_over_d, 3) + " d"},
         {"outputs", dir.string() + "/"}};
     if (pull && !pull->strain.empty())
-      t.rows.insert(t.rows.end() - 1,
-                    {"pull", std::string(pull->along_courses ? "along the courses" : "along the wales") +
-                                 " to " + format_number(pull->strain.back(), 3) + ": " +
-                                 format_number(pull->force_per_width.back(), 4) +
-                                 " N/m, lateral strain " +
-                                 format_number(pull->lateral_strain.back(), 3) + ", " +
-                                 to_string(pull->status.back())});
+      t.rows.insert(
+          t.rows.end() - 1,
+          {"pull", std::string(pull->along_courses ? "along the courses" : "along the wales") +
+                       " to " + format_number(pull->strain.back(), 3) + ": " +
+                       format_number(pull->force_per_width.back(), 4) + " N/m, lateral strain " +
+                       format_number(pull->lateral_strain.back(), 3) + ", " +
+                       to_string(pull->status.back())});
     std::cout << t.text() << std::flush;
   }
   RunStats stats = run.stats;  // a pull step that did not settle ends the run with its status

@@ -45,40 +45,39 @@ nlohmann::json yarn_cell_summary(const YarnCellRun& run, const std::string& inte
     rows.push_back(row);
   }
   const double d = st.d;
-  nlohmann::json cell = {
-      {"repeat", rows},
-      {"wales", st.repeat.wales},
-      {"courses", st.repeat.courses},
-      {"width_m", run.end.width},
-      {"height_m", run.end.height},
-      {"start_width_m", st.width},
-      {"start_height_m", st.height},
-      {"courses_per_cm", run.courses_per_cm},
-      {"wales_per_cm", run.wales_per_cm},
-      {"stitch_length_m", run.stitch_length},
-      {"tightness_factor", std::sqrt(p.tex) / (run.stitch_length * 1e3)},
-      {"K_c", run.k_c},
-      {"K_w", run.k_w},
-      {"K_s", run.k_s},
-      {"R", run.r},
-      {"clearance_min_over_d", number_or_null(run.clearance_min_over_d)},
-      {"clearance_start_over_d", number_or_null(run.clearance_start_over_d)},
-      {"clearance_end_over_d", number_or_null(run.clearance_end_over_d)},
-      {"clearance_checks", run.clearance_checks},
-      {"course_length_knitted_m", knitted},
-      {"course_length_change", change},
-      {"course_length_change_max", number_or_null(worst)},
-      {"dE_dW_N", number_or_null(run.size_gradient[0])},
-      {"dE_dH_N", number_or_null(run.size_gradient[1])},
-      {"status", to_string(run.stats.status)},
-      {"message", run.stats.message},
-      {"steps", run.stats.steps},
-      {"cpu_seconds", run.stats.cpu_seconds},
-      {"wall_seconds", run.stats.wall_seconds},
-      {"stages", stages},
-      {"dof", run.dof},
-      {"edges_per_wale", st.params.vertices_per_loop},
-      {"start_loop_radius_over_d", st.r / d}};
+  nlohmann::json cell = {{"repeat", rows},
+                         {"wales", st.repeat.wales},
+                         {"courses", st.repeat.courses},
+                         {"width_m", run.end.width},
+                         {"height_m", run.end.height},
+                         {"start_width_m", st.width},
+                         {"start_height_m", st.height},
+                         {"courses_per_cm", run.courses_per_cm},
+                         {"wales_per_cm", run.wales_per_cm},
+                         {"stitch_length_m", run.stitch_length},
+                         {"tightness_factor", std::sqrt(p.tex) / (run.stitch_length * 1e3)},
+                         {"K_c", run.k_c},
+                         {"K_w", run.k_w},
+                         {"K_s", run.k_s},
+                         {"R", run.r},
+                         {"clearance_min_over_d", number_or_null(run.clearance_min_over_d)},
+                         {"clearance_start_over_d", number_or_null(run.clearance_start_over_d)},
+                         {"clearance_end_over_d", number_or_null(run.clearance_end_over_d)},
+                         {"clearance_checks", run.clearance_checks},
+                         {"course_length_knitted_m", knitted},
+                         {"course_length_change", change},
+                         {"course_length_change_max", number_or_null(worst)},
+                         {"dE_dW_N", number_or_null(run.size_gradient[0])},
+                         {"dE_dH_N", number_or_null(run.size_gradient[1])},
+                         {"status", to_string(run.stats.status)},
+                         {"message", run.stats.message},
+                         {"steps", run.stats.steps},
+                         {"cpu_seconds", run.stats.cpu_seconds},
+                         {"wall_seconds", run.stats.wall_seconds},
+                         {"stages", stages},
+                         {"dof", run.dof},
+                         {"edges_per_wale", st.params.vertices_per_loop},
+                         {"start_loop_radius_over_d", st.r / d}};
   nlohmann::json pulled = nullptr;
   if (pull) {
     nlohmann::json status = nlohmann::json::array();
@@ -110,12 +109,14 @@ nlohmann::json yarn_cell_summary(const YarnCellRun& run, const std::string& inte
             {"relaxation_time", p.relaxation_time},
             {"contact_stiffness", p.contact_kappa()}}},
           {"units",
-           {{"cell", "width_m, height_m, stitch_length_m, course_length_knitted_m m; "
-                     "courses_per_cm, wales_per_cm 1/cm; K_c, K_w, K_s, R, tightness_factor "
-                     "(sqrt(tex) / l in mm) 1; clearance_*_over_d d; course_length_change "
-                     "relative; dE_dW_N, dE_dH_N N per cell; cpu_seconds, wall_seconds s"},
-            {"pull", "strain, lateral_strain 1; reaction_N N per cell; force_per_width_N_per_m "
-                     "N/m (per rest width: H0 along the courses, W0 along the wales)"}}}};
+           {{"cell",
+             "width_m, height_m, stitch_length_m, course_length_knitted_m m; "
+             "courses_per_cm, wales_per_cm 1/cm; K_c, K_w, K_s, R, tightness_factor "
+             "(sqrt(tex) / l in mm) 1; clearance_*_over_d d; course_length_change "
+             "relative; dE_dW_N, dE_dH_N N per cell; cpu_seconds, wall_seconds s"},
+            {"pull",
+             "strain, lateral_strain 1; reaction_N N per cell; force_per_width_N_per_m "
+             "N/m (per rest width: H0 along the courses, W0 along the wales)"}}}};
 }
 
 void write_yarn_cell_outputs(const std::filesystem::path& dir, const YarnCellRun& run,

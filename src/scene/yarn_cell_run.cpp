@@ -40,10 +40,9 @@ class CellClearanceWatch final : public RunObserver {
 
 }  // namespace
 
-YarnCellRun run_yarn_cell(std::shared_ptr<const YarnCellStart> start,
-                          const std::string& integrator, const IntegratorOptions& options,
-                          RunObserver* observer, const YarnCellState* from, CellSize size,
-                          bool ramp) {
+YarnCellRun run_yarn_cell(std::shared_ptr<const YarnCellStart> start, const std::string& integrator,
+                          const IntegratorOptions& options, RunObserver* observer,
+                          const YarnCellState* from, CellSize size, bool ramp) {
   make_integrator(integrator);  // an unknown name is refused before anything runs
   const YarnCellStart& st = *start;
   const auto wall0 = std::chrono::steady_clock::now();
@@ -96,7 +95,8 @@ YarnCellRun run_yarn_cell(std::shared_ptr<const YarnCellStart> start,
       run.clearance_end_over_d = end / st.d;
       if (!(end >= min_clearance)) min_clearance = end;
       run.size_gradient = cell.size_gradient(x.data());
-      for (int c = 0; c < cell.courses(); ++c) run.course_end.push_back(cell.course_length(c, x.data()));
+      for (int c = 0; c < cell.courses(); ++c)
+        run.course_end.push_back(cell.course_length(c, x.data()));
       break;
     }
   }

@@ -34,8 +34,8 @@ struct YarnCellRun {
     double width = 0.0, height = 0.0;  // at the stage's end, m
   };
   std::vector<Stage> stages;
-  RunStats stats;       // the last stage's, its steps the run's; cpu and wall the run's
-  YarnCellState end;    // at the end
+  RunStats stats;     // the last stage's, its steps the run's; cpu and wall the run's
+  YarnCellState end;  // at the end
   int dof = 0;
   // Least distance over the pairs the contact sees, in d: at the start, at the end, and over
   // every residual check of every stage.
@@ -52,10 +52,10 @@ struct YarnCellRun {
 // Runs the cell: from `from` (null: the start, and the ramp's stages from the first) with the
 // size mode `size` (held lengths kept at from's, or the start's); `ramp` false runs only the
 // last stage (the knitted lengths), e.g. a tensile step from a relaxed state.
-YarnCellRun run_yarn_cell(std::shared_ptr<const YarnCellStart> start,
-                          const std::string& integrator, const IntegratorOptions& options,
-                          RunObserver* observer = nullptr, const YarnCellState* from = nullptr,
-                          CellSize size = CellSize::Free, bool ramp = true);
+YarnCellRun run_yarn_cell(std::shared_ptr<const YarnCellStart> start, const std::string& integrator,
+                          const IntegratorOptions& options, RunObserver* observer = nullptr,
+                          const YarnCellState* from = nullptr, CellSize size = CellSize::Free,
+                          bool ramp = true);
 
 // A tensile test on a relaxed cell: the length along `direction` (x: the courses, W held; y: the
 // wales, H held) stretched from `relaxed` to strain `strain` in steps of at most 0.01 (each step
