@@ -236,9 +236,11 @@ TensileResult run_tensile(const KnitScene& scene, const TensileOptions& o, RunOb
   auto newton_step = [&](std::vector<double>& y) {
     if (!newton_probe.newton_correction(0.0, y.data(), correction)) return false;
     if (!(sys.admissible_step(0.0, y.data(), correction.data()) >= 1.0)) return false;
+    // E at y first, while the model's caches hold y (the factorisation's state); then at the
+    // step's end, which the solver's first evaluation then finds cached.
+    const double e_start = sys.potential_energy(0.0, y.data());
     for (int i = 0; i < n; ++i) trial[i] = y[i] + correction[i];
-    if (!(sys.potential_energy(0.0, trial.data()) <= sys.potential_energy(0.0, y.data())))
-      return false;
+    if (!(sys.potential_energy(0.0, trial.data()) <= e_start)) return false;
     y = trial;
     return true;
   };
