@@ -98,7 +98,8 @@ struct KnitParams {
 
   // Throws std::invalid_argument naming the field by its `knit --set` key (knit.loop_radius,
   // knit.wale_stiffness, knit.course_stiffness, knit.damping, knit.areal_density,
-  // knit.stabiliser, knit.bending, knit.load_steps; max_points has none) and the accepted range with units.
+  // knit.stabiliser, knit.bending, knit.load_steps; max_points has none) and the accepted range
+  // with units.
   void validate() const;
   // True when the network has no stabiliser (paper 2's mechanism): network Paper or s = 0.
   bool mechanism() const { return network == KnitNetwork::Paper || stabiliser_ratio == 0.0; }
