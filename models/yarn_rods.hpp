@@ -221,6 +221,10 @@ class YarnRods final : public MechanicalSystem {
   void edge_pairs(const std::vector<Vec3>& pos, double grow,
                   std::vector<std::pair<int, int>>& out,
                   const std::vector<double>* edge_grow = nullptr) const;
+  // The same pairs, each passed to visit(i, j) as found (nothing stored).
+  template <class Visit>
+  void visit_edge_pairs(const std::vector<Vec3>& pos, double grow,
+                        const std::vector<double>* edge_grow, Visit&& visit) const;
   // True if some sample pair of edges i and j may interact (not wholly inside the same-yarn gap).
   bool may_pair(int i, int j) const;
   bool samples_pair(int i, double si, int j, double sj) const;
