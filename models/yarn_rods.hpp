@@ -65,7 +65,9 @@
 // step (a convex combination of its edge's vertex moves), so a pair at distance D whose edges
 // move m_a and m_b stays above d0 + keep (D - d0) for fractions up to (1 - keep)(D - d0) /
 // (m_a + m_b) (the additive bound of IPC's conservative CCD). The admitted fraction is the
-// least over the pairs the grown boxes (by d/2 + the largest move) can bring within reach.
+// least over the pairs that can bind: each edge's box grows by d0 / 2 + f m_e / (1 - keep), m_e
+// its own vertices' larger move, f = min(1, 2 (1 - keep) d / largest move), and the fraction is
+// at most f (a step moves no vertex more than 2 (1 - keep) d: the boxes stay small).
 //
 // Jacobian pattern: the stretching and bending stencils' vertex blocks, plus every edge pair
 // closer than pattern_radius at the start (all 16 blocks of its 4 vertices). A pair that comes
