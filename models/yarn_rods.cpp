@@ -502,7 +502,16 @@ void YarnRods::evaluate(const double* x, Mode mode, Accumulator& acc) const {
 }
 
 void YarnRods::contact_terms(const std::vector<Vec3>& pos, Mode mode, Accumulator& acc) const {
-  edge_pairs(pos, 0.5 * d_, pairs_);
+  // Integrators evaluate forces, stiffness and energy at one state in turn: the pairs found at
+  // the same positions (compared exactly; a NaN never compares equal) are reused.
+  bool same = pairs_pos_.size() == pos.size();
+  for (size_t v = 0; same && v < pos.size(); ++v)
+    same =
+        pos[v].x == pairs_pos_[v].x && pos[v].y == pairs_pos_[v].y && pos[v].z == pairs_pos_[v].z;
+  if (!same) {
+    edge_pairs(pos, 0.5 * d_, pairs_);
+    pairs_pos_ = pos;
+  }
   const double d2 = d_ * d_;
   for (const auto& [i, j] : pairs_) {
     if (!may_pair(i, j)) continue;

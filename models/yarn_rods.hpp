@@ -220,8 +220,7 @@ class YarnRods final : public MechanicalSystem {
   void contact_terms(const std::vector<Vec3>& pos, Mode mode, Accumulator& acc) const;
   // Edge pairs (i < j) whose boxes, grown by `grow` (plus edge_grow[e] for edge e where given)
   // on every side, overlap (the broad phase).
-  void edge_pairs(const std::vector<Vec3>& pos, double grow,
-                  std::vector<std::pair<int, int>>& out,
+  void edge_pairs(const std::vector<Vec3>& pos, double grow, std::vector<std::pair<int, int>>& out,
                   const std::vector<double>* edge_grow = nullptr) const;
   // The same pairs, each passed to visit(i, j) as found (nothing stored).
   template <class Visit>
@@ -252,7 +251,10 @@ class YarnRods final : public MechanicalSystem {
   const std::array<int, 16>* contact_blocks(int i, int j) const;
   mutable long pattern_misses_ = 0;
   mutable std::vector<Vec3> pos_;
+  // The contact's pairs (boxes grown by d/2) and the positions they were found at: the force,
+  // stiffness and energy evaluations of one state share one broad phase.
   mutable std::vector<std::pair<int, int>> pairs_;
+  mutable std::vector<Vec3> pairs_pos_;
   mutable std::vector<std::pair<std::uint64_t, int>> cells_;
   mutable std::vector<double> scratch_;
 };
