@@ -363,10 +363,9 @@ bool YarnRods::may_pair(int i, int j) const {
   return std::max(b_hi - a_lo, a_hi - b_lo) >= gap_;
 }
 
-void YarnRods::edge_pairs(const std::vector<Vec3>& pos, double grow,
-                          std::vector<std::pair<int, int>>& out,
-                          const std::vector<double>* edge_grow) const {
-  out.clear();
+template <class Visit>
+void YarnRods::visit_edge_pairs(const std::vector<Vec3>& pos, double grow,
+                                const std::vector<double>* edge_grow, Visit&& visit) const {
   const int ne = static_cast<int>(edges_.size());
   scratch_.resize(6 * static_cast<size_t>(ne));
   double* box = scratch_.data();  // per edge lo (3), hi (3)
@@ -416,10 +415,17 @@ void YarnRods::edge_pairs(const std::vector<Vec3>& pos, double grow,
         const std::uint64_t owner =
             key(index(std::max(bi[0], bj[0]), 0), index(std::max(bi[1], bj[1]), 1),
                 index(std::max(bi[2], bj[2]), 2));
-        if (owner == cells_[g].first) out.emplace_back(std::min(i, j), std::max(i, j));
+        if (owner == cells_[g].first) visit(std::min(i, j), std::max(i, j));
       }
     g = end;
   }
+}
+
+void YarnRods::edge_pairs(const std::vector<Vec3>& pos, double grow,
+                          std::vector<std::pair<int, int>>& out,
+                          const std::vector<double>* edge_grow) const {
+  out.clear();
+  visit_edge_pairs(pos, grow, edge_grow, [&](int i, int j) { out.emplace_back(i, j); });
 }
 
 void YarnRods::evaluate(const double* x, Mode mode, Accumulator& acc) const {
@@ -512,7 +518,16 @@ void YarnRods::evaluate(const double* x, Mode mode, Accumulator& acc) const {
 }
 
 void YarnRods::contact_terms(const std::vector<Vec3>& pos, Mode mode, Accumulator& acc) const {
-  edge_pairs(pos, 0.5 * d_, pairs_);
+  // Integrators evaluate forces, stiffness and energy at one state in turn: the pairs found at
+  // the same positions (compared exactly; a NaN never compares equal) are reused.
+  bool same = pairs_pos_.size() == pos.size();
+  for (size_t v = 0; same && v < pos.size(); ++v)
+    same =
+        pos[v].x == pairs_pos_[v].x && pos[v].y == pairs_pos_[v].y && pos[v].z == pairs_pos_[v].z;
+  if (!same) {
+    edge_pairs(pos, 0.5 * d_, pairs_);
+    pairs_pos_ = pos;
+  }
   const double d2 = d_ * d_;
   for (const auto& [i, j] : pairs_) {
     if (!may_pair(i, j)) continue;
@@ -689,11 +704,12 @@ double YarnRods::admissible_step(double /*t*/, const double* x, const double* dx
   std::vector<double> grow(edges_.size());
   for (size_t e = 0; e < edges_.size(); ++e)
     grow[e] = cap * std::max(move[edges_[e].a], move[edges_[e].b]) / (1.0 - keep);
-  std::vector<std::pair<int, int>> pairs;
-  edge_pairs(pos_, 0.5 * d0_, pairs, &grow);
+  // The pairs are visited as the broad phase finds them, not stored: a large step's candidates
+  // take no memory.
   double admit = cap;
-  for (const auto& [i, j] : pairs) {
-    if (!may_pair(i, j)) continue;
+  bool inside = false;  // a sample pair already inside a core: nothing is admitted
+  visit_edge_pairs(pos_, 0.5 * d0_, &grow, [&](int i, int j) {
+    if (inside || !may_pair(i, j)) return;
     const Edge &A = edges_[i], &B = edges_[j];
     const double reach = std::max(move[A.a], move[A.b]) + std::max(move[B.a], move[B.b]);
     // Every sample pair is at least the segments' distance apart: where that distance already
@@ -702,7 +718,7 @@ double YarnRods::admissible_step(double /*t*/, const double* x, const double* dx
     if (D > d0_) {
       if (D - reach < d0_ + keep * (D - d0_))
         admit = std::min(admit, (1.0 - keep) * (D - d0_) / reach);
-      continue;
+      return;
     }
     for (int k = 0; k < A.samples; ++k) {
       const double s = (k + 0.5) / A.samples;
@@ -711,13 +727,16 @@ double YarnRods::admissible_step(double /*t*/, const double* x, const double* dx
         const double t = (m + 0.5) / B.samples;
         if (!samples_pair(i, s, j, t)) continue;
         const double Ds = norm(P - ((1.0 - t) * pos_[B.a] + t * pos_[B.b]));
-        if (!(Ds > d0_)) return 0.0;
+        if (!(Ds > d0_)) {
+          inside = true;
+          return;
+        }
         if (Ds - reach < d0_ + keep * (Ds - d0_))
           admit = std::min(admit, (1.0 - keep) * (Ds - d0_) / reach);
       }
     }
-  }
-  return admit;
+  });
+  return inside ? 0.0 : admit;
 }
 
 double YarnRods::stretch_energy(const double* x) const {

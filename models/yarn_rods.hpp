@@ -65,7 +65,9 @@
 // step (a convex combination of its edge's vertex moves), so a pair at distance D whose edges
 // move m_a and m_b stays above d0 + keep (D - d0) for fractions up to (1 - keep)(D - d0) /
 // (m_a + m_b) (the additive bound of IPC's conservative CCD). The admitted fraction is the
-// least over the pairs the grown boxes (by d/2 + the largest move) can bring within reach.
+// least over the pairs that can bind: each edge's box grows by d0 / 2 + f m_e / (1 - keep), m_e
+// its own vertices' larger move, f = min(1, 2 (1 - keep) d / largest move), and the fraction is
+// at most f (a step moves no vertex more than 2 (1 - keep) d: the boxes stay small).
 //
 // Jacobian pattern: the stretching and bending stencils' vertex blocks, plus every edge pair
 // closer than pattern_radius at the start (all 16 blocks of its 4 vertices). A pair that comes
@@ -233,9 +235,12 @@ class YarnRods final : public MechanicalSystem {
   void contact_terms(const std::vector<Vec3>& pos, Mode mode, Accumulator& acc) const;
   // Edge pairs (i < j) whose boxes, grown by `grow` (plus edge_grow[e] for edge e where given)
   // on every side, overlap (the broad phase).
-  void edge_pairs(const std::vector<Vec3>& pos, double grow,
-                  std::vector<std::pair<int, int>>& out,
+  void edge_pairs(const std::vector<Vec3>& pos, double grow, std::vector<std::pair<int, int>>& out,
                   const std::vector<double>* edge_grow = nullptr) const;
+  // The same pairs, each passed to visit(i, j) as found (nothing stored).
+  template <class Visit>
+  void visit_edge_pairs(const std::vector<Vec3>& pos, double grow,
+                        const std::vector<double>* edge_grow, Visit&& visit) const;
   // True if some sample pair of edges i and j may interact (not wholly inside the same-yarn gap).
   bool may_pair(int i, int j) const;
   bool samples_pair(int i, double si, int j, double sj) const;
@@ -261,7 +266,10 @@ class YarnRods final : public MechanicalSystem {
   const std::array<int, 16>* contact_blocks(int i, int j) const;
   mutable long pattern_misses_ = 0;
   mutable std::vector<Vec3> pos_;
+  // The contact's pairs (boxes grown by d/2) and the positions they were found at: the force,
+  // stiffness and energy evaluations of one state share one broad phase.
   mutable std::vector<std::pair<int, int>> pairs_;
+  mutable std::vector<Vec3> pairs_pos_;
   mutable std::vector<std::pair<std::uint64_t, int>> cells_;
   mutable std::vector<double> scratch_;
 };
