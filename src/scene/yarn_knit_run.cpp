@@ -193,7 +193,10 @@ std::string yarn_structure_message(const YarnStructure& s) {
 void report_yarn_structure(const YarnStructure& s, RunStats& stats) {
   if (!s.lost()) return;
   const std::string lost = yarn_structure_message(s);
-  if (stats.status == RunStatus::Equilibrium) {
+  // Withdrawn loops end the run outside the model's limits; changed crossings alone are said
+  // (the barrier keeps every pair apart, so a crossing changes by a loop turning over, which
+  // the front-view order also counts: docs/yarn_model.md, "The structure check").
+  if (stats.status == RunStatus::Equilibrium && (s.withdrawn > 0 || s.crossings.changed < 0)) {
     stats.status = RunStatus::OutsideModelLimits;
     stats.message = lost;
   } else {

@@ -45,8 +45,9 @@ YarnStructure check_yarn_structure(const YarnKnit& y, const std::vector<YarnCros
                                    const std::vector<Vec3>& all);
 // "" if the structure held, else one line saying what was lost.
 std::string yarn_structure_message(const YarnStructure& s);
-// A run whose structure was lost says so: an equilibrium becomes outside_model_limits with the
-// message; any other status keeps its name and gains the message.
+// A run whose structure was lost says so: an equilibrium with loops withdrawn (or a state not
+// finite) becomes outside_model_limits with the message; any other status, and an equilibrium
+// whose crossings alone changed, keeps its name and gains the message.
 void report_yarn_structure(const YarnStructure& s, RunStats& stats);
 
 // What a yarn run adds to its KnitResult.
