@@ -158,9 +158,9 @@ TEST_CASE("a relaxed yarn run keeps each course's length within 1 % and stays cl
   INFO("interlock gap max " << r.yarn->structure_end.interlock_gap_max_over_d << " d, "
                             << r.measures.crossings.changed << " crossings changed");
   CHECK(r.measures.crossings.designed > 0);
-  CHECK(r.yarn->structure_end.lost() ==
-        (r.stats.message.find("lost its knitted structure") != std::string::npos));
-  CHECK((r.stats.status != RunStatus::Equilibrium || !r.yarn->structure_end.lost()));
+  const bool said = r.stats.message.find("lost its knitted structure") != std::string::npos;
+  CHECK(r.yarn->structure_end.lost() == said);
+  CHECK((r.stats.status != RunStatus::Equilibrium || r.yarn->structure_end.withdrawn == 0));
   // The structure's points read off the yarn: finite, one per point.
   CHECK(r.positions.size() == r.model.points.size());
   CHECK(std::all_of(r.positions.begin(), r.positions.end(), is_finite));
@@ -231,6 +231,14 @@ TEST_CASE("the structure check: kept at the start, lost when a course is pulled 
   report_yarn_structure(lost, wall);
   CHECK(wall.status == RunStatus::WallLimit);
   CHECK(wall.message.find("wall; the yarn lost") == 0);
+  YarnStructure crossed = start;  // a crossing changed, every loop still held
+  crossed.crossings.changed = 2;
+  RunStats turned;
+  turned.status = RunStatus::Equilibrium;
+  turned.message = "Newton";
+  report_yarn_structure(crossed, turned);
+  CHECK(turned.status == RunStatus::Equilibrium);
+  CHECK(turned.message.find("Newton; the yarn lost its knitted structure: 2 of") == 0);
   RunStats kept;
   kept.status = RunStatus::Equilibrium;
   report_yarn_structure(start, kept);

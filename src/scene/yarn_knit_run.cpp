@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "models/yarn_rods.hpp"
+#include "src/geometry/segment_distance.hpp"
 
 namespace knitsim {
 
@@ -136,35 +137,39 @@ YarnStructure check_yarn_structure(const YarnKnit& y, const std::vector<YarnCros
   }
   out.crossings = check_crossings(designed, crossing_lines(y, all));
   const KnitModel& m = y.structure;
-  auto material = [&](int j, double q) {
+  // A stretch of course j's vertices from material index q0 to q1, widened by a quarter cell
+  // each side (the yarn slides through the loops).
+  const double widen = 0.25 * y.params.vertices_per_loop;
+  auto stretch = [&](int j, double q0, double q1) {
     const std::vector<int>& idx = y.course_vertices[j];
     const int last = static_cast<int>(idx.size()) - 1;
-    const int k = std::clamp(static_cast<int>(std::floor(q)), 0, last - 1);
-    const double s = q - k;
-    return (1.0 - s) * all[idx[k]] + s * all[idx[k + 1]];
+    const int k0 = std::clamp(static_cast<int>(std::floor(std::min(q0, q1) - widen)), 0, last);
+    const int k1 = std::clamp(static_cast<int>(std::ceil(std::max(q0, q1) + widen)), 0, last);
+    std::vector<int> out_v;
+    for (int k = k0; k <= k1; ++k) out_v.push_back(idx[k]);
+    return out_v;
   };
-  // Per interlacing point, the feet of the loops whose lower point it is and the heads of those
-  // whose upper point it is.
-  std::vector<Vec3> feet(m.points.size(), Vec3{0, 0, 0}), heads(m.points.size(), Vec3{0, 0, 0});
-  std::vector<int> n_feet(m.points.size(), 0), n_heads(m.points.size(), 0);
+  // Per interlacing point: the head arcs of the loops whose upper point it is, and the whole
+  // loops (loop begin to loop end) whose lower point it is; each pair's closest vertices.
+  std::vector<std::vector<int>> heads(m.points.size()), held(m.points.size());
   for (std::size_t l = 0; l < m.loops.size(); ++l) {
     const KnitLoop& loop = m.loops[l];
     const std::array<double, 4>& q = y.loop_points[l];
-    if (loop.lower >= 0 && std::isfinite(q[0]) && std::isfinite(q[1])) {
-      feet[loop.lower] =
-          feet[loop.lower] + 0.5 * (material(loop.course, q[0]) + material(loop.course, q[1]));
-      ++n_feet[loop.lower];
-    }
-    if (loop.upper >= 0 && std::isfinite(q[2]) && std::isfinite(q[3])) {
-      heads[loop.upper] =
-          heads[loop.upper] + 0.5 * (material(loop.course, q[2]) + material(loop.course, q[3]));
-      ++n_heads[loop.upper];
-    }
+    if (loop.upper >= 0 && std::isfinite(q[2]) && std::isfinite(q[3]))
+      heads[loop.upper] = stretch(loop.course, q[2], q[3]);
+    const YarnCellMarks& mk = y.marks[loop.course * m.chart.wales + loop.wale];
+    if (loop.lower >= 0 && std::isfinite(mk.loop_begin) && std::isfinite(mk.loop_end))
+      held[loop.lower] = stretch(loop.course, mk.loop_begin, mk.loop_end);
   }
   for (std::size_t p = 0; p < m.points.size(); ++p) {
-    if (n_feet[p] == 0 || n_heads[p] == 0) continue;
-    const double gap =
-        norm((1.0 / n_feet[p]) * feet[p] - (1.0 / n_heads[p]) * heads[p]) / y.d;
+    if (heads[p].empty() || held[p].empty()) continue;
+    double gap = std::numeric_limits<double>::infinity();
+    for (std::size_t a = 1; a < heads[p].size(); ++a)
+      for (std::size_t b = 1; b < held[p].size(); ++b)
+        gap = std::min(gap, closest_points(all[heads[p][a - 1]], all[heads[p][a]],
+                                           all[held[p][b - 1]], all[held[p][b]])
+                                .distance);
+    gap /= y.d;
     ++out.interlocks;
     out.interlock_gap_max_over_d = std::max(out.interlock_gap_max_over_d, gap);
     if (gap > kYarnWithdrawn) ++out.withdrawn;
@@ -188,7 +193,10 @@ std::string yarn_structure_message(const YarnStructure& s) {
 void report_yarn_structure(const YarnStructure& s, RunStats& stats) {
   if (!s.lost()) return;
   const std::string lost = yarn_structure_message(s);
-  if (stats.status == RunStatus::Equilibrium) {
+  // Withdrawn loops end the run outside the model's limits; changed crossings alone are said
+  // (the barrier keeps every pair apart, so a crossing changes by a loop turning over, which
+  // the front-view order also counts: docs/yarn_model.md, "The structure check").
+  if (stats.status == RunStatus::Equilibrium && (s.withdrawn > 0 || s.crossings.changed < 0)) {
     stats.status = RunStatus::OutsideModelLimits;
     stats.message = lost;
   } else {

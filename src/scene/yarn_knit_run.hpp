@@ -24,16 +24,18 @@ namespace knitsim {
 //   - designed crossings: the network's check (src/measure/yarn_measures.hpp, check_crossings) on
 //     the yarn's own course polylines, against those of the start; a changed over/under order
 //     means a yarn passed through another or round its end;
-//   - interlocks: at every interlacing point where a loop's head (T3, T5) holds the feet (T1, T7)
-//     of the loop above, the distance between the head's and the feet's midpoints; a loop
-//     withdrawn from the head it passes through leaves it by more than kYarnWithdrawn d (a
-//     frictionless yarn may withdraw without any crossing, so the crossings alone miss it).
-constexpr double kYarnWithdrawn = 4.0;
+//   - interlocks: at every interlacing point where a loop's head holds the loop above, the
+//     closest approach of the head arc (T3..T5) to that loop (loop begin to loop end), both
+//     stretches widened by a quarter cell each side (the yarn slides through the loops), segment
+//     to segment; interlocked they touch (~1 d), a loop withdrawn from the head leaves it by more
+//     than kYarnWithdrawn d (a frictionless yarn may withdraw without any crossing, so the
+//     crossings alone miss it).
+constexpr double kYarnWithdrawn = 2.5;
 struct YarnStructure {
   CrossingCheck crossings;  // changed -1: the state is not finite
   int interlocks = 0;       // head-holds-feet points checked
-  int withdrawn = 0;        // of those, the feet further than kYarnWithdrawn d from the head
-  double interlock_gap_max_over_d = 0.0;  // the largest head-to-feet distance, in d
+  int withdrawn = 0;        // of those, the held loop further than kYarnWithdrawn d from the head
+  double interlock_gap_max_over_d = 0.0;  // the largest head-to-held-loop distance, in d
   bool lost() const { return crossings.changed != 0 || withdrawn > 0; }
 };
 // The start's designed crossings of y's yarn (its course polylines at y.start).
@@ -43,8 +45,9 @@ YarnStructure check_yarn_structure(const YarnKnit& y, const std::vector<YarnCros
                                    const std::vector<Vec3>& all);
 // "" if the structure held, else one line saying what was lost.
 std::string yarn_structure_message(const YarnStructure& s);
-// A run whose structure was lost says so: an equilibrium becomes outside_model_limits with the
-// message; any other status keeps its name and gains the message.
+// A run whose structure was lost says so: an equilibrium with loops withdrawn (or a state not
+// finite) becomes outside_model_limits with the message; any other status, and an equilibrium
+// whose crossings alone changed, keeps its name and gains the message.
 void report_yarn_structure(const YarnStructure& s, RunStats& stats);
 
 // What a yarn run adds to its KnitResult.
