@@ -648,8 +648,8 @@ YarnCellStart build_yarn_cell_start(const KnitChart& repeat, const KnitParams& s
   for (int j = 0; j < chart.courses; ++j)
     for (int i = 0; i < chart.wales; ++i) {
       const Stitch s = repeat.at(i % p, j % q);
-      const bool edge = i == 0 || i == chart.wales - 1 || j == 0 ||
-                        (j == chart.courses - 1 && s == Stitch::Miss);
+      const bool edge =
+          i == 0 || i == chart.wales - 1 || j == 0 || (j == chart.courses - 1 && s == Stitch::Miss);
       chart.stitches.push_back(edge ? Stitch::Knit : s);
     }
   YarnKnitParams fine = params;

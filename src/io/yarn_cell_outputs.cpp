@@ -72,7 +72,7 @@ nlohmann::json yarn_cell_summary(const YarnCellRun& run, const std::string& inte
         arc += norm(a - at(k - 1));
       }
       row.push_back({{"stitch", std::string(1, static_cast<char>(st.repeat.at(
-                                                 static_cast<int>(i), static_cast<int>(c))))},
+                                                   static_cast<int>(i), static_cast<int>(c))))},
                      {"height_m", hi.y - lo.y},
                      {"width_m", hi.x - lo.x},
                      {"depth_m", hi.z - lo.z},
@@ -150,9 +150,9 @@ nlohmann::json yarn_cell_summary(const YarnCellRun& run, const std::string& inte
           {"units",
            {{"cell",
              "width_m, height_m, stitch_length_m, course_length_knitted_m m; "
-             "courses_per_cm, wales_per_cm 1/cm; loops (per course, bottom first, per wale: its yarn, "
-             "sinker to sinker) height_m, width_m, depth_m, z_mean_m, length_m m, straightness (chord / "
-             "length) 1; K_c, K_w, K_s, R, tightness_factor "
+             "courses_per_cm, wales_per_cm 1/cm; loops (per course, bottom first, per "
+             "wale: its yarn, sinker to sinker) height_m, width_m, depth_m, z_mean_m, "
+             "length_m m, straightness (chord / length) 1; K_c, K_w, K_s, R, tightness_factor "
              "(sqrt(tex) / l in mm) 1; clearance_*_over_d d; course_length_change "
              "relative; dE_dW_N, dE_dH_N N per cell; cpu_seconds, wall_seconds s"},
             {"pull",
