@@ -200,7 +200,7 @@ void check_positions(const KnitModel& m, const std::vector<Vec3>& x) {
 
 }  // namespace
 
-void KnitChart::validate(const std::vector<int>* row_lines) const {
+void KnitChart::validate(const std::vector<int>* row_lines, bool repeat) const {
   if (wales < 1 || courses < 1)
     throw std::invalid_argument(std::string("chart: no stitch rows (one line per course, top "
                                             "course first; ") +
@@ -216,7 +216,7 @@ void KnitChart::validate(const std::vector<int>* row_lines) const {
       const Stitch s = at(i, j);
       if (s != Stitch::Knit && s != Stitch::Tuck && s != Stitch::Miss)
         bad_stitch(*this, i, j, "not a stitch", kAcceptedLetters, row_lines);
-      if (s == Stitch::Knit) continue;
+      if (s == Stitch::Knit || repeat) continue;
       const std::string name = s == Stitch::Tuck ? "a tuck" : "a miss";
       auto broken = [&](const std::string& what) {
         bad_stitch(*this, i, j, name + what, kChartRules, row_lines);
@@ -228,7 +228,7 @@ void KnitChart::validate(const std::vector<int>* row_lines) const {
     }
 }
 
-KnitChart parse_knit_chart(const std::string& text) {
+KnitChart parse_knit_chart(const std::string& text, bool repeat) {
   struct Row {
     std::string stitches;
     int line;
@@ -273,7 +273,7 @@ KnitChart parse_knit_chart(const std::string& text) {
   }
   std::vector<int> row_lines;
   for (const Row& r : rows) row_lines.push_back(r.line);
-  chart.validate(&row_lines);
+  chart.validate(&row_lines, repeat);
   return chart;
 }
 

@@ -35,13 +35,15 @@ struct KnitChart {
   Stitch at(int wale, int course) const { return stitches[course * wales + wale]; }
   // Throws std::invalid_argument for a chart that breaks the model's rules (docs/knit.md, "The
   // model as built"), naming the row (from the top as drawn), its line in the file where row_lines
-  // gives them (top row first), the column and the rule.
-  void validate(const std::vector<int>* row_lines = nullptr) const;
+  // gives them (top row first), the column and the rule. repeat: the chart is the repeat of a
+  // periodic cell (knit.boundary = periodic), which has no edge: no rule on the bottom and top
+  // courses and the edge wales.
+  void validate(const std::vector<int>* row_lines = nullptr, bool repeat = false) const;
 };
 
 // Parses the text of a chart file. Throws std::invalid_argument with one line naming the
-// row and column as drawn and the accepted letters.
-KnitChart parse_knit_chart(const std::string& text);
+// row and column as drawn and the accepted letters. repeat: as KnitChart::validate.
+KnitChart parse_knit_chart(const std::string& text, bool repeat = false);
 
 enum class KnitPins { None, Bottom, Top, BottomAndTop };  // which edge levels are held fixed
 

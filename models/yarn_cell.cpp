@@ -643,8 +643,15 @@ YarnCellStart build_yarn_cell_start(const KnitChart& repeat, const KnitParams& s
   KnitChart chart;
   chart.wales = rx * p;
   chart.courses = ry * q;
+  // Knits on the tiling's edges (edge wales, bottom course, a miss in the top course), which the
+  // swatch's chart rules ask for and the interior repeat does not see.
   for (int j = 0; j < chart.courses; ++j)
-    for (int i = 0; i < chart.wales; ++i) chart.stitches.push_back(repeat.at(i % p, j % q));
+    for (int i = 0; i < chart.wales; ++i) {
+      const Stitch s = repeat.at(i % p, j % q);
+      const bool edge =
+          i == 0 || i == chart.wales - 1 || j == 0 || (j == chart.courses - 1 && s == Stitch::Miss);
+      chart.stitches.push_back(edge ? Stitch::Knit : s);
+    }
   YarnKnitParams fine = params;
   fine.vertices_per_loop = kSourceVertices;
   fine.stitch_length = fine.tuck_length = fine.miss_length = 0.0;

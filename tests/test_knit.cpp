@@ -143,6 +143,14 @@ TEST_CASE(
                     Contains("row 2 (line 2), column 3: a miss on an edge wale"));
   CHECK_THROWS_WITH(parse_knit_chart("KMK\nKKK\n"),
                     Contains("row 1 (line 1), column 2: a miss in the top course") && rules);
+  // A periodic cell's repeat (knit.boundary = periodic) has no edge: tucks and misses anywhere;
+  // the letters and the row lengths are still checked.
+  CHECK_THROWS_WITH(parse_knit_chart("KT\nKK\n"),
+                    Contains("row 1 (line 1), column 2: a tuck on an edge wale") && rules);
+  CHECK(parse_knit_chart("KT\nKK\n", true).at(1, 1) == Stitch::Tuck);
+  CHECK(parse_knit_chart("MK\nKM\n", true).at(0, 1) == Stitch::Miss);
+  CHECK_THROWS_WITH(parse_knit_chart("KX\nKK\n", true), Contains("'X' is not a stitch"));
+  CHECK_THROWS_WITH(parse_knit_chart("KT\nK\n", true), Contains("1 stitches, row 1 has 2"));
   // A programmatic chart goes through the same rules (it has no lines).
   KnitChart bad{3, 2, std::vector<Stitch>(6, Stitch::Knit)};
   bad.stitches[1] = Stitch::Tuck;  // course 0 (bottom), wale 1

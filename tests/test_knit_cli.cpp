@@ -528,3 +528,31 @@ TEST_CASE("run_knit, called without the command line, ends where knitsim knit --
   }
   CHECK(rows == r.positions.size());
 }
+
+// A periodic cell's repeat has no edge (docs/yarn_model.md, "Periodic cell"): a 2 x 2 repeat
+// with a tuck on its edge wale is refused as a swatch (the chart's error, also when a --set key
+// is bad) and relaxed as a periodic cell.
+TEST_CASE("knitsim knit: a KT / KK repeat is refused as a swatch and runs as a periodic cell") {
+  TempDir tmp("knit-cli-repeat");
+  const std::string chart = (tmp.path / "tuck.chart").string();
+  std::ofstream(chart) << "KT\nKK\n";
+  const std::string out = " --quiet --no-pictures --out '" + (tmp.path / "out").string() + "'";
+  std::string err;
+  CHECK(run_knit("--chart '" + chart + "' --set knit.model=yarn" + out, err) == 2);
+  CHECK_THAT(err, Catch::Contains("column 2: a tuck on an edge wale"));
+  CHECK(run_knit("--chart '" + chart + "' --set knit.boundary=periodic --set knit.bogus=1" + out,
+                 err) == 2);
+  CHECK_THAT(err, Catch::Contains("a tuck on an edge wale"));
+  const int status = run_knit("--chart '" + chart +
+                                  "' --set knit.model=yarn --set knit.boundary=periodic "
+                                  "--set knit.stitch_length=3.4e-3 --set knit.yarn_vertices=16" +
+                                  out,
+                              err);
+  INFO(err);
+  REQUIRE(status == 0);
+  const nlohmann::json cell =
+      nlohmann::json::parse(std::ifstream(tmp.path / "out" / "summary.json"))["cell"];
+  CHECK(cell["status"] == "equilibrium");
+  CHECK(cell["repeat"] == nlohmann::json::array({"KT", "KK"}));
+  CHECK(cell["loops"][1][1]["stitch"] == "T");
+}

@@ -270,3 +270,23 @@ TEST_CASE(
                                               << ", wales/cm " << a.wales_per_cm << " -> "
                                               << b.wales_per_cm);
 }
+
+TEST_CASE(
+    "yarn cell: a repeat with a tuck or a miss on its edge wale and top course starts (the "
+    "tiling knits its own edges; the swatch's chart rules do not apply to a repeat)") {
+  YarnKnitParams yp;
+  yp.model = KnitModelKind::Yarn;
+  yp.vertices_per_loop = 16;
+  yp.stitch_length = 3.4e-3;
+  for (const char* text : {"KT\nKK\n", "KM\nKK\n"}) {
+    const KnitChart repeat = parse_knit_chart(text, true);
+    REQUIRE(repeat.at(1, 1) != Stitch::Knit);
+    const YarnCellStart st = build_yarn_cell_start(repeat, KnitParams{}, yp);
+    CHECK(st.repeat.at(1, 1) == repeat.at(1, 1));
+    REQUIRE(st.start.size() == 2);
+    CHECK(st.start[0].size() == 32);
+    CHECK(st.start_clearance >= kYarnStartClearance * st.d);
+    // The tuck or float cell (course 1, wale 2) takes less yarn than the knit beside it.
+    CHECK(st.cell_target[1][1] < st.cell_target[1][0]);
+  }
+}

@@ -81,6 +81,48 @@ def build(out):
             "length halves).\n\n" + md_table(
                 ["vertices per loop", "courses/cm", "change", "wales/cm", "change", "steps",
                  "CPU (s)", "status"], rows)))
+    pat = {r["label"]: r for r in runs if r["part"] == "pattern"}
+    if "plain" in pat:
+        p0 = pat["plain"]
+        w0 = f(p0, "width_m") / 1.0  # plain: a 1 x 1 cell
+        h0 = f(p0, "height_m") / 1.0
+        hk0 = f(p0, "knit_loop_height_m")
+        rows = []
+        for label in ("plain", "tuck", "miss"):
+            if label not in pat:
+                continue
+            r = pat[label]
+            nw = len(r["repeat"].split("/")[0]) if r.get("repeat") else 1
+            nc = len(r["repeat"].split("/")) if r.get("repeat") else 1
+            w, h = f(r, "width_m") / nw, f(r, "height_m") / nc
+            held = f(r, "held_loop_height_m")
+            tm = r.get("tm_stitch") or ""
+            rows.append([
+                label, r.get("repeat") or "", num(r["courses_per_cm"], 4),
+                num(r["wales_per_cm"], 4), "%+.1f %%" % pct(w, w0), "%+.1f %%" % pct(h, h0),
+                num(1e3 * f(r, "knit_loop_height_m"), 3),
+                "—" if held != held else "%s (%.2f x plain)" % (num(1e3 * held, 3), held / hk0),
+                "—" if not tm else "%s: %s" % (tm, num(1e3 * f(r, "tm_width_m"), 3)),
+                "—" if not tm else num(r["tm_straightness"], 3),
+                "—" if not tm else "%+.2f" % f(r, "tm_z_behind_knit_over_d"), r["status"]])
+        sections.append((
+            "Tuck and miss patterns beside plain jersey (runs.csv, part pattern)",
+            "2 x 2 repeats relaxed as periodic cells at l = 3.4 mm (every course's yarn per "
+            "wale; tuck and float cells at the knit's ratio of their start length): the 1 x 1 "
+            "tuck pattern KT / KK (a tuck on alternate needles in alternate courses) and the 1 x "
+            "1 miss pattern KM / KK, beside plain jersey (K). Width and length: per wale and per "
+            "course (cell width / wales, height / courses) against plain jersey's. Loop "
+            "heights: the vertical extent of one wale's yarn, sinker to sinker, in course 0 "
+            "(the knit loop on wale 1; the held loop on wale 2, under the tuck or the miss). "
+            "Tuck / float: the yarn of course 1 on wale 2, its width (mm) and straightness "
+            "(chord over yarn length; 1 is straight) and its mean z less that of the knit loop beside it (d; "
+            "negative: behind, the knit's legs come forward in +z). The literature (issue 51 item 3): tuck "
+            "fabric wider and shorter, miss fabric narrower, held loops elongated, floats "
+            "straight behind the face.\n\n" + md_table(
+                ["fabric", "repeat (top first)", "courses/cm", "wales/cm", "width per wale",
+                 "length per course", "knit loop height (mm)", "held loop height (mm)",
+                 "tuck / float width (mm)", "tuck / float straightness",
+                 "tuck / float z - knit's (d)", "status"], rows)))
     curves = read_rows(out, "curves.csv")
     if curves:
         rows = []

@@ -116,7 +116,21 @@ void run(const KnitArgs& args) {
   Scene input;  // the keys as given: the knit's, the run's
   KnitChart chart;
   if (args.scene.empty()) {  // --chart: the chart is read before the --set keys apply
-    chart = read_knit_chart(knit_scene(args.chart, {}));
+    Scene bare = knit_scene(args.chart, {});
+    try {
+      chart = read_knit_chart(bare);
+    } catch (const std::invalid_argument&) {
+      // A periodic cell's repeat has no edge: read without the edge rules if the keys ask for
+      // one (knit.boundary = periodic); else, or if the keys are bad, the chart's error first.
+      bool periodic = false;
+      try {
+        periodic = knit_scene(args.chart, args.sets).yarn.periodic;
+      } catch (const std::exception&) {
+      }
+      if (!periodic) throw;
+      bare.yarn.periodic = true;
+      chart = read_knit_chart(bare);
+    }
     input = knit_scene(args.chart, args.sets);
   } else {
     input = load_knit_scene(args.scene, args.sets);

@@ -1,5 +1,6 @@
 #include "src/io/yarn_cell_outputs.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <string>
@@ -44,8 +45,46 @@ nlohmann::json yarn_cell_summary(const YarnCellRun& run, const std::string& inte
     for (int w = 0; w < st.repeat.wales; ++w) row += static_cast<char>(st.repeat.at(w, c));
     rows.push_back(row);
   }
+  // Per course (bottom first), per wale: the loop's vertices (the start's arc fractions of its
+  // cell, sinker to sinker; the start is uniform in arc), their extents and the yarn's straightness
+  // (chord over arc length: a float lying straight is near 1).
+  nlohmann::json loops = nlohmann::json::array();
+  for (std::size_t c = 0; c < run.end.courses.size() && c < st.cell_start.size(); ++c) {
+    const std::vector<Vec3>& v = run.end.courses[c];
+    const int n = static_cast<int>(v.size());
+    double total = 0.0;
+    for (double l : st.cell_start[c]) total += l;
+    nlohmann::json row = nlohmann::json::array();
+    double before = 0.0;
+    for (std::size_t i = 0; i < st.cell_start[c].size(); ++i) {
+      const int k0 = static_cast<int>(std::lround(n * before / total));
+      before += st.cell_start[c][i];
+      const int k1 = static_cast<int>(std::lround(n * before / total));
+      // vertex k1 of the last wale is vertex 0 shifted by the period W
+      auto at = [&](int k) { return k < n ? v[k] : v[k - n] + Vec3{run.end.width, 0.0, 0.0}; };
+      Vec3 lo = at(k0), hi = at(k0);
+      double arc = 0.0, z = 0.0;
+      for (int k = k0; k < k1; ++k) z += at(k).z / std::max(1, k1 - k0);
+      for (int k = k0 + 1; k <= k1; ++k) {
+        const Vec3 a = at(k);
+        lo = {std::min(lo.x, a.x), std::min(lo.y, a.y), std::min(lo.z, a.z)};
+        hi = {std::max(hi.x, a.x), std::max(hi.y, a.y), std::max(hi.z, a.z)};
+        arc += norm(a - at(k - 1));
+      }
+      row.push_back({{"stitch", std::string(1, static_cast<char>(st.repeat.at(
+                                                   static_cast<int>(i), static_cast<int>(c))))},
+                     {"height_m", hi.y - lo.y},
+                     {"width_m", hi.x - lo.x},
+                     {"depth_m", hi.z - lo.z},
+                     {"z_mean_m", z},
+                     {"length_m", arc},
+                     {"straightness", arc > 0.0 ? norm(at(k1) - at(k0)) / arc : 0.0}});
+    }
+    loops.push_back(row);
+  }
   const double d = st.d;
   nlohmann::json cell = {{"repeat", rows},
+                         {"loops", loops},
                          {"wales", st.repeat.wales},
                          {"courses", st.repeat.courses},
                          {"width_m", run.end.width},
@@ -111,7 +150,9 @@ nlohmann::json yarn_cell_summary(const YarnCellRun& run, const std::string& inte
           {"units",
            {{"cell",
              "width_m, height_m, stitch_length_m, course_length_knitted_m m; "
-             "courses_per_cm, wales_per_cm 1/cm; K_c, K_w, K_s, R, tightness_factor "
+             "courses_per_cm, wales_per_cm 1/cm; loops (per course, bottom first, per "
+             "wale: its yarn, sinker to sinker) height_m, width_m, depth_m, z_mean_m, "
+             "length_m m, straightness (chord / length) 1; K_c, K_w, K_s, R, tightness_factor "
              "(sqrt(tex) / l in mm) 1; clearance_*_over_d d; course_length_change "
              "relative; dE_dW_N, dE_dH_N N per cell; cpu_seconds, wall_seconds s"},
             {"pull",

@@ -14,7 +14,7 @@ KnitChart read_knit_chart(const Scene& scene) {
   const bool command_line = scene.source == "command line";  // knit_scene: --chart
   if (scene.chart.empty()) {
     try {
-      return parse_knit_chart(scene.chart_text);
+      return parse_knit_chart(scene.chart_text, scene.yarn.periodic);
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument("knit.chart_text (" + printable(scene.source) + "): " + e.what());
     }
@@ -33,7 +33,7 @@ KnitChart read_knit_chart(const Scene& scene) {
         ": cannot read the file: " + why);
   }
   try {
-    return parse_knit_chart(text);
+    return parse_knit_chart(text, scene.yarn.periodic);
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(printable(scene.chart) + ": " + e.what());
   }
