@@ -4,6 +4,7 @@
 // length within 1 %; single_tuck with knit.model = yarn ends with a status and its measures.
 #include <algorithm>
 #include <catch2/catch.hpp>
+#include <chrono>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -18,7 +19,7 @@ using namespace knitsim;
 
 namespace {
 
-const char* kSmall = "KKKK\nKKKK\nKKKK\n";     // 4 wales x 3 courses
+const char* kSmall = "KKKK\nKKKK\nKKKK\n";    // 4 wales x 3 courses
 const char* kTuck = "KKKKK\nKKTKK\nKKKKK\n";  // one tuck mid-chart
 
 YarnKnitParams yarn_params(int per_cell, double stitch_length) {
@@ -81,7 +82,8 @@ TEST_CASE("chart to yarn: vertex counts, one yarn continuous at the selvedges, h
           }
         }
       for (int j = 1; j + 1 < chart.courses; ++j)
-        for (int v : y.course_vertices[j]) CHECK(!std::binary_search(y.pins.begin(), y.pins.end(), v));
+        for (int v : y.course_vertices[j])
+          CHECK(!std::binary_search(y.pins.begin(), y.pins.end(), v));
     }
   }
 }
@@ -144,7 +146,10 @@ TEST_CASE("a relaxed yarn run keeps each course's length within 1 % and stays cl
   const KnitResult r = run_knit(scene, "equilibrium");
   REQUIRE(r.yarn);
   INFO("status " << to_string(r.stats.status) << ", residual " << r.stats.residual);
-  CHECK((r.stats.status == RunStatus::Equilibrium || r.stats.status == RunStatus::WallLimit));
+  // At 8 edges a cell this chart loses its structure on the way (below): its stop then ends
+  // outside the model's limits, and only so.
+  CHECK((r.stats.status == RunStatus::Equilibrium || r.stats.status == RunStatus::WallLimit ||
+         (r.stats.status == RunStatus::OutsideModelLimits && r.yarn->structure_end.lost())));
   CHECK(r.stats.steps > 0);
   for (std::size_t j = 0; j < r.yarn->course_end.size(); ++j) {
     INFO("course " << j);
@@ -183,6 +188,23 @@ TEST_CASE("single_tuck with knit.model = yarn ends with a status and its measure
   CHECK(r.frames.size() >= 1);
   for (const FrameRecorder::Frame& f : r.frames)
     CHECK(f.x.size() == static_cast<std::size_t>(r.model.network.dof()));
+}
+
+TEST_CASE("an explicit method on the yarn model keeps the wall cap and its checks",
+          "[yarn_knit][run]") {
+  // Its checks come every 1000 steps; the run must not be cut into 50-step rounds that never
+  // reach one (verlet ran 633 s past a 5 s cap so).
+  Scene input = knit_scene("small", {"knit.model=yarn", "knit.yarn_vertices=8"});
+  input.options.max_wall_seconds = 1.0;
+  KnitScene scene = make_knit_scene(input, parse_knit_chart(kSmall), 2);
+  const auto w0 = std::chrono::steady_clock::now();
+  const KnitResult r = run_knit(scene, "verlet");
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
+  INFO("status " << to_string(r.stats.status) << ", " << r.stats.steps << " steps, " << wall
+                 << " s");
+  CHECK(r.stats.status == RunStatus::WallLimit);
+  CHECK(r.stats.steps > 1000);
+  CHECK(wall < 30.0);  // the cap plus the set-up and the outputs' measures, on a loaded machine
 }
 
 TEST_CASE("the structure check: kept at the start, lost when a course is pulled out",

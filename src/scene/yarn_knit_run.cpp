@@ -16,7 +16,9 @@ namespace knitsim {
 
 namespace {
 
-// Steps of one round (above): short enough that the pattern follows the contacts.
+// Steps of one round (above): short enough that the pattern follows the contacts. An explicit
+// method uses no Jacobian, so its run is one round (its checks come every 1000 steps: rounds of
+// 50 would never reach one, nor so the wall cap or the stop).
 constexpr long kYarnRoundSteps = 50;
 // A ramp stage's carried start must keep every pair the contact sees this far apart (in d; the
 // barrier's core is at YarnParams::core_fraction = 0.7 d), or half its gap to the core where the
@@ -31,6 +33,9 @@ double cpu_now() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
 class ClearanceWatch final : public RunObserver {
  public:
   ClearanceWatch(const YarnRods& rods, RunObserver* next) : rods_(rods), next_(next) {}
+  void on_run_start() override {
+    if (next_) next_->on_run_start();
+  }
   void on_step(double t, double h, int order) override {
     if (next_) next_->on_step(t, h, order);
   }
@@ -67,7 +72,8 @@ YarnKnitRun::Verlet verlet_estimate(const YarnRods& rods, double t, const std::v
   const double c = std::sqrt(p.stretch_stiffness() / p.linear_density());
   double l_min = std::numeric_limits<double>::infinity();
   for (const std::vector<Vec3>& rest : rods.spec().rest)
-    for (std::size_t k = 1; k < rest.size(); ++k) l_min = std::min(l_min, norm(rest[k] - rest[k - 1]));
+    for (std::size_t k = 1; k < rest.size(); ++k)
+      l_min = std::min(l_min, norm(rest[k] - rest[k - 1]));
   out.dt_axial = l_min / c;
   out.dt_estimated = estimate_stable_dt("verlet", rods, t, x.data());
   out.dt_predicted = predict_stable_dt("verlet", rods, t, x.data());
@@ -216,7 +222,8 @@ KnitStart start_yarn_knit(const KnitScene& scene) {
 
 KnitResult run_yarn_knit(KnitStart start, const KnitScene& scene, const std::string& integrator,
                          RunObserver* observer) {
-  make_integrator(integrator);  // an unknown name is refused before anything runs
+  // An unknown name is refused before anything runs.
+  const bool explicit_method = make_integrator(integrator)->info().explicit_method;
   const std::shared_ptr<const YarnKnit> yk = start.yarn;
   const double d = yk->d;
   const auto wall0 = std::chrono::steady_clock::now();
@@ -299,7 +306,7 @@ KnitResult run_yarn_knit(KnitStart start, const KnitScene& scene, const std::str
       }
       ClearanceWatch watch(*rods, &recorder);
       IntegratorOptions options = scene.options;
-      options.max_steps = std::min(steps_left, kYarnRoundSteps);
+      options.max_steps = explicit_method ? steps_left : std::min(steps_left, kYarnRoundSteps);
       if (scene.options.max_wall_seconds > 0.0) {
         const double used =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
