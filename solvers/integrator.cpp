@@ -236,6 +236,10 @@ class EquilibriumRun {
 
   RunStats run() {
     start();
+    // A stop asked before the run (a driver of many runs, each concluded at its start, would
+    // otherwise never see it: a tensile test's steps certified by their warm start).
+    if (observer_) observer_->on_run_start();
+    if (interrupted()) return finish(RunStatus::Interrupted, "interrupted before equilibrium");
     // The initial state may already be at rest (e.g. a plain knit chart).
     if (t_start_eq_ <= t0_) {
       const double r0 = sys_.static_residual(t0_, x_.data());

@@ -11,6 +11,10 @@ class RunObserver {
  public:
   virtual ~RunObserver() = default;
   virtual void on_step(double /*t*/, double /*h*/, int /*order*/) {}
+  // When a run starts, before its first stop test: a driver of many runs that each conclude at
+  // their start (a tensile test's warm-started steps) calls no on_step or on_check, and the
+  // Python module polls its signals here too.
+  virtual void on_run_start() {}
   virtual void on_check(double t, const double* x, const double* v, double residual) = 0;
 };
 

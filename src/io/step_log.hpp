@@ -33,6 +33,9 @@ class StepLog final : public RunObserver {
   // max_rows >= 1 (throws std::invalid_argument otherwise).
   explicit StepLog(RunObserver* next = nullptr, std::size_t max_rows = 100000);
 
+  void on_run_start() override {
+    if (next_) next_->on_run_start();
+  }
   void on_step(double t, double h, int order) override;
   void on_check(double t, const double* x, const double* v, double residual) override;
 

@@ -109,6 +109,9 @@ class ClearanceOverRun final : public RunObserver {
  public:
   ClearanceOverRun(const KnitModel& m, RunObserver* next, double resample_over_r = 0.05);
   void observe(double t, const double* x, bool force);  // x: free dofs, as integrators hold them
+  void on_run_start() override {
+    if (next_) next_->on_run_start();
+  }
   void on_step(double t, double h, int order) override;
   void on_check(double t, const double* x, const double* v, double residual) override;
   const YarnClearance& minimum() const { return min_; }

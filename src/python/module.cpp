@@ -53,6 +53,7 @@ class SignalPoll final : public RunObserver {
         last_(std::chrono::steady_clock::now()) {}
 
   void on_step(double, double, int) override { poll(); }
+  void on_run_start() override { poll(); }
   void on_check(double, const double*, const double*, double) override { poll(); }
 
   // From the solving thread, without the GIL (a run observer's call, the ICA's stop question).

@@ -29,6 +29,9 @@ class FrameRecorder final : public RunObserver {
 
   // Offers the state (t, x) with its residual: the start, then each check.
   void record(double t, const double* x, double residual);
+  void on_run_start() override {
+    if (next_) next_->on_run_start();
+  }
   void on_step(double t, double h, int order) override;
   void on_check(double t, const double* x, const double* v, double residual) override;
 

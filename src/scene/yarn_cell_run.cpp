@@ -19,6 +19,9 @@ double cpu_now() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
 class CellClearanceWatch final : public RunObserver {
  public:
   CellClearanceWatch(const YarnCell& cell, RunObserver* next) : cell_(cell), next_(next) {}
+  void on_run_start() override {
+    if (next_) next_->on_run_start();
+  }
   void on_step(double t, double h, int order) override {
     if (next_) next_->on_step(t, h, order);
   }
