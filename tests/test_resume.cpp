@@ -411,7 +411,12 @@ TEST_CASE(
            (tmp.path / "tucks.chart").string() + "'",
        SIGTERM,
        {"summary.json", "points.csv", "after.png"},
+#ifdef KNITSIM_SANITIZED
+       1.0}};  // the chart's set-up under AddressSanitizer: a stop asked during it ends the
+               // run at its start, no step taken, and this case is about a run stopped mid-way
+#else
        0.2}};
+#endif
   for (const Case& c : cases) {
     INFO(c.args);
     const fs::path out = tmp.path / ("out-" + std::to_string(c.signal));

@@ -203,7 +203,7 @@ TEST_CASE("an explicit method on the yarn model keeps the wall cap and its check
   INFO("status " << to_string(r.stats.status) << ", " << r.stats.steps << " steps, " << wall
                  << " s");
   CHECK(r.stats.status == RunStatus::WallLimit);
-  CHECK(r.stats.steps > 1000);
+  CHECK(r.stats.steps >= 1000);  // the first check, at step 1000, may already see the cap
   CHECK(wall < 30.0);  // the cap plus the set-up and the outputs' measures, on a loaded machine
 }
 
