@@ -19,25 +19,12 @@
 #include "src/core/jacobian_check.hpp"
 #include "src/scene/knit_run.hpp"
 #include "tests/cli_runner.hpp"
+#include "tests/knit_test_scenes.hpp"
 
 using namespace knitsim;
 using namespace knitsim::test;
 
 namespace {
-
-std::string plain(int wales, int courses) {
-  std::string s;
-  for (int j = 0; j < courses; ++j) s += std::string(wales, 'K') + "\n";
-  return s;
-}
-
-KnitScene scene_of(const std::string& chart, const KnitParams& p) {
-  KnitScene s;
-  s.name = "test";
-  s.chart = parse_knit_chart(chart);
-  s.params = p;
-  return s;
-}
 
 // The free points' count: each free point's net force is at most residual x F_ref at an
 // equilibrium, and so is each bar's (models/force_control.hpp, static residual).

@@ -17,25 +17,12 @@
 #include "src/scene/knit_run.hpp"
 #include "src/scene/tensile_run.hpp"
 #include "tests/cli_runner.hpp"
+#include "tests/knit_test_scenes.hpp"
 
 using namespace knitsim;
 using namespace knitsim::test;
 
 namespace {
-
-std::string plain(int wales, int courses) {
-  std::string s;
-  for (int j = 0; j < courses; ++j) s += std::string(wales, 'K') + "\n";
-  return s;
-}
-
-KnitScene scene_of(const std::string& chart, const KnitParams& p) {
-  KnitScene s;
-  s.name = "test";
-  s.chart = parse_knit_chart(chart);
-  s.params = p;
-  return s;
-}
 
 // Settles `start` with the equilibrium solver.
 RunStats settle(KnitStart& s, const IntegratorOptions& opt = {}) {
